@@ -1,0 +1,36 @@
+# Two commands on a fresh machine: `make demo` and `make test`. Both set everything up first.
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
+export PYOPENGL_PLATFORM ?= osmesa
+
+.PHONY: setup demo test test-fast golden bench clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml
+	@dpkg -s libosmesa6 >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libosmesa6; }
+	@[ -x $(PY) ] || python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q torch==2.13.0
+	$(PY) -m pip install -q -e '.[dev]'
+	@touch $@
+
+demo: setup
+	$(PY) scripts/demo.py --out out
+
+test: setup
+	$(PY) -m pytest -q
+
+test-fast: setup
+	$(PY) -m pytest -q -m "not slow"
+
+golden: setup
+	UPDATE_GOLDEN=1 $(PY) -m pytest -q tests/test_golden.py
+
+bench: setup
+	$(PY) scripts/bench_render.py --json out/bench_render.json
+
+clean:
+	rm -rf out test_output .pytest_cache

@@ -1,0 +1,55 @@
+"""`motion2video ...`: a thin command line. Each sub-command lives in ``motion2video/commands/<name>.py``
+with two functions, ``add_parser(subparsers)`` and ``run(args) -> int``; this file only dispatches and turns
+:class:`~motion2video.errors.InputError` into a one-line message with exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from motion2video import __version__
+from motion2video.errors import InputError
+
+# Sub-command modules, in the order `--help` lists them. A module that does not exist yet is skipped.
+COMMANDS = ("render", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
+            "transfer", "analogy")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="motion2video",
+        description="Human motion in, video out.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"motion2video {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f"motion2video.commands.{name}")
+        except ModuleNotFoundError as err:
+            if err.name == f"motion2video.commands.{name}":
+                continue
+            raise
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    try:
+        return int(args.run(args) or 0)
+    except InputError as err:
+        print(f"motion2video {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"motion2video {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
