@@ -1,0 +1,12 @@
+"""Motion file formats: one module per format, each reading into the project's containers.
+
+- :mod:`~motion2video.formats.bvh`: BVH motion capture (reader, forward kinematics, canonical conversion)
+- :mod:`~motion2video.formats.manifest`: the mocap / face ``manifest.csv`` (true fps, labels)
+- :mod:`~motion2video.formats.npz`: Motion / FaceMotion ``.npz`` (atomic writes, no pickles)
+- :mod:`~motion2video.formats.openpose`: OpenPose JSON folders -> 2D canonical Motion
+- :mod:`~motion2video.formats.videopose3d`: VideoPose3D ``data_3d_h36m.npz`` -> canonical Motions
+- :mod:`~motion2video.formats.face_csv`: Live Link Face ARKit CSV -> FaceMotion
+- :mod:`~motion2video.formats.resample`: linear frame-rate conversion
+
+:mod:`motion2video.io` dispatches on the path (``load_motion``, ``save_motion``).
+"""

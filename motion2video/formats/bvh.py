@@ -1,0 +1,673 @@
+"""BVH motion capture: a numpy reader, forward kinematics and conversion to the canonical H36M-17 body.
+
+Reading (:func:`read_bvh`) keeps the file's own skeleton and units (:class:`BvhClip`);
+:func:`bvh_world_positions` runs forward kinematics over all frames at once; :func:`bvh_to_canonical`
+and :func:`load_bvh` give a :class:`~motion2video.motion.Motion` in the project's frame (``h36m-17``,
+metres, right-handed, z up, floor at z = 0).
+
+BVH conventions used here:
+
+- Every ``ROOT``/``JOINT`` has an ``OFFSET`` (its origin in the parent's frame at rest) and a
+  ``CHANNELS`` list, any subset and any order of ``X/Y/Zposition`` and ``X/Y/Zrotation``.
+- Rotation channels are Euler angles in degrees, applied *intrinsically in the listed order*: channels
+  ``Zrotation Xrotation Yrotation`` give the local rotation ``Rz @ Rx @ Ry``.
+- Position channels give the joint's translation in its parent's frame and replace the ``OFFSET``
+  component on the same axis (the usual reading: the root's channels are its world position).
+- ``End Site`` blocks become nodes named ``"<joint>:end"`` (the notation of
+  :data:`motion2video.skeletons.RIG_JOINT_MAPS`).
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from motion2video.errors import InputError
+from motion2video.formats.manifest import ManifestEntry, find_manifest_entry, read_manifest
+from motion2video.formats.resample import resample_linear, round_fps
+from motion2video.motion import Motion
+from motion2video.skeletons import H36M_17, RIG_JOINT_MAPS
+
+CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
+_CHANNEL_LOOKUP = {c.lower(): c for c in CHANNEL_NAMES}
+
+# Metres per file unit, per rig. Chosen from the measured thigh lengths in the data README and checked
+# against standing height (tests/test_formats_bvh.py): CMU's ASF/AMC unit is 1/0.45 inch; the cgspeed
+# DAZ conversion, the MASS character and the converted DeepMimic humanoid are in centimetres. Resulting
+# statures (pose-independent estimate of the tests): cmu-3dsmax 1.50 m, cmu-mb 1.53-1.56, cmu-amc 1.56,
+# cmu-daz 1.60, deepmimic-humanoid 1.55-1.56, mass-character1 1.66-1.69.
+RIG_UNITS: dict[str, float] = {
+    "cmu-mb": 0.0254 / 0.45,
+    "cmu-3dsmax": 0.0254 / 0.45,
+    "cmu-amc": 0.0254 / 0.45,
+    "cmu-daz": 0.01,
+    "deepmimic-humanoid": 0.01,
+    "mass-character1": 0.01,
+}
+
+# Raw amc2bvh conversions of CMU captures (cmu/16_01.bvh, cmu/16_02.bvh) keep the ASF bone names, which no
+# entry of RIG_JOINT_MAPS covers. The ASF bone named X starts where its parent ends, so each BVH joint's
+# origin is the proximal end of that bone (lfemur = hip, ltibia = knee, lhumerus = shoulder, ...). The
+# correspondence mirrors the MotionBuilder renaming used by ``cmu-mb`` (upperback = Spine, thorax =
+# Spine1, upperneck = Neck1).
+EXTRA_RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
+    "cmu-amc": {
+        "pelvis": "hip", "right_hip": "rfemur", "right_knee": "rtibia", "right_ankle": "rfoot",
+        "left_hip": "lfemur", "left_knee": "ltibia", "left_ankle": "lfoot",
+        "spine": "upperback", "thorax": "thorax", "neck": "upperneck", "head": "head",
+        "left_shoulder": "lhumerus", "left_elbow": "lradius", "left_wrist": "lwrist",
+        "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
+    },
+}
+
+# Height of the ankle joint centre above the floor with the foot flat, metres. Anny's default body (the mesh
+# the renderers pose from these joints) has its ankle (bone ``foot.R``) 0.071 m above its soles; adults
+# measure 6-8 cm. The floor is put this far below the lowest ankle (:func:`floor_height`).
+ANKLE_HEIGHT = 0.07
+
+# BVH is y-up; the project is z-up. (x, y, z)_bvh -> (x, -z, y): a +90 degree rotation about x
+# (determinant +1), so left and right are preserved.
+Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+
+@dataclass(frozen=True)
+class BvhClip:
+    """A BVH file as written: its skeleton, channels and raw motion values, in file units.
+
+    Attributes:
+        path: the file it was read from (used in error messages).
+        names: (N,) node names in file order; end sites are named ``"<joint>:end"``.
+        parents: (N,) parent index per node, -1 for the root; parents precede children.
+        offsets: (N, 3) float64 rest offsets in the parent's frame (file units, y up).
+        channels: (N,) tuple of channel names per node (empty for end sites).
+        channel_start: (N,) column of each node's first channel in ``values``.
+        frame_time: seconds per frame as declared in the header.
+        values: (T, C) float64 motion values, one row per frame.
+    """
+
+    path: str
+    names: tuple[str, ...]
+    parents: tuple[int, ...]
+    offsets: np.ndarray
+    channels: tuple[tuple[str, ...], ...]
+    channel_start: tuple[int, ...]
+    frame_time: float
+    values: np.ndarray
+
+    @property
+    def num_frames(self) -> int:
+        return int(self.values.shape[0])
+
+    @property
+    def num_nodes(self) -> int:
+        return len(self.names)
+
+    @property
+    def header_fps(self) -> float:
+        """Frame rate from the header's ``Frame Time``, rounded to an integer when within 0.1% of one."""
+        return round_fps(1.0 / self.frame_time)
+
+    def index(self, name: str) -> int:
+        return self.names.index(name)
+
+
+# --- parsing --------------------------------------------------------------------------------------------
+
+class _Tokens:
+    """The hierarchy's whitespace-separated tokens with their 1-based line numbers."""
+
+    def __init__(self, lines: list[str], source: str) -> None:
+        self.items = [(tok, num) for num, line in enumerate(lines, 1) for tok in line.split()]
+        self.pos = 0
+        self.source = source
+        self.last_line = len(lines)
+
+    def peek(self) -> tuple[str, int] | None:
+        return self.items[self.pos] if self.pos < len(self.items) else None
+
+    def next(self, what: str) -> tuple[str, int]:
+        item = self.peek()
+        if item is None:
+            raise InputError(f"line {self.last_line}: hierarchy ends early, expected {what}", self.source)
+        self.pos += 1
+        return item
+
+    def expect(self, keyword: str) -> int:
+        tok, num = self.next(keyword)
+        if tok.upper() != keyword.upper():
+            raise InputError(f"line {num}: expected {keyword}, got {tok!r}", self.source)
+        return num
+
+    def number(self, what: str) -> float:
+        tok, num = self.next(what)
+        try:
+            value = float(tok)
+        except ValueError:
+            raise InputError(f"line {num}: expected a number for {what}, got {tok!r}", self.source) from None
+        if not np.isfinite(value):
+            raise InputError(f"line {num}: {what} is not finite ({tok})", self.source)
+        return value
+
+    def rest_of_line(self, num: int) -> list[str]:
+        """Tokens still on line ``num`` (a joint name may contain spaces), excluding a trailing ``{``."""
+        out = []
+        while (item := self.peek()) is not None and item[1] == num and item[0] != "{":
+            out.append(item[0])
+            self.pos += 1
+        return out
+
+
+def _parse_hierarchy(lines: list[str], source: str):
+    """Returns (names, parents, offsets, channels) of the single ROOT hierarchy in ``lines``."""
+    toks = _Tokens(lines, source)
+    toks.expect("HIERARCHY")
+    names: list[str] = []
+    parents: list[int] = []
+    offsets: list[tuple[float, float, float]] = []
+    channels: list[tuple[str, ...]] = []
+    stack: list[int] = []  # open joints
+    while True:
+        tok, num = toks.next("ROOT")
+        key = tok.upper()
+        if key in ("ROOT", "JOINT"):
+            if key == "ROOT" and (stack or names):
+                raise InputError(f"line {num}: only one ROOT per file is supported", source)
+            if key == "JOINT" and not stack:
+                raise InputError(f"line {num}: JOINT outside a ROOT block", source)
+            name_tokens = toks.rest_of_line(num)
+            if not name_tokens:
+                raise InputError(f"line {num}: {key} without a name", source)
+            name = " ".join(name_tokens)
+            if name in names:
+                raise InputError(f"line {num}: duplicate joint name {name!r}", source)
+            toks.expect("{")
+            toks.expect("OFFSET")
+            offset = (toks.number("OFFSET x"), toks.number("OFFSET y"), toks.number("OFFSET z"))
+            ch_line = toks.expect("CHANNELS")
+            count_tok, count_line = toks.next("channel count")
+            if not count_tok.isdigit():
+                raise InputError(f"line {count_line}: expected a channel count, got {count_tok!r}", source)
+            node_channels = []
+            for _ in range(int(count_tok)):
+                ch, ch_num = toks.next("a channel name")
+                canonical = _CHANNEL_LOOKUP.get(ch.lower())
+                if canonical is None:
+                    raise InputError(f"line {ch_num}: unknown channel {ch!r}", source)
+                if canonical in node_channels:
+                    raise InputError(f"line {ch_line}: channel {canonical} listed twice", source)
+                node_channels.append(canonical)
+            names.append(name)
+            parents.append(stack[-1] if stack else -1)
+            offsets.append(offset)
+            channels.append(tuple(node_channels))
+            stack.append(len(names) - 1)
+        elif key == "END":
+            if not stack:
+                raise InputError(f"line {num}: End Site outside a joint", source)
+            toks.expect("Site")
+            toks.expect("{")
+            toks.expect("OFFSET")
+            offset = (toks.number("OFFSET x"), toks.number("OFFSET y"), toks.number("OFFSET z"))
+            toks.expect("}")
+            base = f"{names[stack[-1]]}:end"
+            name = base
+            suffix = 2
+            while name in names:  # a second end site on one joint (allowed, rare)
+                name, suffix = f"{base}{suffix}", suffix + 1
+            names.append(name)
+            parents.append(stack[-1])
+            offsets.append(offset)
+            channels.append(())
+        elif key == "}":
+            if not stack:
+                raise InputError(f"line {num}: unbalanced '}}'", source)
+            stack.pop()
+            if not stack:
+                break
+        else:
+            raise InputError(f"line {num}: expected JOINT, End Site or '}}', got {tok!r}", source)
+    extra = toks.peek()
+    if extra is not None:
+        raise InputError(f"line {extra[1]}: unexpected {extra[0]!r} after the ROOT block", source)
+    return names, parents, offsets, channels
+
+
+def _header_value(line: str, key: str, num: int, source: str) -> str:
+    head, sep, value = line.partition(":")
+    if not sep or " ".join(head.split()).lower() != key.lower():
+        raise InputError(f"line {num}: expected '{key}:', got {line.strip()[:40]!r}", source)
+    return value.strip()
+
+
+def parse_bvh(text: str, source: str = "<bvh>") -> BvhClip:
+    """Parse BVH text. Raises :class:`InputError` (naming ``source`` and the line) when it is malformed.
+
+    Args:
+        text: the whole file.
+        source: the file name used in messages.
+    """
+    lines = text.splitlines()
+    motion_at = next((i for i, line in enumerate(lines) if line.strip().upper() == "MOTION"), None)
+    if motion_at is None:
+        raise InputError("no MOTION section (not a BVH file, or truncated)", source)
+    names, parents, offsets, channels = _parse_hierarchy(lines[:motion_at], source)
+
+    # "Frames: N" and "Frame Time: dt", then one line per frame.
+    rest = [(i + 1, line) for i, line in enumerate(lines[motion_at + 1:], motion_at + 1) if line.strip()]
+    if len(rest) < 2:
+        raise InputError(f"line {motion_at + 1}: MOTION must be followed by 'Frames:' and 'Frame Time:'",
+                         source)
+    (frames_num, frames_line), (time_num, time_line) = rest[0], rest[1]
+    frames_text = _header_value(frames_line, "Frames", frames_num, source)
+    if not frames_text.isdigit():
+        raise InputError(f"line {frames_num}: frame count must be a non-negative integer, got {frames_text!r}",
+                         source)
+    num_frames = int(frames_text)
+    time_text = _header_value(time_line, "Frame Time", time_num, source)
+    try:
+        frame_time = float(time_text)
+    except ValueError:
+        raise InputError(f"line {time_num}: Frame Time must be a number, got {time_text!r}", source) from None
+    if not np.isfinite(frame_time) or frame_time <= 0:
+        raise InputError(f"line {time_num}: Frame Time must be positive, got {time_text}", source)
+    if num_frames == 0:
+        raise InputError(f"line {frames_num}: the motion is empty (Frames: 0)", source)
+
+    counts = [len(c) for c in channels]
+    num_channels = int(sum(counts))
+    if num_channels == 0:
+        raise InputError("the hierarchy declares no channels", source)
+    data = rest[2:]
+    if len(data) < num_frames:
+        last = data[-1][0] if data else time_num
+        raise InputError(f"line {last}: file ends after {len(data)} of {num_frames} frames (truncated)", source)
+    if len(data) > num_frames:
+        raise InputError(f"line {data[num_frames][0]}: more frame lines than the declared {num_frames}", source)
+    try:
+        # numpy's C text parser; it rejects ragged rows and non-numbers, which are then located below.
+        values = np.loadtxt(io.StringIO("\n".join(line for _, line in data)), dtype=np.float64,
+                            ndmin=2, comments=None)  # (T, C)
+    except ValueError:
+        values = None
+    if values is None or values.shape != (num_frames, num_channels):
+        for num, line in data:
+            row = line.split()
+            if len(row) != num_channels:
+                raise InputError(f"line {num}: expected {num_channels} values, got {len(row)}", source)
+            try:
+                np.array(row, dtype=np.float64)
+            except ValueError:
+                raise InputError(f"line {num}: a motion value is not a number", source) from None
+        raise InputError("cannot parse the motion values", source)
+    if not np.all(np.isfinite(values)):
+        bad = int(np.argwhere(~np.isfinite(values))[0, 0])
+        raise InputError(f"line {data[bad][0]}: motion values contain NaN or Inf", source)
+
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(int)
+    return BvhClip(
+        path=source,
+        names=tuple(names),
+        parents=tuple(parents),
+        offsets=np.asarray(offsets, dtype=np.float64).reshape(-1, 3),
+        channels=tuple(channels),
+        channel_start=tuple(int(s) for s in starts),
+        frame_time=frame_time,
+        values=values,
+    )
+
+
+def read_bvh(path: str | Path) -> BvhClip:
+    """Read a BVH file; see :func:`parse_bvh`. Raises :class:`InputError` for a missing or malformed file."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such file", path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="strict")
+    except UnicodeDecodeError:
+        raise InputError("not a text file (BVH is plain text)", path) from None
+    return parse_bvh(text, str(path))
+
+
+# --- forward kinematics ---------------------------------------------------------------------------------
+
+def axis_rotations(angles_deg: np.ndarray, axis: str | np.ndarray) -> np.ndarray:
+    """Rotation matrices about coordinate axes (right-hand rule).
+
+    Args:
+        angles_deg: (...,) angles in degrees.
+        axis: ``"X"``, ``"Y"`` or ``"Z"``, or an int array (0/1/2 for X/Y/Z) broadcastable to
+            ``angles_deg``.
+    Returns:
+        (..., 3, 3) float64 matrices.
+    """
+    a = np.deg2rad(np.asarray(angles_deg, dtype=np.float64))
+    if isinstance(axis, str):
+        if axis not in ("X", "Y", "Z"):
+            raise ValueError(f"axis must be X, Y or Z, got {axis!r}")
+        axis = "XYZ".index(axis)
+    # Rodrigues about a coordinate axis e: R = I + sin(a) [e]x + (1 - cos(a)) [e]x^2.
+    cross = _AXIS_CROSS[np.asarray(axis)]  # (..., 3, 3)
+    s = np.sin(a)[..., None, None]
+    c = np.cos(a)[..., None, None]
+    return np.eye(3) + s * cross + (1.0 - c) * (cross @ cross)
+
+
+# [e]x, the cross-product matrix of each coordinate axis e = x, y, z.
+_AXIS_CROSS = np.array([
+    [[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]],
+    [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]],
+    [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+])
+
+
+def local_transforms(clip: BvhClip) -> tuple[np.ndarray, np.ndarray]:
+    """Per-frame local rotation and translation of every node.
+
+    Returns:
+        rotations: (T, N, 3, 3), the product of the node's rotation channels in listed order.
+        translations: (T, N, 3), the OFFSET with position channels substituted on their axes.
+    """
+    num_frames, num_nodes = clip.num_frames, clip.num_nodes
+    translations = np.broadcast_to(clip.offsets, (num_frames, num_nodes, 3)).copy()
+    # slots[k][j]: column of node j's k-th rotation channel, or -1 (identity) when it has fewer.
+    slots = np.full((3, num_nodes), -1)
+    for j, (chans, start) in enumerate(zip(clip.channels, clip.channel_start)):
+        k = 0
+        for offset, ch in enumerate(chans):
+            axis = "XYZ".index(ch[0])
+            if ch.endswith("position"):
+                translations[:, j, axis] = clip.values[:, start + offset]
+            else:
+                slots[k, j] = start + offset
+                k += 1
+    columns = np.nonzero(slots.max(axis=0) >= 0)[0]  # nodes with at least one rotation channel
+    rotations = np.broadcast_to(np.eye(3), (num_frames, num_nodes, 3, 3)).copy()
+    if columns.size == 0:
+        return rotations, translations
+    channel_axis = np.array(["XYZ".index(c[0]) for chans in clip.channels for c in chans])  # (C,)
+    identity_col = clip.values.shape[1]  # an extra all-zero column: angle 0 -> identity
+    values = np.concatenate([clip.values, np.zeros((num_frames, 1))], axis=1)  # (T, C + 1)
+    axes = np.concatenate([channel_axis, [0]])
+    product = None
+    for k in range(3):
+        cols = np.where(slots[k, columns] >= 0, slots[k, columns], identity_col)  # (Nr,)
+        mats = axis_rotations(values[:, cols], axes[cols][None, :])  # (T, Nr, 3, 3)
+        product = mats if product is None else product @ mats
+    rotations[:, columns] = product
+    return rotations, translations
+
+
+def bvh_world_positions(clip: BvhClip) -> np.ndarray:
+    """Forward kinematics: world position of every node (joints and end sites), vectorised over frames.
+
+    Nodes are processed one tree depth at a time, all nodes of a depth at once.
+
+    Returns:
+        (T, N, 3) float64 positions in file units and file axes (y up).
+    """
+    rotations, translations = local_transforms(clip)
+    parents = np.asarray(clip.parents)
+    depth = np.zeros(clip.num_nodes, dtype=int)
+    for j, p in enumerate(parents):
+        depth[j] = depth[p] + 1 if p >= 0 else 0
+    world_rot = np.empty_like(rotations)  # (T, N, 3, 3)
+    world_pos = np.empty_like(translations)  # (T, N, 3)
+    roots = np.nonzero(depth == 0)[0]
+    world_rot[:, roots] = rotations[:, roots]
+    world_pos[:, roots] = translations[:, roots]
+    for level in range(1, depth.max() + 1):
+        nodes = np.nonzero(depth == level)[0]
+        par = parents[nodes]
+        world_rot[:, nodes] = world_rot[:, par] @ rotations[:, nodes]
+        offset = (world_rot[:, par] @ translations[:, nodes, :, None])[..., 0]  # (T, n, 3)
+        world_pos[:, nodes] = world_pos[:, par] + offset
+    return world_pos
+
+
+def bvh_rest_positions(clip: BvhClip) -> np.ndarray:
+    """Positions of every node in the rest pose (all rotations zero, root at its OFFSET).
+
+    Returns:
+        (N, 3) float64 positions in file units and axes.
+    """
+    pos = np.zeros((clip.num_nodes, 3))
+    for j, p in enumerate(clip.parents):
+        pos[j] = clip.offsets[j] + (pos[p] if p >= 0 else 0.0)
+    return pos
+
+
+# --- canonical conversion -------------------------------------------------------------------------------
+
+def rig_joint_maps() -> dict[str, dict[str, str | tuple[str, str]]]:
+    """All known rigs: :data:`motion2video.skeletons.RIG_JOINT_MAPS` plus :data:`EXTRA_RIG_JOINT_MAPS`."""
+    return {**RIG_JOINT_MAPS, **EXTRA_RIG_JOINT_MAPS}
+
+
+def _map_node_names(mapping: dict[str, str | tuple[str, str]]) -> set[str]:
+    out: set[str] = set()
+    for target in mapping.values():
+        out.update(target if isinstance(target, tuple) else (target,))
+    return out
+
+
+def detect_rig(names: tuple[str, ...] | list[str], source: str | None = None) -> str:
+    """Name of the rig whose mapped joints all occur in ``names`` (node names, end sites as ``"j:end"``).
+
+    Raises :class:`InputError` when no rig, or more than one, matches.
+    """
+    present = set(names)
+    found = [rig for rig, mapping in rig_joint_maps().items() if _map_node_names(mapping) <= present]
+    if len(found) == 1:
+        return found[0]
+    if not found:
+        sample = ", ".join(n for n in names if not n.endswith(":end"))[:120]
+        raise InputError(f"unknown BVH rig (joints: {sample}...); known rigs: {', '.join(rig_joint_maps())}",
+                         source)
+    raise InputError(f"BVH joint names match several rigs ({', '.join(found)}); pass rig= explicitly", source)
+
+
+def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) -> np.ndarray:
+    """Pick the canonical H36M-17 joints out of per-node positions.
+
+    Args:
+        nodes: (T, N, 3) node positions (any units and axes).
+        names: (N,) node names.
+        rig: a key of :func:`rig_joint_maps`.
+    Returns:
+        (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
+    """
+    mapping = rig_joint_maps()[rig]
+    index = {n: i for i, n in enumerate(names)}
+    out = []
+    for joint in H36M_17.joints:
+        target = mapping[joint]
+        if isinstance(target, tuple):
+            out.append(nodes[:, [index[t] for t in target]].mean(axis=1))
+        else:
+            out.append(nodes[:, index[target]])
+    return np.stack(out, axis=1)  # (T, 17, 3)
+
+
+def to_project_frame(points: np.ndarray, unit: float) -> np.ndarray:
+    """File units, y up -> metres, z up: ``(x, y, z) -> unit * (x, -z, y)``.
+
+    Args:
+        points: (..., 3) positions in file units.
+        unit: metres per file unit.
+    Returns:
+        (..., 3) float64 positions in metres.
+    """
+    return unit * (np.asarray(points, dtype=np.float64) @ Y_UP_TO_Z_UP.T)
+
+
+def floor_height(joints: np.ndarray, *, ankle_height: float = ANKLE_HEIGHT) -> float:
+    """Height of the floor under a z-up canonical clip.
+
+    The floor is put ``ankle_height`` below the lowest ankle of the clip. "Lowest" is the 1st percentile
+    (not the minimum) of the per-frame lower ankle, so that a glitch of a few frames cannot drag the floor
+    down; in a clip where the body stands or walks, the lowest ankle is a flat stance foot. A clip that
+    never touches the ground (none in the shared data) would get a floor under its lowest ankle.
+
+    The floor is a level plane: it is not fitted for tilt. In several CMU walks the stance ankle rises by
+    up to ~6 cm over a 4 m walk (the capture floor is ~1 degree off the file's horizontal), so feet float
+    that much at the far end of those clips.
+
+    Args:
+        joints: (T, 17, 3) canonical joints, metres, z up.
+    Returns:
+        the floor height (the value to subtract from z).
+    """
+    ankles = joints[:, [H36M_17.index("right_ankle"), H36M_17.index("left_ankle")], 2]  # (T, 2)
+    return float(np.percentile(ankles.min(axis=1), 1.0)) - ankle_height
+
+
+@dataclass(frozen=True)
+class CanonicalBvh:
+    """A whole BVH clip in the project frame (metres, z up), before trimming and floor placement.
+
+    Attributes:
+        joints: (T, 17, 3) canonical H36M-17 joints.
+        nodes: (T, N, 3) every BVH node (joints and end sites) in the same frame.
+        rig: detected (or given) rig name.
+        unit: metres per file unit used.
+    """
+
+    joints: np.ndarray
+    nodes: np.ndarray
+    rig: str
+    unit: float
+
+
+def canonical_positions(clip: BvhClip, *, rig: str | None = None) -> CanonicalBvh:
+    """Forward kinematics, rig detection, unit and axis conversion for a whole clip (no floor shift)."""
+    rig = detect_rig(clip.names, clip.path) if rig is None else rig
+    if rig not in rig_joint_maps():
+        raise InputError(f"unknown rig {rig!r}; known: {', '.join(rig_joint_maps())}", clip.path)
+    unit = RIG_UNITS[rig]
+    nodes = to_project_frame(bvh_world_positions(clip), unit)  # (T, N, 3) metres, z up
+    joints = canonical_from_nodes(nodes, clip.names, rig)  # (T, 17, 3)
+    return CanonicalBvh(joints=joints, nodes=nodes, rig=rig, unit=unit)
+
+
+def bvh_to_canonical(
+    clip: BvhClip,
+    *,
+    rig: str | None = None,
+    fps: float | None = None,
+    start: int = 0,
+    frames: int | None = None,
+    target_fps: float | None = None,
+    label: str | None = None,
+    canonical: CanonicalBvh | None = None,
+) -> Motion:
+    """Convert a parsed BVH clip to a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
+
+    Order of operations: forward kinematics; rig detection from joint names; units to metres with
+    :data:`RIG_UNITS`; y-up -> z-up (:func:`to_project_frame`); trimming to ``[start, start + frames)`` in
+    file frames; floor placement from the kept frames (:func:`floor_height`); resampling to ``target_fps``
+    by linear interpolation of joint positions (adequate for positions, see :func:`resample_linear`).
+
+    Args:
+        clip: from :func:`read_bvh`.
+        rig: force a rig instead of detecting it.
+        fps: the true frame rate, overriding the header (e.g. from the manifest).
+        start: first frame kept (in file frames).
+        frames: number of file frames kept from ``start`` (None: to the end).
+        target_fps: resample to this rate (None: keep the clip's rate).
+        label: action label stored on the Motion.
+        canonical: ``canonical_positions(clip, rig=rig)`` when the caller already has it (skips the
+            forward kinematics).
+    """
+    rate = clip.header_fps if fps is None else float(fps)
+    if not np.isfinite(rate) or rate <= 0:
+        raise InputError(f"fps must be a positive number, got {fps}", clip.path)
+    if target_fps is not None and (not np.isfinite(target_fps) or target_fps <= 0):
+        raise InputError(f"target fps must be a positive number, got {target_fps}", clip.path)
+    if start < 0 or start >= clip.num_frames:
+        raise InputError(f"start frame {start} is outside the clip (0..{clip.num_frames - 1})", clip.path)
+    if frames is not None and frames <= 0:
+        raise InputError(f"frames must be positive, got {frames}", clip.path)
+    if canonical is None:
+        canonical = canonical_positions(clip, rig=rig)
+    elif canonical.joints.shape[0] != clip.num_frames or (rig is not None and canonical.rig != rig):
+        raise ValueError("canonical= does not belong to this clip / rig")
+    joints = canonical.joints.copy()  # (T, 17, 3)
+    stop = clip.num_frames if frames is None else min(start + frames, clip.num_frames)
+    joints = joints[start:stop]  # (T', 17, 3)
+    joints[..., 2] -= floor_height(joints)
+    if target_fps is not None and float(target_fps) != rate:
+        joints = resample_linear(joints, rate, float(target_fps))
+        rate = float(target_fps)
+    return Motion(joints.astype(np.float32), rate, "h36m-17", clip.path, label)
+
+
+def default_trim(rig: str) -> int:
+    """Frames to drop at the start of a clip of this rig (cgspeed's DAZ files begin with a T-pose)."""
+    return 5 if rig == "cmu-daz" else 0
+
+
+def load_bvh(
+    path: str | Path,
+    *,
+    fps: float | None = None,
+    target_fps: float | None = None,
+    trim_start: int | None = None,
+    frames: int | None = None,
+    manifest: str | Path | ManifestEntry | bool | None = None,
+    label: str | None = None,
+) -> Motion:
+    """Load a BVH file as a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
+
+    Args:
+        path: the .bvh file.
+        fps: true frame rate; wins over the manifest and the header.
+        target_fps: resample to this rate by linear interpolation of positions.
+        trim_start: frames dropped at the start. None: 0, or with a manifest :func:`default_trim` of the
+            detected rig (5 for ``cmu-daz``).
+        frames: keep this many file frames after the trim (None: all).
+        manifest: where fps and label come from when not given: a ``manifest.csv`` path, a
+            :class:`ManifestEntry`, ``True`` to look for a manifest.csv listing this file in its folder or
+            the folders above (:func:`find_manifest_entry`), or None / False for none.
+        label: action label (wins over the manifest's).
+    """
+    clip = read_bvh(path)
+    entry: ManifestEntry | None = None
+    if isinstance(manifest, ManifestEntry):
+        entry = manifest
+    elif manifest is True:
+        entry = find_manifest_entry(path)
+    elif manifest not in (None, False):
+        entry = find_manifest_entry(path, manifest=manifest)
+        if entry is None:
+            raise InputError(f"not listed in {manifest}", path)
+    rig = detect_rig(clip.names, clip.path)
+    if entry is not None:
+        fps = entry.fps if fps is None else fps
+        label = entry.label if label is None else label
+        if trim_start is None:
+            trim_start = default_trim(rig)
+    return bvh_to_canonical(clip, rig=rig, fps=fps, start=trim_start or 0, frames=frames,
+                            target_fps=target_fps, label=label)
+
+
+def load_mocap_folder(folder: str | Path, *, target_fps: float | None = 25) -> list[Motion]:
+    """Load every clip of a mocap folder, resampled to ``target_fps`` (None: native rates).
+
+    With a ``manifest.csv`` in ``folder`` the clips it lists are loaded in its order with its fps, labels
+    and the rig's default trim; without one every ``*.bvh`` below ``folder`` is loaded (sorted by path)
+    with header rates and no trim.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError("no such directory", folder)
+    manifest_path = folder / "manifest.csv"
+    if manifest_path.is_file():
+        entries = read_manifest(manifest_path)
+        return [load_bvh(folder / e.file, target_fps=target_fps, manifest=e) for e in entries.values()]
+    paths = sorted(folder.rglob("*.bvh"))
+    if not paths:
+        raise InputError("no .bvh files in the directory", folder)
+    return [load_bvh(p, target_fps=target_fps) for p in paths]
