@@ -1,0 +1,214 @@
+"""``behavior``: behaviour-driven synthesis (Blattmann et al., CVPR 2021), posture-conditioned cVAE.
+
+A behaviour sequence x = [x_t, x_1, ..., x_T] starts at its posture x_t. In the forecasting setting x_t is
+the last observed frame and x_1..x_T the future window.
+- q(z | x, x_t): an LSTM over the whole sequence (x_t included, as in Fig. 2a) and a linear Gaussian head;
+- p(x | z, x_t): an LSTM decoder whose state is initialised from z, whose first input is x_t, then its own
+  predictions, with a linear residual output (Sec. 4.1);
+- the auxiliary posture regressor p_psi (a three-layer MLP) predicts the start posture x_t from z.
+
+Objective (Eq. 5, minimised):
+    recon + gamma_KL (KL(q || N(0, I)) - I_KL) - gamma_C * regressor_error(z)
+with recon the summed squared error of the sequence, ``regressor_error`` the summed squared error of the
+regressor's start-posture prediction from a posterior sample (the model is penalised when the regressor
+succeeds: z should not carry posture), I_KL the information budget and gamma_KL the Lagrange multiplier,
+updated by dual gradient ascent (:func:`dual_ascent`) after every training-mode ``loss`` call:
+    gamma_KL <- max(0, gamma_KL + eta (KL - I_KL)).
+gamma_KL is a buffer (``kl_multiplier``), so it is saved in checkpoints.
+
+After training, a normalizing flow (:mod:`motion2video.models.flow`) is fitted to posterior latents
+(:meth:`BehaviorModel.fit_flow`); ``sample(..., use_flow=True)`` draws u ~ N(0, I) and decodes z = T^-1(u).
+
+Training protocol (alternating optimisation, two optimisers), for a generic training loop:
+- ``parameter_groups() -> {"main": [...], "auxiliary": [...]}``: one optimiser per group. The flow's
+  parameters are in neither (fitted afterwards).
+- each iteration, in train mode:
+    1. main step:  ``opt_main.zero_grad(); model.loss(obs, future, step=step).total.backward(); opt_main.step()``
+       (this also updates gamma_KL; the backward leaves gradients on the regressor too, which step 2
+       clears: always zero a group's gradients right before its backward);
+    2. auxiliary step: ``opt_aux.zero_grad(); model.auxiliary_loss(obs, future).total.backward(); opt_aux.step()``
+       (z is detached: only the regressor learns here).
+- after training: ``model.fit_flow(model.posterior_latents(obs_all, future_all), steps=...)``.
+Models without ``parameter_groups`` train with one optimiser over all parameters and ``loss`` only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+from motion2video.models.base import LatentPosterior, LossOutput, register_model
+from motion2video.models.blocks import (
+    GaussianHead,
+    LSTMDecoder,
+    LSTMEncoder,
+    check_sample_args,
+    check_sequences,
+    kl_std_normal,
+    randn,
+    reconstruction_mse,
+    repeat_batch,
+    reparameterize,
+)
+from motion2video.models.flow import Flow, FlowFitResult, fit_flow
+
+
+def dual_ascent(multiplier: float, *, constraint: float, budget: float, lr: float) -> float:
+    """One projected dual-gradient-ascent step on the Lagrange multiplier of ``constraint <= budget``.
+
+    Returns max(0, multiplier + lr * (constraint - budget)): it grows while the KL exceeds the budget and
+    shrinks (never below 0) while it is under.
+    """
+    return max(0.0, multiplier + lr * (constraint - budget))
+
+
+@dataclass(frozen=True)
+class BehaviorConfig:
+    feature_dim: int = 51
+    hidden_dim: int = 128
+    latent_dim: int = 32
+    regressor_dim: int = 128
+    layer_norm: bool = True
+    kl_budget: float = 30.0  # I_KL, nats per sequence
+    gamma_c: float = 0.1  # weight of the disentanglement penalty (paper: 0.1)
+    kl_multiplier_init: float = 1.0  # initial gamma_KL
+    kl_multiplier_lr: float = 1e-3  # dual ascent step size eta
+    flow_blocks: int = 6
+    flow_hidden: int = 128
+
+
+@register_model("behavior", BehaviorConfig, kind="stochastic")
+class BehaviorModel(nn.Module):
+    def __init__(self, config: BehaviorConfig) -> None:
+        super().__init__()
+        self.config = config
+        c = config
+        F, H, Z = c.feature_dim, c.hidden_dim, c.latent_dim
+        self.encoder = LSTMEncoder(F, H, layer_norm=c.layer_norm)
+        self.posterior_head = GaussianHead(H, Z)
+        self.decoder = LSTMDecoder(
+            feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=False
+        )
+        self.regressor = nn.Sequential(
+            nn.Linear(Z, c.regressor_dim),
+            nn.ReLU(),
+            nn.Linear(c.regressor_dim, c.regressor_dim),
+            nn.ReLU(),
+            nn.Linear(c.regressor_dim, F),
+        )
+        self.flow = Flow(Z, num_blocks=c.flow_blocks, hidden_dim=c.flow_hidden)
+        self.register_buffer("kl_multiplier", torch.tensor(float(c.kl_multiplier_init)))
+        self.register_buffer("flow_fitted", torch.tensor(False))
+
+    # -- behaviour API ---------------------------------------------------------------------------
+
+    def behavior_posterior(self, sequence: torch.Tensor) -> LatentPosterior:
+        """q(z | x, x_t) for sequence (B, T, F) whose first frame is its start posture x_t."""
+        check_sequences(sequence, None, feature_dim=self.config.feature_dim)
+        if sequence.shape[1] < 2:
+            raise ValueError(f"a behaviour sequence needs >= 2 frames, got {sequence.shape[1]}")
+        return self.posterior_head(self.encoder(sequence)[:, -1])
+
+    def behavior_latent(self, sequence: torch.Tensor) -> torch.Tensor:
+        """The behaviour representation (posterior mean) of sequence (B, T, F): (B, Z)."""
+        return self.behavior_posterior(sequence).mu
+
+    def transfer(self, z: torch.Tensor, start_posture: torch.Tensor, horizon: int) -> torch.Tensor:
+        """Enact behaviour z (B, Z) from start_posture (B, F): (B, horizon, F) (the frames after the start)."""
+        if start_posture.ndim != 2 or start_posture.shape[-1] != self.config.feature_dim:
+            raise ValueError(f"start_posture must be (B, {self.config.feature_dim}), got {tuple(start_posture.shape)}")
+        return self.decoder(z, start_posture, horizon=horizon)
+
+    # -- model protocol --------------------------------------------------------------------------
+
+    def encode(self, obs: torch.Tensor, future: torch.Tensor) -> LatentPosterior:
+        """q(z | [x_T, future]) with x_T = obs[:, -1]."""
+        check_sequences(obs, future, feature_dim=self.config.feature_dim)
+        return self.behavior_posterior(torch.cat([obs[:, -1:], future], dim=1))
+
+    def decode(self, obs: torch.Tensor, z: torch.Tensor, *, horizon: int) -> torch.Tensor:
+        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+        return self.transfer(z, obs[:, -1], horizon)
+
+    def parameter_groups(self) -> dict[str, list[nn.Parameter]]:
+        """{"main": encoder + decoder, "auxiliary": posture regressor}; the flow is in neither."""
+        aux = list(self.regressor.parameters())
+        skip = {id(p) for p in aux} | {id(p) for p in self.flow.parameters()}
+        main = [p for p in self.parameters() if id(p) not in skip]
+        return {"main": main, "auxiliary": aux}
+
+    def loss(self, obs: torch.Tensor, future: torch.Tensor, *, step: int) -> LossOutput:
+        """Eq. 5 (minimised); in train mode with grad enabled it then updates gamma_KL by dual ascent."""
+        c = self.config
+        post = self.encode(obs, future)
+        start = obs[:, -1]  # (B, F)
+        z = reparameterize(post, torch.randn_like(post.mu))
+        pred = self.decoder(z, start, horizon=future.shape[1])  # (B, Tf, F)
+        recon = reconstruction_mse(pred, future)
+        kl = kl_std_normal(post).mean()
+        reg_err = (self.regressor(z) - start).pow(2).sum(dim=-1).mean()
+        gamma_kl = float(self.kl_multiplier)
+        total = recon + gamma_kl * (kl - c.kl_budget) - c.gamma_c * reg_err
+        if self.training and torch.is_grad_enabled():
+            new = dual_ascent(gamma_kl, constraint=float(kl.detach()), budget=c.kl_budget, lr=c.kl_multiplier_lr)
+            self.kl_multiplier.fill_(new)
+        terms = {
+            "recon": float(recon.detach()),
+            "kl": float(kl.detach()),
+            "kl_multiplier": gamma_kl,
+            "regressor_error": float(reg_err.detach()),
+        }
+        return LossOutput(total=total, terms=terms)
+
+    def auxiliary_loss(self, obs: torch.Tensor, future: torch.Tensor) -> LossOutput:
+        """Eq. 2 for the regressor: its start-posture error from a detached posterior sample."""
+        with torch.no_grad():
+            post = self.encode(obs, future)
+            z = reparameterize(post, torch.randn_like(post.mu))
+        err = (self.regressor(z) - obs[:, -1]).pow(2).sum(dim=-1).mean()
+        return LossOutput(total=err, terms={"regressor": float(err.detach())})
+
+    # -- flow ------------------------------------------------------------------------------------
+
+    @torch.no_grad()
+    def posterior_latents(
+        self, obs: torch.Tensor, future: torch.Tensor, *, generator: torch.Generator | None = None
+    ) -> torch.Tensor:
+        """One sample z ~ q(z | x, x_t) per window: (B, Z), the flow's training data."""
+        post = self.encode(obs, future)
+        return reparameterize(post, randn(tuple(post.mu.shape), like=post.mu, generator=generator))
+
+    def fit_flow(
+        self, latents: torch.Tensor, *, steps: int, batch_size: int = 256, lr: float = 1e-3, seed: int = 0
+    ) -> FlowFitResult:
+        """Fit the flow to posterior latents (N, Z) (from :meth:`posterior_latents`) and mark it fitted."""
+        result = fit_flow(self.flow, latents, steps=steps, batch_size=batch_size, lr=lr, seed=seed)
+        self.flow_fitted.fill_(True)
+        return result
+
+    @torch.no_grad()
+    def sample(
+        self,
+        obs: torch.Tensor,
+        *,
+        num_samples: int,
+        horizon: int,
+        generator: torch.Generator | None = None,
+        use_flow: bool = True,
+    ) -> torch.Tensor:
+        """New behaviours from the last observed posture: obs (B, To, F) -> (B, K, horizon, F).
+
+        u ~ N(0, I); z = T^-1(u) with ``use_flow`` (requires :meth:`fit_flow`), else z = u.
+        """
+        check_sample_args(num_samples, horizon)
+        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+        if use_flow and not bool(self.flow_fitted):
+            raise RuntimeError("the behaviour flow is not fitted: call fit_flow() first or pass use_flow=False")
+        B, K = obs.shape[0], num_samples
+        z = randn((B * K, self.config.latent_dim), like=obs, generator=generator)  # (B*K, Z)
+        if use_flow:
+            z = self.flow.inverse(z)
+        out = self.decoder(z, repeat_batch(obs[:, -1], K), horizon=horizon)  # (B*K, horizon, F)
+        return out.view(B, K, horizon, -1)
