@@ -1,0 +1,440 @@
+"""Video and image writing, plus the layouts used to show results (borders, labels, grids, contact sheets).
+
+- mp4: H.264 (libx264, yuv420p) by piping raw RGB frames into imageio-ffmpeg's ffmpeg binary (its exit
+  status is checked: a failed encode raises with ffmpeg's message), with the frame rate passed as an exact
+  fraction (``Fraction(fps).limit_denominator(100000)``: 30000/1001 stays 30000/1001). Odd frame sizes are
+  padded to even by repeating the last row / column (yuv420p needs even sizes); nothing is rescaled.
+- GIF: by extension, through imageio (Pillow). GIF stores frame delays in 1/100 s, so its rate is only
+  approximate (30 fps is stored as 3/100 s per frame).
+- Writes are atomic: the file is written to a temporary name in the same directory and renamed with
+  ``os.replace``; on any failure the temporary file is removed and the error is raised, so no partial file
+  is ever left behind. A destination whose directory cannot be written raises
+  :class:`~motion2video.errors.InputError` before anything is encoded. Missing parent directories are
+  created.
+
+All frames are RGB uint8: (T, H, W, 3) for clips, (H, W, 3) for images.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import tempfile
+from fractions import Fraction
+from pathlib import Path
+
+import cv2
+import imageio.v3 as iio
+import imageio_ffmpeg
+import numpy as np
+
+from motion2video.errors import InputError
+
+VIDEO_SUFFIXES = (".mp4", ".gif")
+IMAGE_SUFFIXES = (".png",)
+X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow")
+GREEN = (0, 200, 0)  # observed frames
+RED = (220, 0, 0)  # predicted frames
+_FONT = cv2.FONT_HERSHEY_SIMPLEX
+
+
+# --- checks -------------------------------------------------------------------------------------------
+
+def _check_clip(frames: np.ndarray, what: str = "frames") -> np.ndarray:
+    frames = np.asarray(frames)
+    if frames.ndim != 4 or frames.shape[-1] != 3 or frames.shape[0] < 1:
+        raise ValueError(f"{what} must have shape (T, H, W, 3) with T >= 1, got {frames.shape}")
+    if frames.dtype != np.uint8:
+        raise ValueError(f"{what} must be uint8, got {frames.dtype}")
+    return frames
+
+
+def _check_image(image: np.ndarray) -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[-1] != 3 or image.dtype != np.uint8:
+        raise ValueError(f"image must be (H, W, 3) uint8, got {image.shape} {image.dtype}")
+    return image
+
+
+def _clip_or_image(frames: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(T, H, W, 3) or (H, W, 3) uint8 -> (T, H, W, 3) and whether the input was a single image."""
+    frames = np.asarray(frames)
+    if frames.ndim == 3:
+        return _check_clip(frames[None]), True
+    return _check_clip(frames), False
+
+
+def _exact_fps(fps: float | Fraction, path: Path) -> Fraction:
+    try:
+        value = float(fps)
+    except (TypeError, ValueError):
+        raise InputError(f"fps must be a number, got {fps!r}", path) from None
+    if not math.isfinite(value) or value <= 0:
+        raise InputError(f"fps must be a positive number, got {fps}", path)
+    return fps if isinstance(fps, Fraction) else Fraction(value).limit_denominator(100000)
+
+
+def _open_temp(path: Path) -> Path:
+    """Check that ``path``'s directory can be written and create the temporary file beside it.
+
+    Raises InputError (naming the path) when the directory cannot be created or written.
+    """
+    parent = path.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"cannot create the output directory {parent}: {err.strerror or err}", path) from None
+    if path.is_dir():
+        raise InputError("the output path is a directory", path)
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"the output directory {parent} is not writable", path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=parent)
+    except OSError as err:
+        raise InputError(f"cannot write in the output directory {parent}: {err.strerror or err}", path) from None
+    os.close(fd)
+    return Path(tmp)
+
+
+def _commit(tmp: Path, path: Path, write) -> Path:
+    """Run ``write(tmp)``, then rename tmp -> path; remove tmp and re-raise on any failure."""
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+# --- writing and reading ------------------------------------------------------------------------------
+
+def pad_to_even(frames: np.ndarray) -> np.ndarray:
+    """Pad (T, H, W, 3) frames to even H and W by repeating the last row / column (no-op when even)."""
+    frames = _check_clip(frames)
+    pad_h, pad_w = frames.shape[1] % 2, frames.shape[2] % 2
+    if not (pad_h or pad_w):
+        return frames
+    return np.pad(frames, ((0, 0), (0, pad_h), (0, pad_w), (0, 0)), mode="edge")
+
+
+def write_video(
+    path: str | Path,
+    frames: np.ndarray,
+    fps: float | Fraction,
+    *,
+    crf: int = 18,
+    preset: str = "medium",
+) -> Path:
+    """Write an mp4 (H.264, yuv420p) or a GIF, chosen by the file extension; atomically.
+
+    Args:
+        path: destination ``.mp4`` or ``.gif``.
+        frames: (T, H, W, 3) uint8 RGB.
+        fps: frames per second (float or Fraction), passed to ffmpeg as an exact fraction.
+        crf: x264 constant rate factor (0 lossless .. 51 worst; mp4 only).
+        preset: x264 preset (``"ultrafast"`` .. ``"veryslow"``; mp4 only).
+    Returns:
+        The written path.
+    """
+    path = Path(path)
+    frames = _check_clip(frames)
+    suffix = path.suffix.lower()
+    if suffix not in VIDEO_SUFFIXES:
+        raise InputError(f"unsupported video extension {path.suffix!r}; use one of {', '.join(VIDEO_SUFFIXES)}",
+                         path)
+    rate = _exact_fps(fps, path)
+    if not 0 <= int(crf) <= 51:
+        raise InputError(f"crf must be in 0..51, got {crf}", path)
+    if suffix == ".mp4" and preset not in X264_PRESETS:
+        raise InputError(f"unknown x264 preset {preset!r}; choose one of {', '.join(X264_PRESETS)}", path)
+    tmp = _open_temp(path)
+    if suffix == ".gif":
+        return _commit(tmp, path, lambda p: _write_gif(p, frames, float(rate)))
+    return _commit(tmp, path, lambda p: _write_mp4(p, pad_to_even(frames), rate, int(crf), str(preset), dest=path))
+
+
+def _write_mp4(path: Path, frames: np.ndarray, rate: Fraction, crf: int, preset: str, *, dest: Path) -> None:
+    """Pipe raw RGB frames into imageio-ffmpeg's ffmpeg binary; raise with ffmpeg's message on failure."""
+    height, width = frames.shape[1:3]
+    cmd = [
+        imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-hide_banner", "-loglevel", "error",
+        "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", f"{rate.numerator}/{rate.denominator}",
+        "-i", "-", "-an", "-c:v", "libx264", "-preset", preset, "-crf", str(crf), "-pix_fmt", "yuv420p",
+        "-movflags", "+faststart", "-f", "mp4", str(path),
+    ]
+    with tempfile.TemporaryFile() as log:
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=log)
+        try:
+            for frame in frames:
+                proc.stdin.write(np.ascontiguousarray(frame).tobytes())
+            proc.stdin.close()
+        except BrokenPipeError:
+            pass  # ffmpeg quit early; its exit status and message are reported below
+        except BaseException:
+            proc.kill()
+            proc.wait()
+            raise
+        code = proc.wait()
+        if code != 0:
+            log.seek(0)
+            message = " ".join(log.read().decode("utf-8", "replace").split())[-500:]
+            raise RuntimeError(f"ffmpeg failed writing {dest} (exit {code}): ...{message}")
+
+
+def _write_gif(path: Path, frames: np.ndarray, fps: float) -> None:
+    iio.imwrite(path, frames, extension=".gif", duration=1000.0 / fps, loop=0)
+
+
+def probe_frame_rate(path: str | Path) -> Fraction:
+    """The exact frame rate of an mp4, read back from its packet timestamps (like ffprobe).
+
+    Runs ffmpeg's ``framecrc`` muxer on the video stream (no decoding) and returns
+    ``time_base_den / (time_base_num * packet_duration)`` of the first packet.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(path), "-map", "0:v:0", "-c", "copy",
+           "-f", "framecrc", "-"]
+    result = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if result.returncode != 0:
+        raise InputError(f"ffmpeg cannot read the video: {result.stderr.strip().splitlines()[-1:]}", path)
+    time_base = None
+    for line in result.stdout.splitlines():
+        if line.startswith("#tb 0:"):
+            num, den = line.split(":", 1)[1].strip().split("/")
+            time_base = Fraction(int(num), int(den))
+        elif time_base is not None and line and not line.startswith("#"):
+            duration = int(line.split(",")[3])
+            return 1 / (time_base * duration)
+    raise InputError("the video has no frames", path)
+
+
+def read_video(path: str | Path) -> tuple[np.ndarray, float]:
+    """Read a whole mp4 or GIF.
+
+    Returns:
+        frames (T, H, W, 3) uint8 RGB, and fps (exact for mp4, from the GIF frame delay otherwise).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    if path.suffix.lower() == ".gif":
+        frames = iio.imread(path, index=None, mode="RGB")  # (T, H, W, 3)
+        meta = iio.immeta(path, index=0)
+        return np.asarray(frames, np.uint8), 1000.0 / float(meta["duration"])
+    reader = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+    meta = next(reader)
+    width, height = meta["size"]
+    frames = [np.frombuffer(buf, np.uint8).reshape(height, width, 3) for buf in reader]
+    if not frames:
+        raise InputError("the video has no frames", path)
+    return np.stack(frames), float(probe_frame_rate(path))
+
+
+def write_image(path: str | Path, image: np.ndarray) -> Path:
+    """Write an (H, W, 3) uint8 RGB image as PNG, atomically (same rules as :func:`write_video`)."""
+    path = Path(path)
+    image = _check_image(image)
+    if path.suffix.lower() not in IMAGE_SUFFIXES:
+        raise InputError(f"unsupported image extension {path.suffix!r}; use .png", path)
+    ok, data = cv2.imencode(".png", np.ascontiguousarray(image[..., ::-1]))
+    if not ok:
+        raise RuntimeError(f"OpenCV could not encode a PNG for {path}")
+    tmp = _open_temp(path)
+    return _commit(tmp, path, lambda p: p.write_bytes(data.tobytes()))
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """Read an image file as (H, W, 3) uint8 RGB."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such image file", path)
+    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if bgr is None:
+        raise InputError("cannot decode the image", path)
+    return np.ascontiguousarray(bgr[..., ::-1])
+
+
+# --- layouts ------------------------------------------------------------------------------------------
+
+def add_border(frames: np.ndarray, colour: tuple[int, int, int], width: int = 4) -> np.ndarray:
+    """Paint a ``width``-pixel frame of ``colour`` over the outer pixels (the size does not change).
+
+    Args:
+        frames: (T, H, W, 3) or (H, W, 3) uint8.
+    Returns:
+        A new array of the same shape.
+    """
+    clip, single = _clip_or_image(frames)
+    out = clip.copy()
+    w = int(width)
+    if w > 0:
+        c = np.asarray(colour, np.uint8)
+        out[:, :w], out[:, -w:], out[:, :, :w], out[:, :, -w:] = c, c, c, c
+    return out[0] if single else out
+
+
+def label(
+    frames: np.ndarray,
+    text: str,
+    *,
+    colour: tuple[int, int, int] = (255, 255, 255),
+    background: tuple[int, int, int] = (0, 0, 0),
+    corner: str = "top-left",
+    inset: int = 0,
+) -> np.ndarray:
+    """Write ``text`` on every frame, in a solid box in a corner (the size does not change).
+
+    The font (OpenCV Hershey simplex, anti-aliased) scales with the frame height and shrinks until the
+    text fits the width. Only ASCII prints (OpenCV's fonts have no other glyphs).
+
+    Args:
+        frames: (T, H, W, 3) or (H, W, 3) uint8.
+        text: one line of text; empty text returns a copy.
+        corner: ``"top-left"`` or ``"bottom-left"``.
+        inset: distance in pixels from the frame edge (e.g. a border's width).
+    Returns:
+        A new array of the same shape.
+    """
+    if corner not in ("top-left", "bottom-left"):
+        raise ValueError(f"corner must be 'top-left' or 'bottom-left', got {corner!r}")
+    clip, single = _clip_or_image(frames)
+    out = clip.copy()
+    if text:
+        height, width = out.shape[1:3]
+        room = max(width - 2 * inset - 6, 8)
+        scale = max(height / 512.0, 0.3)
+        (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
+        while tw > room and scale > 0.25:
+            scale *= 0.9
+            (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
+        box_h = th + base + 6
+        top = inset if corner == "top-left" else height - inset - box_h
+        x0 = inset
+        out[:, max(top, 0):max(top + box_h, 0), x0:min(x0 + tw + 6, width)] = np.asarray(background, np.uint8)
+        for t in range(out.shape[0]):
+            cv2.putText(out[t], text, (x0 + 3, top + 3 + th), _FONT, scale, tuple(int(c) for c in colour), 1,
+                        cv2.LINE_AA)
+    return out[0] if single else out
+
+
+def _hold_last(clip: np.ndarray, length: int) -> np.ndarray:
+    """Pad (T, H, W, 3) to ``length`` frames by repeating the last frame."""
+    if clip.shape[0] >= length:
+        return clip
+    return np.concatenate([clip, np.repeat(clip[-1:], length - clip.shape[0], axis=0)], axis=0)
+
+
+def grid(
+    clips: list[np.ndarray],
+    labels: list[str] | None = None,
+    columns: int | None = None,
+    *,
+    gap: int = 2,
+    background: tuple[int, int, int] = (0, 0, 0),
+) -> np.ndarray:
+    """Tile clips of equal frame size into one clip.
+
+    Shorter clips hold their last frame until the longest ends; empty cells are ``background``.
+
+    Args:
+        clips: K arrays (T_k, H, W, 3) uint8 (all the same H and W).
+        labels: K texts drawn in each cell's top-left corner, or None.
+        columns: cells per row (default ceil(sqrt(K))).
+        gap: pixels between cells.
+    Returns:
+        (max T_k, rows*H + (rows-1)*gap, columns*W + (columns-1)*gap, 3) uint8.
+    """
+    if not clips:
+        raise ValueError("grid needs at least one clip")
+    clips = [_check_clip(c, f"clip {i}") for i, c in enumerate(clips)]
+    height, width = clips[0].shape[1:3]
+    for i, c in enumerate(clips):
+        if c.shape[1:3] != (height, width):
+            raise ValueError(f"clip {i} is {c.shape[2]}x{c.shape[1]} but clip 0 is {width}x{height}")
+    if labels is not None:
+        if len(labels) != len(clips):
+            raise ValueError(f"{len(labels)} labels for {len(clips)} clips")
+        clips = [label(c, text) for c, text in zip(clips, labels)]
+    n = len(clips)
+    cols = int(columns) if columns else math.ceil(math.sqrt(n))
+    if cols < 1:
+        raise ValueError(f"columns must be >= 1, got {columns}")
+    rows = math.ceil(n / cols)
+    length = max(c.shape[0] for c in clips)
+    out = np.empty((length, rows * height + (rows - 1) * gap, cols * width + (cols - 1) * gap, 3), np.uint8)
+    out[:] = np.asarray(background, np.uint8)
+    for k, clip in enumerate(clips):
+        r, c = divmod(k, cols)
+        y, x = r * (height + gap), c * (width + gap)
+        out[:, y:y + height, x:x + width] = _hold_last(clip, length)
+    return out
+
+
+def observed_future_video(
+    observed: np.ndarray,
+    futures: list[np.ndarray],
+    labels: list[str] | None = None,
+    *,
+    columns: int | None = None,
+    border: int = 4,
+) -> np.ndarray:
+    """The papers' layout for K sampled futures of one observed clip.
+
+    Every cell plays the same observed frames framed in GREEN, then its own predicted future framed in
+    RED; the K cells are tiled with :func:`grid` (a shorter future holds its last frame).
+
+    Args:
+        observed: (To, H, W, 3) uint8 observed frames.
+        futures: K arrays (Tf_k, H, W, 3) uint8 predicted frames.
+        labels: K texts (e.g. ``"sample 1"``), or None.
+    Returns:
+        (To + max Tf_k, H', W', 3) uint8.
+    """
+    observed = _check_clip(observed, "observed")
+    if not futures:
+        raise ValueError("observed_future_video needs at least one future")
+    framed_obs = add_border(observed, GREEN, border)
+    cells = []
+    for k, future in enumerate(futures):
+        future = _check_clip(future, f"future {k}")
+        if future.shape[1:3] != observed.shape[1:3]:
+            raise ValueError(f"future {k} frames are {future.shape[1:3]} but observed are {observed.shape[1:3]}")
+        cells.append(np.concatenate([framed_obs, add_border(future, RED, border)], axis=0))
+    if labels is not None:
+        if len(labels) != len(cells):
+            raise ValueError(f"{len(labels)} labels for {len(cells)} futures")
+        cells = [label(c, text, inset=border) for c, text in zip(cells, labels)]
+    return grid(cells, None, columns)
+
+
+def contact_sheet(
+    frames: np.ndarray,
+    every: int = 1,
+    columns: int | None = None,
+    *,
+    numbered: bool = True,
+    gap: int = 2,
+) -> np.ndarray:
+    """Frames 0, every, 2*every, ... of a clip tiled into one image.
+
+    Args:
+        frames: (T, H, W, 3) uint8.
+        every: take one frame in ``every``.
+        columns: cells per row (default min(count, 8)).
+        numbered: write each frame's index in its bottom-left corner.
+    Returns:
+        (H', W', 3) uint8 image.
+    """
+    frames = _check_clip(frames)
+    if int(every) < 1:
+        raise ValueError(f"every must be >= 1, got {every}")
+    index = list(range(0, frames.shape[0], int(every)))
+    cells = [frames[i:i + 1] for i in index]
+    if numbered:  # bottom-left, so the frame number does not cover a label already in the frames
+        cells = [label(c, str(i), corner="bottom-left") for c, i in zip(cells, index)]
+    cols = int(columns) if columns else min(len(cells), 8)
+    return grid(cells, None, cols, gap=gap)[0]
