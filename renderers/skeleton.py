@@ -28,6 +28,8 @@ Palettes.
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 
 import cv2
@@ -285,6 +287,21 @@ def side_colour(skeleton: Skeleton, joint: int) -> tuple[int, int, int]:
     return {"left": LEFT_COLOUR, "right": RIGHT_COLOUR}.get(skeleton.side(joint), CENTRE_COLOUR)
 
 
+@functools.lru_cache(maxsize=None)
+def _palette(skeleton_name: str, palette: str) -> tuple[tuple, tuple, tuple]:
+    """(limbs, limb colours, joint colours) of a skeleton in a palette; cached, since drawing a frame is far
+    cheaper than recomputing the tints."""
+    if palette == "openpose":
+        limbs = OPENPOSE_LIMBS
+        limb_colours = tuple(_tint(OPENPOSE_COLOURS[i], OPENPOSE_LIMB_DIM - 1.0) for i in range(len(limbs)))
+        return limbs, limb_colours, tuple(OPENPOSE_COLOURS)
+    skel = _skeleton(skeleton_name)
+    limbs = tuple(skel.bones)
+    limb_colours = tuple(side_colour(skel, child) for _, child in limbs)
+    joint_colours = tuple(_tint(side_colour(skel, j), 0.45) for j in range(skel.num_joints))
+    return limbs, limb_colours, joint_colours
+
+
 def draw_skeleton(
     image: np.ndarray,
     joints_2d: np.ndarray,
@@ -313,19 +330,12 @@ def draw_skeleton(
     joints_2d = np.asarray(joints_2d, np.float64)
     if joints_2d.shape != (skel.num_joints, 2):
         raise ValueError(f"joints_2d must be ({skel.num_joints}, 2) for {skel.name}, got {joints_2d.shape}")
-    if style.palette == "openpose":
-        if skel.name != OPENPOSE_18.name:
-            joints_2d = to_openpose18(joints_2d, skel)
-            depth = None if depth is None else to_openpose18(depth[:, None], skel)[:, 0]
-        limbs = OPENPOSE_LIMBS
-        limb_colours = [_tint(OPENPOSE_COLOURS[i], OPENPOSE_LIMB_DIM - 1.0) for i in range(len(limbs))]
-        joint_colours = list(OPENPOSE_COLOURS)
-        order = range(len(limbs))
-    else:
-        limbs = tuple(skel.bones)
-        limb_colours = [side_colour(skel, child) for _, child in limbs]
-        joint_colours = [_tint(side_colour(skel, j), 0.45) for j in range(skel.num_joints)]
-        order = range(len(limbs))
+    if style.palette == "openpose" and skel.name != OPENPOSE_18.name:
+        joints_2d = to_openpose18(joints_2d, skel)
+        depth = None if depth is None else to_openpose18(depth[:, None], skel)[:, 0]
+    limbs, limb_colours, joint_colours = _palette(skel.name, style.palette)
+    order = range(len(limbs))
+    if style.palette != "openpose":
         if depth is not None:
             d = np.asarray(depth, np.float64)
             mean_depth = np.array([d[a] + d[b] for a, b in limbs])
