@@ -1,0 +1,99 @@
+"""`motion2video train-frames`: train the keypoint-conditioned frame generator on synthetic Anny renders."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+EXAMPLES = """\
+examples:
+  motion2video train-frames --domain body -o out/frames-body-128.safetensors --steps 4000 --cache /tmp/m2v-cache
+  motion2video train-frames --domain face -o out/frames-face-128.safetensors --steps 3500 --resume
+  motion2video train-frames --domain body -o out/tiny.safetensors --steps 50 --train-sequences 16
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "train-frames",
+        help="train the keypoint-conditioned frame generator (body or face)",
+        description="Render (or reuse from the cache) a synthetic appearance dataset with the Anny body or "
+        "face renderer, posed by real captures, then train the frame generator with L1 + SSIM. Checkpoints "
+        "(safetensors) are written periodically; --resume continues an interrupted run.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--domain", choices=("body", "face"), required=True, help="body or face frames")
+    p.add_argument("-o", "--output", required=True, help="checkpoint to write (.safetensors)")
+    p.add_argument("--steps", type=int, default=3000, help="optimisation steps (default 3000)")
+    p.add_argument("--size", type=int, default=128, choices=(64, 128, 256), help="frame size (default 128)")
+    p.add_argument("--batch-size", type=int, default=8, help="pairs per step (default 8)")
+    p.add_argument("--lr", type=float, default=1e-3, help="peak learning rate (default 1e-3)")
+    p.add_argument("--cache", default=None,
+                   help="directory for the rendered npz shards (default ~/.cache/motion2video/frames)")
+    p.add_argument("--data-root", default=None,
+                   help="folder with mocap/ and face/ captures (default ../shared/data beside the repository)")
+    p.add_argument("--train-sequences", type=int, default=None,
+                   help="rendered training sequences (default 240, 12 frames each)")
+    p.add_argument("--crop", type=int, default=None,
+                   help="train on CROP x CROP windows holding both poses of a pair (0: whole frames; "
+                   "default size/2, about 8x less compute per step than whole frames for the same quality)")
+    p.add_argument("--adversarial", action="store_true", help="add the patch discriminator (slow on CPU)")
+    p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
+    p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
+    p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
+    p.add_argument("--threads", type=int, default=1,
+                   help="torch CPU threads (default 1: on 2 shared cores one thread ran 3x faster than two)")
+    p.add_argument("--no-progress", action="store_true", help="hide progress bars")
+    p.set_defaults(run=run)
+
+
+def default_crop(domain: str, size: int) -> int:
+    """Training crop: half the frame (measured: body, 400 steps on 64 crops reach the PSNR of 400 steps on
+    whole 128 frames in 1/8 of the time; faces train well on them too)."""
+    return size // 2
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from motion2video.errors import InputError
+    from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
+    from motion2video.frames.train import TrainFramesConfig, train_frames
+
+    if args.threads < 1:
+        raise InputError(f"--threads must be >= 1, got {args.threads}")
+    import torch
+
+    torch.set_num_threads(args.threads)
+    if args.steps < 1:
+        raise InputError(f"--steps must be >= 1, got {args.steps}")
+    if args.batch_size < 1:
+        raise InputError(f"--batch-size must be >= 1, got {args.batch_size}")
+    output = Path(args.output)
+    if output.suffix != ".safetensors":
+        raise InputError("the checkpoint name must end in .safetensors", output)
+    spec = default_spec(args.domain, "train", args.size, seed=args.seed)
+    if args.train_sequences is not None:
+        if args.train_sequences < 1:
+            raise InputError(f"--train-sequences must be >= 1, got {args.train_sequences}")
+        spec = replace(spec, num_sequences=args.train_sequences,
+                       num_identities=min(spec.num_identities, args.train_sequences))
+    crop = default_crop(args.domain, args.size) if args.crop is None else args.crop
+    if crop < 0 or crop > args.size or crop % 16:
+        raise InputError(f"--crop must be 0 or a multiple of 16 up to --size, got {crop}")
+    cache = Path(args.cache) if args.cache else default_cache_dir()
+    seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
+    config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
+                               adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
+                               seed=args.seed)
+    result = train_frames(seqs, output=output, config=config, resume=args.resume,
+                          progress=not args.no_progress,
+                          extra_metadata={"dataset_spec": spec.key()})
+    last = result.history[-1] if result.history else {}
+    print(json.dumps({"checkpoint": str(result.path), "steps": result.steps,
+                      "wall_s": round(result.wall_s, 1), "total_wall_s": round(result.total_wall_s, 1),
+                      "steps_per_second": round(result.steps_per_second, 3),
+                      "last_loss": {k: round(v, 5) for k, v in last.items() if k != "step"}}))
+    return 0

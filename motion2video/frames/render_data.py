@@ -1,0 +1,264 @@
+"""Rendering the synthetic appearance sequences of :mod:`motion2video.frames.data` with the Anny renderers.
+
+Bodies: a window of a real mocap clip (loaded as canonical h36m-17 through the BVH loader), posed on an
+Anny body by the body renderer's IK, one identity (phenotype + region colours), a background crop, a camera
+yaw and elevation, a light level and tint; control points are the 3D joints projected with the camera that
+rendered the frames.
+
+Faces: a window of a real ARKit capture (expression) with head pose from the face-dynamics module, an
+Anny face with one identity, background, camera yaw and light; the structure is the same face rendered in
+the face renderer's shaded grey structure style; control points are projected face-mesh vertices.
+
+Everything a shard holds depends only on ``(spec, shard index)``, so shards can be rendered in any order
+and an interrupted generation resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from motion2video.errors import InputError
+from motion2video.frames.data import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
+                                      default_data_root, identities, is_test_clip)
+
+# Camera and light variation per sequence.
+BODY_AZIMUTH_DEG = (-40.0, 40.0)
+BODY_ELEVATION_DEG = (0.0, 15.0)
+FACE_AZIMUTH_DEG = (-25.0, 25.0)
+FACE_HEAD_AMPLITUDE = 1.5  # procedural head-pose excursions (x the face-dynamics defaults)
+FACE_CONTROL_POINTS = 48  # projected face-mesh vertices used by the limb-warp baseline
+LIGHT_GAIN = (0.75, 1.15)
+LIGHT_TINT = 0.08  # per-channel multiplicative tint range around 1
+
+
+@dataclass
+class SequenceSource:
+    """Everything needed to render the sequences of one split: the clips, identities and backgrounds."""
+
+    spec: DatasetSpec
+    clip_paths: list[Path]
+    clip_names: list[str]
+    identities: list[Identity]
+    backgrounds: list[np.ndarray]
+    manifest: dict = field(default_factory=dict)
+    _clips: dict = field(default_factory=dict)
+
+    @classmethod
+    def create(cls, spec: DatasetSpec, *, data_root: str | Path | None = None) -> "SequenceSource":
+        root = Path(data_root) if data_root is not None else default_data_root()
+        if spec.domain == "body":
+            from motion2video.formats.manifest import read_manifest
+
+            folder = root / "mocap"
+            manifest_path = folder / "manifest.csv"
+            if not manifest_path.is_file():
+                raise InputError("no mocap manifest.csv here (give --data-root, the folder holding mocap/)",
+                                 folder)
+            manifest = read_manifest(manifest_path)
+            names = [f for f in manifest if is_test_clip(f) == (spec.split == "test")]
+        else:
+            folder = root / "face"
+            if not folder.is_dir():
+                raise InputError("no face capture folder here (give --data-root, the folder holding face/)", folder)
+            manifest = {}
+            names = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*.csv")
+                           if p.name != "manifest.csv")
+            names = [f for f in names if is_test_face_clip(f) == (spec.split == "test")]
+        if not names:
+            raise InputError(f"no {spec.domain} clips for the {spec.split} split", folder)
+        return cls(spec=spec, clip_paths=[folder / n for n in names], clip_names=names,
+                   identities=identities(spec.split, spec.num_identities, seed=spec.seed),
+                   backgrounds=background_images(), manifest=manifest)
+
+    def clip(self, i: int):
+        """The i-th clip, loaded once: a Motion (body) or a FaceMotion (face)."""
+        if i not in self._clips:
+            if self.spec.domain == "body":
+                from motion2video.formats.bvh import load_bvh
+
+                self._clips[i] = load_bvh(self.clip_paths[i], manifest=self.manifest[self.clip_names[i]])
+            else:
+                from motion2video.data.face_data import load_face_clip
+
+                self._clips[i] = load_face_clip(self.clip_paths[i])
+        return self._clips[i]
+
+    def close(self) -> None:
+        self._clips.clear()
+
+
+def is_test_face_clip(name: str) -> bool:
+    """Held-out face captures: one of the five Live Link Face takes (``S07-001``), fixed so both splits
+    keep real captures (there are only six files)."""
+    return Path(name).stem == "S07-001"
+
+
+def window_times(rng: np.random.Generator, num_frames: int, fps: float, *, frames: int,
+                 seconds: float) -> np.ndarray:
+    """(frames,) increasing frame positions spread evenly over a random window of ``seconds`` (or the whole
+    clip when shorter), rounded to source frames."""
+    span = min(num_frames - 1, int(round(seconds * fps)))
+    start = int(rng.integers(0, num_frames - span)) if num_frames - span > 0 else 0
+    return np.round(start + np.linspace(0, span, frames)).astype(np.int64)
+
+
+def light_jitter(rng: np.random.Generator) -> np.ndarray:
+    """(3,) multiplicative light level and tint for the rendered person."""
+    return rng.uniform(*LIGHT_GAIN) * rng.uniform(1.0 - LIGHT_TINT, 1.0 + LIGHT_TINT, 3)
+
+
+def relight(frames: np.ndarray, masks: np.ndarray, gain: np.ndarray) -> np.ndarray:
+    """Scale the person's pixels (``masks``) by ``gain`` per channel: (T, H, W, 3) uint8 -> same."""
+    out = frames.astype(np.float32)
+    out[masks] *= gain
+    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+
+
+def _rgb255(colour: tuple[float, float, float]) -> tuple[int, int, int]:
+    return tuple(int(round(255 * c)) for c in colour)
+
+
+def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
+    """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, clip index, start)."""
+    from motion2video.motion import Motion
+    from renderers.body import BodyRenderer, BodyStyle
+    from renderers.camera import project
+
+    spec = source.spec
+    size = spec.image_size
+    ci = int(rng.integers(len(source.clip_paths)))
+    clip = source.clip(ci)
+    times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
+                         seconds=spec.window_seconds)
+    motion = Motion(clip.joints[times], clip.fps, source=clip.source)
+    style = BodyStyle(
+        size=(size, size),
+        phenotype=dict(identity.phenotype),
+        skin=_rgb255(identity.skin), top=_rgb255(identity.top), trousers=_rgb255(identity.trousers),
+        shoes=_rgb255(identity.shoes), hair=_rgb255(identity.hair),
+        background=background_crop(rng, source.backgrounds, size),
+        azimuth_deg=float(rng.uniform(*BODY_AZIMUTH_DEG)),
+        elevation_deg=float(rng.uniform(*BODY_ELEVATION_DEG)),
+    )
+    gain = light_jitter(rng)
+    with BodyRenderer(style) as renderer:
+        out = renderer.render_with_masks(motion)
+    images = relight(out.frames, out.masks, gain)
+    points = project(motion.joints, out.camera)[..., :2].astype(np.float32)  # (T, 17, 2)
+    return images, points, ci, int(times[0])
+
+
+def render_shard(source: SequenceSource, shard: int, *,
+                 on_sequence: Callable[[int], object] | None = None) -> FrameSequences:
+    """Render the sequences of shard ``shard`` of ``source.spec``."""
+    spec = source.spec
+    first = shard * spec.sequences_per_shard
+    last = min(spec.num_sequences, first + spec.sequences_per_shard)
+    if first >= last:
+        raise ValueError(f"shard {shard} is past the end of the split ({spec.num_shards} shards)")
+    images, points, structs, ident, clips, starts = [], [], [], [], [], []
+    for i in range(first, last):
+        rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
+        ident_index = i % spec.num_identities
+        identity = source.identities[ident_index]
+        if spec.domain == "body":
+            im, pts, ci, start = render_body_sequence(source, rng, identity)
+        else:
+            im, pts, st, ci, start = render_face_sequence(source, rng, identity)
+            structs.append(st)
+        images.append(im)
+        points.append(pts)
+        ident.append(ident_index)
+        clips.append(source.clip_names[ci])
+        starts.append(start)
+        if on_sequence is not None:
+            on_sequence(1)
+    return FrameSequences(
+        domain=spec.domain, images=np.stack(images), points=np.stack(points),
+        structure_images=np.stack(structs) if structs else None,
+        identity=np.asarray(ident, np.int64), clip=np.asarray(clips), start=np.asarray(starts, np.int64),
+    )
+
+
+def farthest_point_subset(points: np.ndarray, count: int) -> np.ndarray:
+    """(count,) indices of a well-spread subset of (N, 3) points (greedy farthest-point sampling, starting
+    from the point with the smallest y, i.e. the front-most)."""
+    count = min(count, len(points))
+    chosen = [int(np.argmin(points[:, 1]))]
+    dist = np.linalg.norm(points - points[chosen[0]], axis=1)
+    for _ in range(count - 1):
+        nxt = int(np.argmax(dist))
+        chosen.append(nxt)
+        dist = np.minimum(dist, np.linalg.norm(points - points[nxt], axis=1))
+    return np.asarray(chosen, np.int64)
+
+
+def face_control_vertices(vertices: np.ndarray, *, count: int = FACE_CONTROL_POINTS) -> np.ndarray:
+    """Indices of face-front vertices used as limb-warp control points, chosen on one frame's (K, 3) head
+    sub-mesh vertices: the front half of the head (y below the head's median, the face looks along -y) in
+    the upper 65 % of the drawn mesh's height range (head and chin, not the chest), spread by
+    farthest-point sampling."""
+    y, z = vertices[:, 1], vertices[:, 2]
+    front = (y < np.median(y)) & (z > z.min() + 0.35 * (z.max() - z.min()))
+    ids = np.flatnonzero(front)
+    return ids[farthest_point_subset(vertices[ids], count)]
+
+
+def yawed_camera(camera, azimuth_deg: float):
+    """The camera turned about the vertical axis through its target by ``azimuth_deg``."""
+    from renderers.camera import PinholeCamera
+
+    a = np.radians(azimuth_deg)
+    rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    target = np.asarray(camera.target, np.float64)
+    position = target + rot @ (np.asarray(camera.position, np.float64) - target)
+    return PinholeCamera(tuple(float(v) for v in position), camera.target, camera.yfov, camera.width,
+                         camera.height)
+
+
+def render_face_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
+    """One face sequence.
+
+    Returns:
+        images (T, S, S, 3) uint8, points (T, K, 2) float32 projected control vertices, structures
+        (T, S, S) uint8 grey structure renders, clip index, first source frame.
+    """
+    from motion2video.data.face_dynamics import head_pose_track
+    from motion2video.motion import NUM_EXPRESSIONS, FaceMotion
+    from renderers.face import FaceRenderer, FaceStyle
+
+    spec = source.spec
+    size = spec.image_size
+    ci = int(rng.integers(len(source.clip_paths)))
+    clip = source.clip(ci)
+    times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
+                         seconds=spec.window_seconds)
+    params = clip.params[times].copy()  # (T, 58)
+    if not np.any(params[:, NUM_EXPRESSIONS:]):  # the capture has no head pose: add a procedural track
+        track = head_pose_track(clip.num_frames, clip.fps, int(rng.integers(2**31)), amplitude=FACE_HEAD_AMPLITUDE)
+        params[:, NUM_EXPRESSIONS:] = track[times]
+    face = FaceMotion(params, clip.fps, identity=dict(identity.phenotype), source=clip.source)
+    background = background_crop(rng, source.backgrounds, size)
+    appearance = FaceStyle(size=(size, size), style="appearance", skin=_rgb255(identity.skin),
+                           hair=_rgb255(identity.hair), iris=_rgb255(identity.iris),
+                           lips=_rgb255(tuple(c * f for c, f in zip(identity.skin, (0.85, 0.6, 0.6)))),
+                           top=_rgb255(identity.top), background=background)
+    structure = FaceStyle(size=(size, size), style="structure", background=(0, 0, 0))
+    azimuth = float(rng.uniform(*FACE_AZIMUTH_DEG))
+    gain = light_jitter(rng)
+    with FaceRenderer(appearance) as renderer:
+        camera = yawed_camera(renderer.camera_for(face), azimuth)
+        out = renderer.render_with_masks(face, camera=camera)
+        verts = np.concatenate([v for _, v in renderer.vertices(face)])  # (T, K, 3)
+    with FaceRenderer(structure) as renderer:
+        grey = renderer.render(face, camera=camera)  # (T, S, S, 3)
+    images = relight(out.frames, out.masks, gain)
+    control = face_control_vertices(verts[0])
+    points = np.concatenate([out.landmarks, camera.project(verts[:, control])[..., :2]], axis=1)  # (T, 8+K, 2)
+    points = points.astype(np.float32)
+    structures = np.rint(grey.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # (T, S, S)
+    return images, points, structures, ci, int(times[0])

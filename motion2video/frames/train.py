@@ -1,0 +1,236 @@
+"""Training loop of the frame generator: L1 + SSIM (+ an optional LSGAN patch discriminator), Adam with
+warm-up and cosine decay, periodic resumable checkpoints.
+
+Batches are drawn on the fly from rendered sequences (:mod:`motion2video.frames.data`): any two frames of a
+sequence make a pair. The batch at step ``s`` depends only on ``(seed, s)``, so a resumed run sees the same
+batches as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from motion2video.errors import InputError
+from motion2video.frames.checkpoint import (load_frame_model, load_train_state, save_frame_model,
+                                            save_train_state, state_path)
+from motion2video.frames.data import FrameSequences, make_pairs, sample_pair_index, structure_channels
+from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, PatchDiscriminator,
+                                       count_parameters, images_to_tensor, reconstruction_loss)
+
+
+@dataclass(frozen=True)
+class TrainFramesConfig:
+    """Optimisation settings.
+
+    Attributes:
+        steps: total optimisation steps.
+        batch_size: pairs per step.
+        lr: peak learning rate (Adam).
+        warmup_steps: linear warm-up length.
+        lr_final_fraction: the cosine decay ends at ``lr * lr_final_fraction``.
+        ssim_weight: weight of (1 - SSIM) next to L1.
+        adversarial: add a conditional patch discriminator (LSGAN); off by default (slow on CPU).
+        adv_weight: weight of the generator's adversarial term.
+        flip: random left-right mirroring of pairs.
+        crop: train on ``crop`` x ``crop`` windows holding both poses of each pair (0: whole frames). The
+            network is fully convolutional, so it still runs on whole frames; crops put the compute where
+            the person is (a body fills a small part of the frame).
+        checkpoint_every: write the checkpoint and resume state every this many steps.
+        log_every: record the losses every this many steps.
+        seed: seeds the initialisation and the batches.
+    """
+
+    steps: int = 3000
+    batch_size: int = 8
+    lr: float = 1e-3
+    warmup_steps: int = 100
+    lr_final_fraction: float = 0.05
+    ssim_weight: float = 1.0
+    adversarial: bool = False
+    adv_weight: float = 0.01
+    flip: bool = True
+    crop: int = 0
+    checkpoint_every: int = 250
+    log_every: int = 25
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.steps < 1 or self.batch_size < 1 or self.checkpoint_every < 1 or self.log_every < 1:
+            raise ValueError("steps, batch_size, checkpoint_every and log_every must be >= 1")
+        if not self.lr > 0:
+            raise ValueError("lr must be > 0")
+        if self.crop < 0:
+            raise ValueError("crop must be >= 0")
+
+
+def learning_rate(step: int, config: TrainFramesConfig) -> float:
+    """Learning rate at ``step`` (0-based): linear warm-up, then cosine decay to the final fraction."""
+    if step < config.warmup_steps:
+        return config.lr * (step + 1) / config.warmup_steps
+    span = max(1, config.steps - config.warmup_steps)
+    progress = min(1.0, (step - config.warmup_steps) / span)
+    low = config.lr * config.lr_final_fraction
+    return low + 0.5 * (config.lr - low) * (1.0 + math.cos(math.pi * progress))
+
+
+@dataclass
+class TrainFramesResult:
+    """What a run did: the checkpoint, steps done in total, wall time of this call and in total (over
+    resumes), steps per second of this call, and the logged losses ``{"step", "loss", "l1", "ssim", ...}``."""
+
+    path: Path
+    steps: int
+    wall_s: float
+    total_wall_s: float
+    steps_per_second: float
+    history: list[dict] = field(default_factory=list)
+
+
+def _batch_tensors(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | None, *, crop: int = 0,
+                   rng: np.random.Generator | None = None):
+    pairs = make_pairs(seqs, index, flip=flip, crop=crop, rng=rng)
+    x_ref = images_to_tensor(pairs.ref_images)  # (B, 3, H, W)
+    x_tgt = images_to_tensor(pairs.tgt_images)
+    p_ref = torch.from_numpy(pairs.ref_structures)  # (B, S, H, W)
+    p_tgt = torch.from_numpy(pairs.tgt_structures)
+    return x_ref, x_tgt, p_ref, p_tgt
+
+
+def train_frames(
+    seqs: FrameSequences,
+    *,
+    output: str | Path,
+    config: TrainFramesConfig = TrainFramesConfig(),
+    model_config: FrameGeneratorConfig | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    extra_metadata: dict | None = None,
+) -> TrainFramesResult:
+    """Train a frame generator on ``seqs`` and write ``output`` (+ its ``.state`` resume file).
+
+    Args:
+        seqs: training sequences (one domain, one image size).
+        output: checkpoint path (``.safetensors``).
+        config: optimisation settings.
+        model_config: the architecture (default: the defaults for the data's domain and size).
+        resume: continue from ``output`` and its resume state when they exist (the architecture is then
+            the checkpoint's); without them training starts from scratch (a note is printed).
+        progress: show a tqdm progress bar.
+        extra_metadata: merged into the checkpoint's ``train`` summary.
+    """
+    output = Path(output)
+    if model_config is None:
+        model_config = FrameGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
+                                            structure_channels=structure_channels(seqs.domain))
+    factor = 2 ** (len(model_config.channels) - 1)
+    if config.crop and (config.crop > seqs.image_size or config.crop % factor):
+        raise ValueError(f"crop {config.crop} must be <= the image size {seqs.image_size} and a multiple of {factor}")
+    if (model_config.domain, model_config.image_size) != (seqs.domain, seqs.image_size):
+        raise ValueError(f"model is {model_config.domain}/{model_config.image_size} but the data is "
+                         f"{seqs.domain}/{seqs.image_size}")
+    torch.manual_seed(config.seed)
+    start_step, past_wall = 0, 0.0
+    model = FrameGenerator(model_config)
+    have_state = output.is_file() and state_path(output).is_file()
+    if resume and have_state:
+        loaded = load_frame_model(output)
+        if (loaded.config.domain, loaded.config.image_size) != (seqs.domain, seqs.image_size):
+            raise InputError(f"cannot resume: the checkpoint is {loaded.config.domain}/{loaded.config.image_size}"
+                             f" but the data is {seqs.domain}/{seqs.image_size}", output)
+        model = loaded.model
+    elif resume:
+        print(f"train-frames: nothing to resume at {output} (no checkpoint + .state file); starting from step 0")
+    model.train()
+    optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, betas=(0.9, 0.99))
+    disc = disc_opt = None
+    if config.adversarial:
+        disc = PatchDiscriminator(model.config.structure_channels)
+        disc_opt = torch.optim.Adam(disc.parameters(), lr=config.lr, betas=(0.5, 0.99))
+    if resume and have_state:
+        start_step, extra = load_train_state(output, optimizer=optimizer, discriminator=disc,
+                                             disc_optimizer=disc_opt)
+        past_wall = float(extra.get("total_wall_s", 0.0))
+    if start_step >= config.steps:
+        print(f"train-frames: {output} has already done {start_step} >= {config.steps} steps")
+
+    summary_base = {
+        "train_config": dataclasses.asdict(config),
+        "data": seqs.summary(),
+        "parameters": count_parameters(model),
+        **(extra_metadata or {}),
+    }
+    history: list[dict] = []
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=config.steps, initial=start_step, desc=f"train-frames {seqs.domain}", unit="step")
+    t0 = time.perf_counter()
+
+    def checkpoint(step: int) -> None:
+        total = past_wall + time.perf_counter() - t0
+        train_meta = {**summary_base, "steps": step, "total_wall_s": round(total, 1),
+                      "last_losses": history[-1] if history else {}}
+        save_frame_model(model, output, step=step, train=train_meta)
+        save_train_state(output, optimizer=optimizer, step=step, discriminator=disc, disc_optimizer=disc_opt,
+                         extra={"total_wall_s": total})
+
+    running: dict[str, float] = {}
+    step = start_step
+    for step in range(start_step, config.steps):
+        rng = np.random.default_rng([config.seed, step])
+        index = sample_pair_index(rng, seqs, config.batch_size)
+        flip = rng.random(config.batch_size) < 0.5 if config.flip else None
+        x_ref, x_tgt, p_ref, p_tgt = _batch_tensors(seqs, index, flip, crop=config.crop, rng=rng)
+        lr = learning_rate(step, config)
+        for group in optimizer.param_groups:
+            group["lr"] = lr
+
+        pred = model(x_ref, p_ref, p_tgt)  # (B, 3, H, W)
+        rec = reconstruction_loss(pred, x_tgt, ssim_weight=config.ssim_weight)
+        total = rec.total
+        terms = {"loss": float(rec.total.detach()), "l1": rec.l1, "ssim": rec.ssim}
+        if disc is not None:
+            g_adv = ((disc(pred, p_tgt) - 1.0) ** 2).mean()
+            total = total + config.adv_weight * g_adv
+            terms["g_adv"] = float(g_adv.detach())
+        optimizer.zero_grad(set_to_none=True)
+        total.backward()
+        optimizer.step()
+        if disc is not None:
+            for group in disc_opt.param_groups:
+                group["lr"] = lr
+            d_loss = ((disc(x_tgt, p_tgt) - 1.0) ** 2).mean() + (disc(pred.detach(), p_tgt) ** 2).mean()
+            disc_opt.zero_grad(set_to_none=True)
+            d_loss.backward()
+            disc_opt.step()
+            terms["d"] = float(d_loss.detach())
+
+        for k, v in terms.items():
+            running[k] = running.get(k, 0.0) + v
+        done = step + 1
+        if done % config.log_every == 0 or done == config.steps:
+            count = config.log_every if done % config.log_every == 0 else done % config.log_every
+            record = {"step": done, "lr": lr, **{k: v / count for k, v in running.items()}}
+            history.append(record)
+            running = {}
+            if bar is not None:
+                bar.set_postfix(loss=f"{record['loss']:.4f}", ssim=f"{record['ssim']:.3f}")
+        if bar is not None:
+            bar.update(1)
+        if done % config.checkpoint_every == 0 or done == config.steps:
+            checkpoint(done)
+    if bar is not None:
+        bar.close()
+    wall = time.perf_counter() - t0
+    steps_done = max(0, config.steps - start_step)
+    return TrainFramesResult(path=output, steps=max(start_step, config.steps), wall_s=wall,
+                             total_wall_s=past_wall + wall,
+                             steps_per_second=steps_done / wall if wall > 0 else 0.0, history=history)

@@ -1,0 +1,119 @@
+"""The synthetic appearance data rendered with the Anny body and face renderers from the real captures in
+../shared/data, and the train-frames / evaluate-frames commands end to end (tiny sizes)."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from motion2video.cli import main
+from motion2video.frames.data import (DatasetSpec, body_structures, cache_folder, evaluation_pair_index,
+                                      is_test_clip, load_or_generate, make_pairs)
+from motion2video.frames.render_data import is_test_face_clip
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+needs_data = pytest.mark.skipif(not (DATA / "mocap" / "manifest.csv").is_file(),
+                                reason="real captures not found at ../shared/data")
+
+
+@pytest.fixture(autouse=True)
+def one_thread():
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+def tiny_spec(domain: str, split: str) -> DatasetSpec:
+    return DatasetSpec(domain=domain, split=split, image_size=64, num_sequences=2, frames_per_sequence=3,
+                       num_identities=2, sequences_per_shard=1, window_seconds=1.0 if domain == "body" else 3.0)
+
+
+def test_held_out_clip_rules():
+    from motion2video.formats.manifest import read_manifest
+
+    names = list(read_manifest(DATA / "mocap" / "manifest.csv"))
+    test = [n for n in names if is_test_clip(n)]
+    assert 8 <= len(test) <= 20 and len(names) - len(test) >= 50
+    assert is_test_face_clip("livelinkface/S07-001.csv") and not is_test_face_clip("llv/dao.csv")
+
+
+@needs_data
+@pytest.mark.slow
+def test_rendered_body_sequences(tmp_path):
+    spec = tiny_spec("body", "test")
+    seqs = load_or_generate(spec, cache_dir=tmp_path, progress=False)
+    assert seqs.images.shape == (2, 3, 64, 64, 3) and seqs.images.dtype == np.uint8
+    assert seqs.points.shape == (2, 3, 17, 2) and seqs.structure_images is None
+    assert all(is_test_clip(str(c)) for c in seqs.clip)  # held-out clips only
+    # The person moves between frames, the joints project inside the picture, the background is kept.
+    assert not np.array_equal(seqs.images[0, 0], seqs.images[0, 2])
+    assert np.all((seqs.points > -2) & (seqs.points < 66))
+    st = body_structures(seqs.points[0], 64)
+    assert st.shape == (3, 33, 64, 64) and st.max() == pytest.approx(1.0, abs=0.05)
+    # Cached: a second call loads the same shards without rendering.
+    shards = sorted(cache_folder(tmp_path, spec).glob("shard-*.npz"))
+    assert len(shards) == 2
+    mtimes = [p.stat().st_mtime_ns for p in shards]
+    again = load_or_generate(spec, cache_dir=tmp_path, progress=False)
+    np.testing.assert_array_equal(again.images, seqs.images)
+    assert [p.stat().st_mtime_ns for p in shards] == mtimes
+    # An interrupted generation resumes: delete one shard, and it is re-rendered identically.
+    shards[1].unlink()
+    redone = load_or_generate(spec, cache_dir=tmp_path, progress=False)
+    np.testing.assert_array_equal(redone.images, seqs.images)
+    np.testing.assert_allclose(redone.points, seqs.points)
+
+
+@needs_data
+@pytest.mark.slow
+def test_rendered_face_sequences(tmp_path):
+    seqs = load_or_generate(tiny_spec("face", "train"), cache_dir=tmp_path, progress=False)
+    assert seqs.images.shape == (2, 3, 64, 64, 3)
+    assert seqs.structure_images.shape == (2, 3, 64, 64)
+    assert seqs.points.shape[:2] == (2, 3) and seqs.points.shape[2] >= 40
+    assert all(not is_test_face_clip(str(c)) for c in seqs.clip)
+    # The grey structure render is black background + grey face, where the appearance render has a face.
+    assert (seqs.structure_images > 0).mean() > 0.2
+    pairs = make_pairs(seqs, evaluation_pair_index(seqs))
+    assert pairs.ref_structures.shape == (4, 1, 64, 64)
+
+
+@needs_data
+@pytest.mark.slow
+def test_train_and_evaluate_commands(tmp_path, capsys):
+    ckpt = tmp_path / "tiny.safetensors"
+    cache = tmp_path / "cache"
+    rc = main(["train-frames", "--domain", "body", "-o", str(ckpt), "--steps", "2", "--size", "64",
+               "--batch-size", "2", "--train-sequences", "2", "--cache", str(cache), "--no-progress"])
+    assert rc == 0 and ckpt.is_file() and ckpt.with_name("tiny.state.safetensors").is_file()
+    report = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert report["steps"] == 2
+    rc = main(["train-frames", "--domain", "body", "-o", str(ckpt), "--steps", "3", "--size", "64",
+               "--batch-size", "2", "--train-sequences", "2", "--cache", str(cache), "--no-progress", "--resume"])
+    assert rc == 0
+    assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["steps"] == 3
+    out_json = tmp_path / "eval.json"
+    sheet = tmp_path / "sheet.png"
+    rc = main(["evaluate-frames", "--model", str(ckpt), "--json", str(out_json), "--cache", str(cache),
+               "--test-sequences", "1", "--contact-sheet", str(sheet), "--no-progress"])
+    assert rc == 0 and sheet.is_file()
+    results = json.loads(out_json.read_text())["results"]
+    assert set(results) == {"generator", "copy-reference", "limb-warp"}
+    assert all(set(v) == {"psnr", "ssim"} and np.isfinite(v["psnr"]) for v in results.values())
+
+
+def test_commands_refuse_bad_input(tmp_path, capsys):
+    assert main(["evaluate-frames", "--model", str(tmp_path / "missing.safetensors")]) == 2
+    assert "missing.safetensors" in capsys.readouterr().err
+    assert main(["train-frames", "--domain", "face", "-o", str(tmp_path / "x.pt"), "--steps", "1"]) == 2
+    assert main(["train-frames", "--domain", "face", "-o", str(tmp_path / "x.safetensors"), "--steps", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 2 and "error:" in err
