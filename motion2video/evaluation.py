@@ -1,0 +1,191 @@
+"""Evaluate motion models on the same windows with the DLow protocol (and MT-VAE's R-MSE / S-MSE / CLL).
+
+:func:`evaluate_bundles` runs every model on every window of a split, K samples each, and computes the
+metrics of :mod:`motion2video.metrics` on un-normalised, root-relative frame vectors
+(:func:`motion2video.data.windows.metric_vectors`: metres for body3d, virtual-camera image heights for
+body2d, parameter units for faces). The ``evaluate`` command and ``scripts/make_results.py`` call it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from motion2video import metrics as M
+from motion2video.checkpoint import ModelBundle
+from motion2video.data.dataset import WindowSet
+from motion2video.data.windows import FeatureLayout, metric_vectors
+
+# DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
+MM_THRESHOLDS = {"body3d": 0.5, "body2d": 0.1, "face": 0.25}
+MAIN_METRICS = ("ade", "fde", "mmade", "mmfde", "apd")
+
+
+@dataclass(frozen=True)
+class EvalProtocol:
+    """How windows are scored.
+
+    Attributes:
+        samples: K futures per window (best-of-K for ADE / FDE, pairs for APD).
+        stride: frames between evaluated windows.
+        split: ``"test"`` (held-out groups, plus clips the checkpoint never saw), ``"val"``, ``"train"`` or
+            ``"all"``.
+        seed: seeds every model's sampling (the same seed for each method).
+        mm_threshold: multimodal ground-truth threshold on the last observed frame vector (None: the
+            layout default of :data:`MM_THRESHOLDS`).
+        batch_size: windows per model call.
+    """
+
+    samples: int = 50
+    stride: int = 16
+    split: str = "test"
+    seed: int = 0
+    mm_threshold: float | None = None
+    batch_size: int = 32
+
+    def threshold(self, layout: FeatureLayout) -> float:
+        return MM_THRESHOLDS[layout.kind] if self.mm_threshold is None else float(self.mm_threshold)
+
+
+@dataclass
+class EvalResult:
+    """Per-method metrics on one set of windows.
+
+    Attributes:
+        protocol: a JSON-able description of what was measured.
+        results: method name -> metric name -> value.
+    """
+
+    protocol: dict
+    results: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        return {"protocol": self.protocol, "results": self.results}
+
+    def table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
+        """A fixed-width text table, one row per method."""
+        names = list(self.results)
+        width = max([len("method")] + [len(n) for n in names])
+        head = f"{'method':<{width}}  " + "  ".join(f"{c:>8}" for c in columns)
+        rows = [head, "-" * len(head)]
+        for n in names:
+            vals = [self.results[n].get(c) for c in columns]
+            rows.append(f"{n:<{width}}  " + "  ".join(f"{v:8.4f}" if v is not None else f"{'-':>8}" for v in vals))
+        return "\n".join(rows)
+
+
+def _tensor(x: np.ndarray, model: torch.nn.Module) -> torch.Tensor:
+    params = list(model.parameters())
+    device = params[0].device if params else torch.device("cpu")
+    return torch.from_numpy(np.ascontiguousarray(x, np.float32)).to(device)
+
+
+@torch.no_grad()
+def sample_futures(model: torch.nn.Module, obs: np.ndarray, *, num_samples: int, horizon: int, seed: int,
+                   batch_size: int = 32) -> np.ndarray:
+    """K futures per observation: obs (N, To, F) normalised -> (N, K, horizon, F) normalised (float32)."""
+    model.eval()
+    gen = torch.Generator().manual_seed(seed)
+    out = []
+    for i in range(0, len(obs), batch_size):
+        s = model.sample(_tensor(obs[i:i + batch_size], model), num_samples=num_samples, horizon=horizon,
+                         generator=gen)
+        out.append(s.float().cpu().numpy())
+    return np.concatenate(out) if out else np.zeros((0, num_samples, horizon, obs.shape[-1]), np.float32)
+
+
+@torch.no_grad()
+def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarray, *, num_samples: int, seed: int,
+                      batch_size: int = 32) -> np.ndarray | None:
+    """K reconstructions per window from latents drawn from the recognition model q(z | obs, future)
+    (for R-MSE): (N, K, Tf, F) normalised, or None for models without ``encode`` / ``decode``."""
+    if not (hasattr(model, "encode") and hasattr(model, "decode")):
+        return None
+    model.eval()
+    gen = torch.Generator().manual_seed(seed)
+    out = []
+    horizon = future.shape[1]
+    for i in range(0, len(obs), batch_size):
+        o, f = _tensor(obs[i:i + batch_size], model), _tensor(future[i:i + batch_size], model)
+        post = model.encode(o, f)
+        b, z_dim = post.mu.shape
+        eps = torch.randn((b, num_samples, z_dim), generator=gen).to(post.mu.device)
+        z = post.mu[:, None] + torch.exp(0.5 * post.logvar)[:, None] * eps  # (B, K, Z)
+        rec = model.decode(o.repeat_interleave(num_samples, 0), z.reshape(b * num_samples, z_dim), horizon=horizon)
+        out.append(rec.reshape(b, num_samples, horizon, -1).float().cpu().numpy())
+    return np.concatenate(out)
+
+
+def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *, threshold: float) -> dict[str, float]:
+    """ADE, FDE, MMADE, MMFDE and APD of metric-space samples pred (N, K, T, D) against gt (N, T, D)."""
+    groups = M.multimodal_ground_truth(last_observed, threshold=threshold)
+    return {
+        "ade": M.ade(pred, gt),
+        "fde": M.fde(pred, gt),
+        "mmade": M.mmade(pred, gt, groups),
+        "mmfde": M.mmfde(pred, gt, groups),
+        "apd": M.apd(pred),
+    }
+
+
+def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol: EvalProtocol,
+                     extended: bool = False, val_windows: WindowSet | None = None) -> EvalResult:
+    """Score every bundle on ``windows`` (all bundles must share the layout and normalisation stats the
+    windows were built with).
+
+    Args:
+        bundles: models and baselines; their names key the results.
+        windows: from :meth:`MotionDataset.windows`.
+        protocol: samples, seed, threshold.
+        extended: also compute S-MSE (best-of-K MSE of the prior samples), R-MSE (best-of-K MSE of
+            recognition-model reconstructions, latent models only) and the Parzen conditional
+            log-likelihood (``cll``, nats per window; needs ``val_windows`` to choose the bandwidth).
+    Returns:
+        An :class:`EvalResult`.
+    """
+    if len(windows) == 0:
+        raise ValueError("no windows to evaluate")
+    layout = bundles[0].layout
+    stats = bundles[0].stats
+    obs_len = windows.observed
+    horizon = windows.features.shape[1] - obs_len
+    gt = metric_vectors(windows.raw[:, obs_len:], layout)  # (N, Tf, D)
+    last = metric_vectors(windows.raw[:, obs_len - 1], layout)  # (N, D)
+    threshold = protocol.threshold(layout)
+    groups = M.multimodal_ground_truth(last, threshold=threshold)
+    result = EvalResult(protocol={
+        **dataclasses.asdict(protocol), "mm_threshold": threshold, "layout": layout.kind,
+        "units": layout.metric_units, "observed": obs_len, "future": horizon, "windows": len(windows),
+        "clips": sorted(set(windows.clip_names)),
+        "mean_multimodal_futures": float(np.mean([len(g) for g in groups])),
+        "best_of": protocol.samples,
+        "metric_space": "root-relative non-root joints" if layout.is_body else "face parameters",
+    })
+
+    def to_metric(samples_norm: np.ndarray) -> np.ndarray:
+        return metric_vectors(stats.denormalize(samples_norm), layout)
+
+    for bundle in bundles:
+        samples = sample_futures(bundle.model, windows.obs, num_samples=protocol.samples, horizon=horizon,
+                                 seed=protocol.seed, batch_size=protocol.batch_size)
+        pred = to_metric(samples)
+        row = dlow_metrics(pred, gt, last, threshold=threshold)
+        if extended:
+            row["s_mse"] = M.best_of_k_mse(pred, gt)
+            rec = posterior_futures(bundle.model, windows.obs, windows.future, num_samples=protocol.samples,
+                                    seed=protocol.seed, batch_size=protocol.batch_size)
+            if rec is not None:
+                row["r_mse"] = M.best_of_k_mse(to_metric(rec), gt)
+            if val_windows is not None and len(val_windows) > 0:
+                val_pred = to_metric(sample_futures(bundle.model, val_windows.obs, num_samples=protocol.samples,
+                                                    horizon=horizon, seed=protocol.seed + 1,
+                                                    batch_size=protocol.batch_size))
+                val_gt = metric_vectors(val_windows.raw[:, obs_len:], layout)
+                h = M.select_parzen_bandwidth(val_pred, val_gt)
+                row["cll"] = float(M.parzen_log_likelihood(pred, gt, bandwidth=h).mean())
+                row["parzen_bandwidth"] = h
+        result.results[bundle.name] = {k: float(v) for k, v in row.items()}
+    return result
