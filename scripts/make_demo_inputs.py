@@ -84,7 +84,9 @@ def readme_text() -> str:
         "with the Anny body renderer) and `reference_face.png` (the neutral first frame of `smile.npz`, Anny",
         "face renderer) come from",
         "`scripts/make_demo_inputs.py --reference`; they need the Anny model cache and take a while, so the",
-        "plain command above does not make them.",
+        "plain command above does not make them. Beside each image, `<image>.pose.npz` holds the pose it shows",
+        "(body: `points` (17, 2) joints in its pixels; face: `face` (58,) params, `identity` and the camera that",
+        "rendered it), which `motion2video synthesize` uses as the reference structure.",
         "",
     ]
     return "\n".join(lines)
@@ -147,6 +149,32 @@ def write_references(out: Path) -> list[Path]:
     path = out / "reference_face.png"
     iio.imwrite(path, frame)
     written.append(path)
+    return written + write_reference_poses(out)
+
+
+def write_reference_poses(out: Path) -> list[Path]:
+    """Write ``<image>.pose.npz`` beside each reference image: the pose it shows, in its pixels (body
+    joints) or with the camera that rendered it (face), so ``synthesize`` knows the reference structure
+    exactly (:mod:`motion2video.pipeline`). Needs the Anny renderers; renders one frame per body size."""
+    from motion2video.pipeline import ReferencePose, reference_pose_path, save_reference_pose
+    from renderers.body import BodyRenderer, BodyStyle
+    from renderers.camera import project
+    from renderers.face import FaceRenderer, FaceStyle
+
+    walk = generate(list(BODY_DEMOS["walk_to_run.npz"][0]), fps=FPS, seed=SEED).slice(0, 1)
+    written = []
+    for size in REFERENCE_SIZES:
+        with BodyRenderer(BodyStyle(size=(size, size))) as renderer:
+            camera = renderer.render_with_masks(walk).camera
+        image = out / ("reference_body.png" if size == REFERENCE_SIZES[0] else f"reference_body_{size}.png")
+        pose = ReferencePose("body", size, size, points=project(walk.joints[0], camera)[:, :2])
+        written.append(save_reference_pose(reference_pose_path(image), pose))
+    face = generate_face(list(FACE_DEMOS["smile.npz"][0]), fps=FPS, seed=SEED).slice(0, 1)
+    size = REFERENCE_SIZES[0]
+    with FaceRenderer(FaceStyle(size=(size, size))) as renderer:
+        camera = renderer.camera_for(face)
+    pose = ReferencePose("face", size, size, face=face.params[0], identity=dict(face.identity), camera=camera)
+    written.append(save_reference_pose(reference_pose_path(out / "reference_face.png"), pose))
     return written
 
 

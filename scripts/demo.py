@@ -1,0 +1,118 @@
+"""`make demo`: multimodal future videos of a body clip and a face clip with the shipped checkpoints.
+
+    .venv/bin/python scripts/demo.py --out out
+
+Writes, from the committed ``demo_inputs/`` only (nothing outside the repository is read):
+
+- ``out/futures_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``walk_to_run.npz`` sampled by
+  ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-128``;
+- ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
+- ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
+  ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``.
+
+Every video plays the observed frames framed green, then each sampled future framed red.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+DEMO_INPUTS = REPO / "demo_inputs"
+WEIGHTS = REPO / "motion2video" / "weights"
+BODY = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="walk_to_run.npz",
+            reference="reference_body_128.png", start=24)
+FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-128", clip="smile.npz",
+            reference="reference_face.png", start=0)
+MESH_SIZE = 256
+
+
+def weight_files(weights: Path = WEIGHTS) -> dict[str, Path]:
+    """Checkpoint name -> file in ``weights`` for the four checkpoints the demo uses."""
+    names = [BODY["motion_model"], BODY["frame_model"], FACE["motion_model"], FACE["frame_model"]]
+    return {name: Path(weights) / f"{name}.safetensors" for name in names}
+
+
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process and of its finished children (ffmpeg), MiB (Linux kB units)."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return max(own, children) / 1024.0
+
+
+def run_demo(out: Path, *, samples: int = 5, seed: int = 0, weights: Path = WEIGHTS) -> dict[str, Path]:
+    """Write the demo videos into ``out`` using the checkpoints in ``weights``; returns name -> path."""
+    from motion2video.pipeline import (SynthesisConfig, compose_video, contact_sheet, render_mesh_frames,
+                                      synthesize)
+    from motion2video.video import write_image, write_video
+
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, Path] = {}
+    for name, spec in (("body", BODY), ("face", FACE)):
+        t0 = time.perf_counter()
+        files = weight_files(weights)
+        result = synthesize(motion_model=files[spec["motion_model"]], frame_model=files[spec["frame_model"]],
+                            input_path=DEMO_INPUTS / spec["clip"], reference=DEMO_INPUTS / spec["reference"],
+                            output=out / f"futures_{name}.mp4",
+                            config=SynthesisConfig(samples=samples, seed=seed, start=spec["start"]))
+        for note in result.notes:
+            print(f"  note: {note}")
+        print(f"{name}: {result.samples} futures of {result.horizon} frames after {result.observed} observed "
+              f"in {time.perf_counter() - t0:.1f} s")
+        written.update({f"futures_{name}": result.video, f"futures_{name}_structure": result.structure_video,
+                        f"futures_{name}_sheet": result.sheet})
+        if name == "body":
+            t0 = time.perf_counter()
+            mesh = render_mesh_frames(result.structures, size=MESH_SIZE, fps=result.fps)
+            written["mesh_body"] = write_video(out / "mesh_body.mp4", compose_video(mesh.observed, mesh.futures),
+                                               result.fps)
+            written["mesh_body_sheet"] = write_image(out / "mesh_body-sheet.png",
+                                                     contact_sheet(mesh.observed, mesh.futures))
+            print(f"body mesh: {time.perf_counter() - t0:.1f} s")
+    return written
+
+
+def _shown(path: Path) -> str:
+    """A path relative to the repository when it lies inside it."""
+    path = path.resolve()
+    return str(path.relative_to(REPO)) if path.is_relative_to(REPO) else str(path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default out)")
+    parser.add_argument("--samples", type=int, default=5, help="futures per clip (default 5)")
+    parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    parser.add_argument("--weights", type=Path, default=WEIGHTS,
+                        help="folder holding the four checkpoints (default: the shipped motion2video/weights)")
+    args = parser.parse_args(argv)
+    if args.samples < 1:
+        print(f"demo: error: --samples must be >= 1, got {args.samples}", file=sys.stderr)
+        return 2
+    missing = [path for path in weight_files(args.weights).values() if not path.is_file()]
+    if missing:
+        shown = ", ".join(_shown(path) for path in missing)
+        print(f"demo: error: missing weight file(s): {shown} (the shipped checkpoints "
+              "are trained with `motion2video train` and `motion2video train-frames`; see the model cards)",
+              file=sys.stderr)
+        return 2
+    from motion2video.errors import InputError
+
+    t0 = time.perf_counter()
+    try:
+        written = run_demo(args.out, samples=args.samples, seed=args.seed, weights=args.weights)
+    except InputError as err:
+        print(f"demo: error: {err}", file=sys.stderr)
+        return 2
+    print(f"demo done in {time.perf_counter() - t0:.1f} s, peak memory {peak_memory_mb():.0f} MiB:")
+    for path in written.values():
+        print(f"  {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,130 @@
+"""`motion2video synthesize` end to end on tiny checkpoints trained here, and its bad-input errors: one
+line, exit code 2, and none of the three outputs written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+import torch
+
+from motion2video.cli import main
+from motion2video.pipeline import output_paths
+from motion2video.video import read_image, read_video
+from tests.test_pipeline import (DEMO, FRAME_SIZE, assert_framed, train_body_motion_model, train_face_motion_model,
+                                 train_frame_model)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def one_thread():
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+@pytest.fixture(scope="module")
+def ckpt(tmp_path_factory, mocap_dir, face_dir) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("synthesize_ckpt")
+    return {"body": train_body_motion_model(mocap_dir, folder), "face": train_face_motion_model(face_dir, folder),
+            "frames_body": train_frame_model("body", folder), "frames_face": train_frame_model("face", folder)}
+
+
+@pytest.fixture
+def body_args(ckpt, mocap_dir) -> list[str]:
+    return ["synthesize", "--motion-model", str(ckpt["body"]), "--frame-model", str(ckpt["frames_body"]),
+            str(mocap_dir / "cmu" / "131_02.bvh"), "--observed", "6", "--horizon", "4"]
+
+
+def test_body_videos_sheet_and_same_seed_same_frames(body_args, tmp_path, capsys):
+    runs = {}
+    for name, seed in (("a", "7"), ("b", "7"), ("c", "8")):
+        out = tmp_path / f"{name}.mp4"
+        assert main(body_args + ["--reference", str(DEMO / "reference_body_128.png"), "--samples", "3",
+                                 "--seed", seed, "-o", str(out)]) == 0
+        runs[name] = [read_video(p)[0] for p in output_paths(out)[:2]]
+        assert read_image(output_paths(out)[2]).shape == (4 * FRAME_SIZE + 3 * 2, 8 * FRAME_SIZE + 7 * 2, 3)
+    captured = capsys.readouterr()
+    assert "wrote" in captured.out and "a-structure.mp4" in captured.out and "a-sheet.png" in captured.out
+    assert "note: reference image is 128x128: resized to 64x64" in captured.err
+    video, structure = runs["a"]
+    assert video.shape == (10, 2 * FRAME_SIZE + 2, 2 * FRAME_SIZE + 2, 3)  # 6 + 4 frames, 3 cells in 2 x 2
+    assert structure.shape == video.shape
+    assert_framed(video, observed=6, cells=3, columns=2)
+    assert_framed(structure, observed=6, cells=3, columns=2)
+    np.testing.assert_array_equal(runs["a"][0], runs["b"][0])
+    np.testing.assert_array_equal(runs["a"][1], runs["b"][1])
+    # Another seed: the same observed structure (up to H.264, whose frames depend on their neighbours),
+    # other futures.
+    diff = np.abs(runs["a"][1].astype(float) - runs["c"][1]).mean(axis=(1, 2, 3))  # (T,)
+    assert diff[:6].max() < 0.5 and diff[6:].min() > 4 * diff[:6].max() + 0.1, diff
+
+
+def test_converted_references_get_a_note(body_args, tmp_path, capsys):
+    ref = cv2.imread(str(DEMO / "reference_body_128.png"))
+    grey = tmp_path / "grey.png"
+    rgba = tmp_path / "rgba.png"
+    cv2.imwrite(str(grey), cv2.cvtColor(ref, cv2.COLOR_BGR2GRAY))
+    cv2.imwrite(str(rgba), cv2.resize(np.dstack([ref, np.full(ref.shape[:2], 255, np.uint8)]), (64, 64)))
+    for image, note in ((grey, "grey-scale image converted to RGB"), (rgba, "RGBA image composited over a white")):
+        out = tmp_path / f"{image.stem}.mp4"
+        assert main(body_args + ["--reference", str(image), "--samples", "1", "-o", str(out)]) == 0
+        err = capsys.readouterr().err
+        assert note in err and "no reference pose file" in err  # no .pose.npz beside these copies
+        assert all(p.is_file() for p in output_paths(out))
+
+
+def _fails(args: list[str], capsys, out: Path) -> str:
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "motion2video synthesize: error:" in err, err
+    for path in output_paths(out):
+        assert not path.exists(), path
+    assert not list(out.parent.glob(".*partial*")) and not list(out.parent.glob("*.tmp*"))
+    return err
+
+
+def test_bad_input_one_line_exit_2_and_no_partial_files(ckpt, body_args, mocap_dir, face_dir, tmp_path, capsys):
+    out = tmp_path / "x.mp4"
+    ref = ["--reference", str(DEMO / "reference_body_128.png")]
+    k = ["--samples", "2"]
+    o = ["-o", str(out)]
+    (tmp_path / "broken.png").write_bytes(b"\x89PNG not really")
+    assert "no such reference image" in _fails(body_args + ["--reference", str(tmp_path / "nope.png")] + k + o,
+                                               capsys, out)
+    assert "cannot decode the reference image" in _fails(body_args + ["--reference", str(tmp_path / "broken.png")]
+                                                         + k + o, capsys, out)
+    assert "--samples must be >= 1" in _fails(body_args + ref + ["--samples", "0"] + o, capsys, out)
+    assert "samples must be in 1..64" in _fails(body_args + ref + ["--samples", "65"] + o, capsys, out)
+    short = str(mocap_dir / "mass" / "mass_run.bvh")  # 14 frames at 25 fps
+    err = _fails(["synthesize", "--motion-model", str(ckpt["body"]), "--frame-model", str(ckpt["frames_body"]), short]
+                 + ref + k + o, capsys, out)
+    assert "shorter than the observed" in err and "mass_run.bvh" in err
+    # A face frame model with a body motion model, and the reverse.
+    err = _fails(["synthesize", "--motion-model", str(ckpt["body"]), "--frame-model", str(ckpt["frames_face"]),
+                  str(mocap_dir / "cmu" / "131_02.bvh"), "--reference", str(DEMO / "reference_face.png")] + k + o,
+                 capsys, out)
+    assert "makes face frames" in err and "body motion" in err
+    err = _fails(["synthesize", "--motion-model", str(ckpt["face"]), "--frame-model", str(ckpt["frames_body"]),
+                  str(face_dir / "llv" / "dao.csv")] + ref + k + o, capsys, out)
+    assert "makes body frames" in err and "face motion" in err
+    # Body motion given to a face model, face motion given to a body model.
+    err = _fails(["synthesize", "--motion-model", str(ckpt["face"]), "--frame-model", str(ckpt["frames_face"]),
+                  str(mocap_dir / "cmu" / "131_02.bvh"), "--reference", str(DEMO / "reference_face.png")] + k + o,
+                 capsys, out)
+    assert "131_02.bvh" in err and "face model" in err
+    err = _fails(body_args[:5] + [str(DEMO / "smile.npz")] + ref + k + o, capsys, out)
+    assert "smile.npz" in err and "body model" in err
+    # A reference pose of the wrong kind, a wrong output extension, a missing output folder, a missing model.
+    err = _fails(body_args + ref + ["--reference-pose", str(DEMO / "reference_face.pose.npz")] + k + o, capsys, out)
+    assert "face pose, but the frame model makes body frames" in err
+    assert "must be an .mp4" in _fails(body_args + ref + k + ["-o", str(tmp_path / "x.gif")], capsys,
+                                       tmp_path / "x.gif")
+    assert "output folder does not exist" in _fails(body_args + ref + k + ["-o", str(tmp_path / "no" / "x.mp4")],
+                                                    capsys, tmp_path / "no" / "x.mp4")
+    err = _fails(["synthesize", "--motion-model", str(tmp_path / "none.safetensors"), "--frame-model",
+                  str(ckpt["frames_body"]), str(DEMO / "walk_to_run.npz")] + ref + k + o, capsys, out)
+    assert "no such checkpoint" in err
+    assert "--observed must be >= 2" in _fails(body_args[:6] + ["--observed", "1"] + ref + k + o, capsys, out)
