@@ -1,0 +1,169 @@
+"""`motion2video transfer`: re-enact the behaviour of one clip from another clip's posture (or flow samples)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from motion2video.errors import InputError
+
+EXAMPLES = """\
+examples:
+  motion2video transfer --model behavior --behavior ../shared/data/mocap/cmu/131_03.bvh \\
+      --target ../shared/data/mocap/cmu/01_01.bvh --target-frame 1200 -o out/transfer.mp4
+  motion2video transfer --model runs/behavior.safetensors --behavior jump.bvh --target walk.bvh \\
+      --style skeleton --horizon 60 -o out/transfer_skeleton.mp4 --npz out/transfer.npz
+  motion2video transfer --model behavior --sample 6 --target ../shared/data/mocap/cmu/08_01.bvh \\
+      --seed 3 -o out/flow_samples.mp4
+  motion2video transfer --model behavior --behavior jump.bvh --target walk.bvh --style frames \\
+      --frame-model frames-body-128 --reference person.png -o out/transfer_frames.mp4
+
+The source's behaviour (--behavior-start, then 1 + horizon frames) is encoded by the behaviour model and
+re-enacted from the target's posture at --target-frame (frame numbers count the file's own frames). The
+video shows the source (left) and the target re-enacting it (right; start posture framed green, generated
+frames red) in another person's appearance: an Anny body with another phenotype and clothes (mesh), or the
+frame generator animating --reference (frames; without --reference the target's start posture is rendered
+as the reference). The re-enactment's root moves as the model generates it, relative to the target's start
+position and heading. Clips at other frame rates are resampled to the model's rate.
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "transfer",
+        help="re-enact the behaviour of one clip from another clip's posture (behaviour model)",
+        description="Behaviour transfer (Blattmann et al. 2021): extract the behaviour of SOURCE with the "
+        "behaviour model's encoder, re-enact it from TARGET's posture at --target-frame, and write the "
+        "side-by-side video; --sample N draws N new behaviours through the normalizing flow instead.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--model", required=True, help="behaviour checkpoint path or shipped model name")
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument("--behavior", metavar="SOURCE", help="clip whose behaviour is transferred")
+    source.add_argument("--sample", type=int, metavar="N", help="draw N new behaviours through the flow")
+    p.add_argument("--target", required=True, help="clip whose posture re-enacts the behaviour")
+    p.add_argument("--target-frame", type=int, default=0, help="the target's start frame (file frames, default 0)")
+    p.add_argument("--behavior-start", type=int, default=0, help="first frame of the source's behaviour (default 0)")
+    p.add_argument("--horizon", type=int, default=None, help="generated frames (default: the model's, 48)")
+    p.add_argument("--style", choices=("mesh", "frames", "skeleton"), default=None,
+                   help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
+                   "(default when --reference is given); skeleton: limb maps")
+    p.add_argument("--reference", default=None, help="reference image of the target person (--style frames)")
+    p.add_argument("--reference-pose", default=None,
+                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image, if any)")
+    p.add_argument("--frame-model", default=None,
+                   help="frame-generator checkpoint or shipped name for --style frames (default frames-body-128, "
+                   "or frames-face-128 for face models)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the flow samples (default 0)")
+    p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
+    p.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
+    p.add_argument("--npz", default=None, help="also write source, re-enactments and latents to this .npz")
+    p.add_argument("--threads", type=int, default=1, help="torch CPU threads (default 1)")
+    p.set_defaults(run=run)
+
+
+def check_outputs(output: str, npz: str | None) -> Path:
+    """Validate the output paths before any work (nothing is written on a bad argument)."""
+    from motion2video.video import VIDEO_SUFFIXES
+
+    out = Path(output)
+    if out.suffix.lower() not in VIDEO_SUFFIXES:
+        raise InputError(f"unsupported video extension {out.suffix!r}; use one of {', '.join(VIDEO_SUFFIXES)}", out)
+    for target in [out] + ([Path(npz)] if npz else []):
+        if not target.parent.exists():
+            raise InputError("the output folder does not exist", target)
+    if npz and Path(npz).suffix.lower() != ".npz":
+        raise InputError("--npz must name a .npz file", npz)
+    return out
+
+
+def save_npz(path: str | Path, arrays: dict) -> Path:
+    """Write ``arrays`` to an .npz atomically (temporary file + rename)."""
+    import os
+
+    import numpy as np
+
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    try:
+        np.savez(tmp, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+    import torch
+
+    from motion2video.checkpoint import load_model
+    from motion2video.models.baselines import BASELINES
+    from motion2video.transfer import behavior_model, load_clip, render_transfer, sample_behaviors, transfer_behavior
+    from motion2video.video import write_video
+
+    if args.threads < 1:
+        raise InputError(f"--threads must be >= 1, got {args.threads}")
+    torch.set_num_threads(args.threads)
+    if not 32 <= args.size <= 2048:
+        raise InputError(f"--size must be in 32..2048, got {args.size}")
+    out = check_outputs(args.output, args.npz)
+    style = args.style or ("frames" if args.reference else None)
+    if args.reference and style != "frames":
+        raise InputError(f"--reference is only used with --style frames (got --style {style})", args.reference)
+    if args.model in BASELINES:
+        raise InputError(f"behaviour transfer needs a 'behavior' model; {args.model!r} is a baseline")
+    bundle = load_model(args.model)
+    behavior_model(bundle)  # the wrong kind of model fails before any clip is read
+    layout = bundle.data_config.layout
+    style = style or ("skeleton" if layout == "body2d" else "mesh")
+    if style == "mesh" and layout == "body2d":
+        raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+    frame_model = reference = None
+    if style == "frames":
+        from motion2video.frames.checkpoint import load_frame_model
+        from motion2video.pipeline import DOMAIN_OF_LAYOUT, load_reference
+
+        frame_name = args.frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
+        frame_model = load_frame_model(frame_name)
+        domain = frame_model.config.domain
+        if domain != DOMAIN_OF_LAYOUT[layout]:
+            raise InputError(f"this frame generator makes {domain} frames, but {bundle.name} moves a "
+                             f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
+        if args.reference:
+            reference = load_reference(args.reference, size=frame_model.config.image_size, domain=domain,
+                                       pose_path=args.reference_pose)
+        elif layout != "body3d":
+            raise InputError("--style frames needs --reference for this model (only 3D body models can render "
+                             "their own reference)")
+    elif args.reference_pose or args.frame_model:
+        raise InputError("--frame-model and --reference-pose are only used with --style frames")
+    target = load_clip(bundle, args.target)
+    if args.behavior is not None:
+        source = load_clip(bundle, args.behavior)
+        result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
+                                   target_frame=args.target_frame, horizon=args.horizon)
+    else:
+        result = sample_behaviors(bundle, target, num_samples=args.sample, target_frame=args.target_frame,
+                                  horizon=args.horizon, seed=args.seed)
+    frames = render_transfer(result, style=style, size=args.size, frame_model=frame_model, reference=reference)
+    for note in (reference.notes if reference is not None else ()):
+        print(f"motion2video transfer: note: {note}", file=sys.stderr)
+    write_video(out, frames, result.fps)
+    what = (f"behaviour of {args.behavior}" if args.behavior is not None
+            else f"{args.sample} flow-sampled behaviours (seed {args.seed})")
+    print(f"wrote {out} ({what} re-enacted from {args.target} frame {args.target_frame}: "
+          f"{result.reenacted.shape[1] - 1} generated frames, {style}, {frames.shape[2]}x{frames.shape[1]}, "
+          f"{result.fps:g} fps)")
+    if args.npz:
+        arrays = {"reenacted": result.reenacted, "z": result.z, "fps": np.float64(result.fps),
+                  "layout": np.str_(result.layout), "model": np.str_(bundle.name),
+                  "target_frame": np.int64(result.target_frame)}
+        if result.source is not None:
+            arrays["source"] = result.source
+        save_npz(args.npz, arrays)
+        print(f"wrote {args.npz}")
+    return 0

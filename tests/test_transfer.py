@@ -1,0 +1,305 @@
+"""Behaviour transfer (`motion2video transfer`) with tiny behaviour models trained here on real clips, and
+its bad-input errors (one line, exit code 2, no output file)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import torch
+
+from motion2video.checkpoint import load_model, save_checkpoint
+from motion2video.cli import main
+from motion2video.data.dataset import DatasetConfig, build_dataset
+from motion2video.data.windows import resample, rotate_about_z
+from motion2video.io import load_motion, save_motion
+from motion2video.metrics import MeanStd
+from motion2video.motion import Motion
+from motion2video.training import TrainConfig, train_model
+from motion2video.transfer import (
+    TABLE1_TIMESTEPS,
+    LoadedClip,
+    evaluate_transfer,
+    load_clip,
+    regression_error,
+    transfer_behavior,
+    transfer_pairs,
+)
+from motion2video.video import read_video, write_image
+
+CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh", "mass/mass_walk.bvh")
+TINY = {"hidden_dim": 16, "latent_dim": 4}
+HORIZON = 10
+
+
+@pytest.fixture(scope="module", autouse=True)
+def one_thread():
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+def _train(name: str, data, out, *, model: dict | None = None, steps: int = 3, **data_kw):
+    """A tiny model trained a few steps (every clip in training: no validation or test split)."""
+    config = DatasetConfig(val_fraction=0.0, test_fraction=0.0, **data_kw)
+    dataset = build_dataset(data, config)
+    train_model(model_name=name, model_config={**TINY, **(model or {})}, dataset=dataset,
+                config=TrainConfig(steps=steps, batch_size=4, warmup_steps=0, checkpoint_every=1000, val_every=0,
+                                   flow_steps=5, flow_windows=16),
+                out=out, progress=False)
+    return out
+
+
+@pytest.fixture(scope="module")
+def small_data(tmp_path_factory, mocap_dir):
+    root = tmp_path_factory.mktemp("mocap_transfer")
+    for rel in CLIPS:
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).symlink_to(mocap_dir / rel)
+    return root
+
+
+@pytest.fixture(scope="module")
+def ckpts(small_data, face_dir, tmp_path_factory):
+    d = tmp_path_factory.mktemp("transfer_ckpt")
+    return {
+        "behavior": _train("behavior", small_data, d / "behavior.safetensors"),
+        "mtvae": _train("mtvae-add", small_data, d / "mtvae.safetensors"),
+        "face": _train("behavior", face_dir / "llv" / "dao.csv", d / "face.safetensors", layout="face",
+                       observed=4, future=12),
+    }
+
+
+@pytest.fixture(scope="module")
+def clips(mocap_dir):
+    """Source and target come from different BVH rigs (cmu-3dsmax and cmu-mb), both read as canonical
+    H36M-17, and at 120 fps, resampled to the model's 25 fps."""
+    return {"source": str(mocap_dir / "cmu/131_03.bvh"), "target": str(mocap_dir / "cmu/01_01.bvh")}
+
+
+def _resampled(path, fps=25.0) -> np.ndarray:
+    m = load_motion(path)
+    return resample(m.joints, m.fps, fps), m.fps
+
+
+def test_transfer_skeleton_video_and_npz(ckpts, clips, tmp_path, capsys):
+    out, npz = tmp_path / "t.mp4", tmp_path / "t.npz"
+    code = main(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
+                 clips["target"], "--target-frame", "240", "--behavior-start", "60", "--horizon", str(HORIZON),
+                 "--style", "skeleton", "--size", "64", "-o", str(out), "--npz", str(npz)])
+    assert code == 0 and "wrote" in capsys.readouterr().out
+    frames, fps = read_video(out)
+    assert fps == 25.0 and frames.shape == (1 + HORIZON, 64, 2 * 64 + 2, 3)
+    saved = np.load(npz)
+    target, target_fps = _resampled(clips["target"])
+    source, source_fps = _resampled(clips["source"])
+    start = int(np.floor(240 * 25 / target_fps + 0.5))
+    s = int(np.floor(60 * 25 / source_fps + 0.5))
+    # the re-enactment starts exactly at the target's posture; the source panel is the source itself
+    np.testing.assert_allclose(saved["reenacted"][0, 0], target[start], atol=1e-5)
+    np.testing.assert_allclose(saved["source"], source[s:s + 1 + HORIZON], atol=1e-5)
+    assert saved["reenacted"].shape == (1, 1 + HORIZON, 17, 3) and saved["z"].shape == (1, 4)
+    assert np.all(np.isfinite(saved["reenacted"]))
+
+
+def test_reenactment_follows_the_target_position_and_heading(ckpts, clips):
+    """The root moves relative to the target's start position and heading: turning and moving the target
+    turns and moves the whole re-enactment the same way."""
+    bundle = load_model(ckpts["behavior"])
+    source = load_clip(bundle, clips["source"])
+    target = load_clip(bundle, clips["target"])
+    moved = LoadedClip(data=rotate_about_z(target.data, 1.1, np.array([2.0, -1.0, 0.0])) + np.float32([0.5, 3, 0]),
+                       fps=target.fps, source_fps=target.source_fps, source_frames=target.source_frames,
+                       path="moved")
+    a = transfer_behavior(bundle, source, target, target_frame=100, horizon=HORIZON).reenacted[0]
+    b = transfer_behavior(bundle, source, moved, target_frame=100, horizon=HORIZON).reenacted[0]
+    expected = rotate_about_z(a, 1.1, np.array([2.0, -1.0, 0.0])) + np.float32([0.5, 3, 0])
+    np.testing.assert_allclose(b, expected, atol=1e-4)
+
+
+def test_flow_samples_grid_is_seeded(ckpts, clips, tmp_path):
+    paths = {}
+    for name, seed in (("a", 3), ("b", 3), ("c", 4)):
+        out, npz = tmp_path / f"{name}.mp4", tmp_path / f"{name}.npz"
+        code = main(["transfer", "--model", str(ckpts["behavior"]), "--sample", "3", "--target", clips["target"],
+                     "--horizon", str(HORIZON), "--style", "skeleton", "--size", "48", "--seed", str(seed),
+                     "-o", str(out), "--npz", str(npz)])
+        assert code == 0
+        paths[name] = np.load(npz)
+    frames, _ = read_video(tmp_path / "a.mp4")
+    assert frames.shape[0] == 1 + HORIZON and frames.shape[1:3] == (2 * 48 + 2, 2 * 48 + 2)  # 2x2 grid, 3 cells
+    assert paths["a"]["reenacted"].shape == (3, 1 + HORIZON, 17, 3) and "source" not in paths["a"]
+    np.testing.assert_array_equal(paths["a"]["reenacted"], paths["b"]["reenacted"])
+    assert not np.allclose(paths["a"]["reenacted"], paths["c"]["reenacted"])
+
+
+def test_resampled_target_gives_the_same_start_posture(ckpts, clips, tmp_path):
+    """A target at another frame rate is resampled; --target-frame counts the file's own frames."""
+    target, _ = _resampled(clips["target"])
+    path50 = save_motion(Motion(resample(target, 25.0, 50.0), 50.0), tmp_path / "target50.npz")
+    out = {}
+    for name, path, frame in (("25", None, 40), ("50", path50, 80)):
+        if path is None:
+            path = save_motion(Motion(target, 25.0), tmp_path / "target25.npz")
+        npz = tmp_path / f"{name}.npz"
+        assert main(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
+                     str(path), "--target-frame", str(frame), "--horizon", "4", "--style", "skeleton", "--size",
+                     "32", "-o", str(tmp_path / f"{name}.mp4"), "--npz", str(npz)]) == 0
+        out[name] = np.load(npz)["reenacted"]
+    np.testing.assert_allclose(out["50"], out["25"], atol=1e-4)
+
+
+@pytest.mark.slow
+def test_transfer_mesh_shows_another_person(ckpts, clips, tmp_path):
+    out = tmp_path / "mesh.mp4"
+    code = main(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
+                 clips["target"], "--horizon", "3", "--size", "64", "-o", str(out)])
+    assert code == 0
+    frames, _ = read_video(out)
+    assert frames.shape == (4, 64, 130, 3)
+    left, right = frames[:, 6:-6, 6:58].astype(int), frames[:, 6:-6, 72:-6].astype(int)
+    reddish = lambda x: ((x[..., 0] > 150) & (x[..., 1] < 110) & (x[..., 2] < 110)).sum()  # noqa: E731
+    assert reddish(right) > 20 and reddish(left) < reddish(right) / 4  # the target's red top, not the source's
+
+
+@pytest.fixture(scope="module")
+def frame_ckpt(tmp_path_factory):
+    """An untrained (residual: it starts as copy-reference) tiny body frame generator."""
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
+
+    torch.manual_seed(0)
+    gen = FrameGenerator(FrameGeneratorConfig(image_size=32, channels=(4, 8)))
+    return save_frame_model(gen, tmp_path_factory.mktemp("frames") / "frames.safetensors", step=0)
+
+
+@pytest.mark.slow
+def test_transfer_frames_style_with_reference(ckpts, clips, frame_ckpt, tmp_path, capsys):
+    ref = np.zeros((40, 60, 3), np.uint8)
+    ref[:, :, 2] = 200
+    write_image(tmp_path / "ref.png", ref)
+    out = tmp_path / "frames.mp4"
+    code = main(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
+                 clips["target"], "--horizon", "3", "--size", "32", "--frame-model", str(frame_ckpt),
+                 "--reference", str(tmp_path / "ref.png"), "-o", str(out)])
+    assert code == 0
+    assert "note: reference image is 60x40" in capsys.readouterr().err  # padded and resized, with a note
+    frames, _ = read_video(out)
+    assert frames.shape == (4, 32, 66, 3)
+    assert frames[:, 22:28, 40:62, 2].mean() > 150  # below the label: the generator copies the blue reference
+
+
+@pytest.mark.slow
+def test_transfer_frames_style_renders_its_own_reference(ckpts, clips, frame_ckpt, tmp_path):
+    out = tmp_path / "frames.mp4"
+    code = main(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
+                 clips["target"], "--horizon", "2", "--size", "32", "--style", "frames", "--frame-model",
+                 str(frame_ckpt), "-o", str(out)])
+    assert code == 0
+    frames, _ = read_video(out)
+    right = frames[:, 20:28, 38:62].astype(int)  # the rendered Anny reference: white background, red top
+    assert frames.shape == (3, 32, 66, 3) and right.mean() > 100
+
+
+@pytest.mark.slow
+def test_face_transfer_renders_another_face(ckpts, face_dir, tmp_path):
+    out, npz = tmp_path / "face.mp4", tmp_path / "face.npz"
+    source, target = face_dir / "livelinkface" / "S07-001.csv", face_dir / "llv" / "dao.csv"
+    code = main(["transfer", "--model", str(ckpts["face"]), "--behavior", str(source), "--target", str(target),
+                 "--target-frame", "30", "--horizon", "3", "--size", "48", "-o", str(out), "--npz", str(npz)])
+    assert code == 0
+    frames, _ = read_video(out)
+    assert frames.shape == (4, 48, 98, 3)
+    saved = np.load(npz)
+    dao = load_motion(target)
+    np.testing.assert_allclose(saved["reenacted"][0, 0], resample(dao.params, dao.fps, 25.0)[13], atol=1e-5)
+    assert np.all((saved["reenacted"][..., :52] >= 0) & (saved["reenacted"][..., :52] <= 1))
+    # neither file names an identity: the target is drawn as another face (other skin), not the source's
+    assert np.abs(frames[:, 14:, 8:40].astype(int) - frames[:, 14:, 58:90].astype(int)).mean() > 3
+
+
+def test_the_table1_protocol_runs_on_tiny_models(ckpts, small_data):
+    bundle = load_model(ckpts["behavior"])
+    dataset = build_dataset(small_data, bundle.data_config, split=bundle.meta.split, stats=bundle.stats)
+    windows = dataset.windows("train", stride=32)
+    pairs = transfer_pairs(windows.clip_names, seed=0)
+    names = np.asarray(windows.clip_names)
+    assert np.all(names[pairs] != names)
+    for ckpt in (ckpts["behavior"], ckpts["mtvae"]):
+        scores = evaluate_transfer(load_model(ckpt), windows, windows, pairs=pairs)
+        assert set(scores.tde) == set(scores.re) == set(TABLE1_TIMESTEPS)
+        assert all(np.isfinite(v) and v >= 0 for v in [*scores.tde.values(), *scores.re.values()])
+        assert isinstance(scores.d_beta, MeanStd) and scores.d_beta.mean >= 0
+        assert {"self", "transfer", "prior"} <= set(scores.realism)
+        assert all(0.0 <= v <= 1.0 for v in scores.realism.values())
+    assert "flow" in evaluate_transfer(bundle, windows, windows, pairs=pairs).realism
+
+
+def test_regression_error_is_zero_for_linear_postures():
+    rng = np.random.default_rng(0)
+    z = rng.normal(size=(200, 5))
+    w = rng.normal(size=(5, 7))
+    assert regression_error(z[:150], z[:150] @ w, z[150:], z[150:] @ w, l2=1e-9) < 1e-12
+    assert regression_error(z[:150], rng.normal(size=(150, 7)), z[150:], rng.normal(size=(50, 7))) > 0.5
+
+
+# --- bad input ----------------------------------------------------------------------------------------------
+
+
+def _fails(argv, capsys, *outputs) -> str:
+    code = main(argv)
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and err.startswith("motion2video transfer: error:"), err
+    for path in outputs:
+        assert not path.exists()
+    return err
+
+
+@pytest.fixture
+def other_skeleton(tmp_path, clips):
+    """A 3D clip of another skeleton (COCO-17 joint order), which body models cannot read."""
+    target, _ = _resampled(clips["target"])
+    return save_motion(Motion(target, 25.0, skeleton="coco-17"), tmp_path / "coco.npz")
+
+
+@pytest.mark.parametrize("case", ["frame-too-large", "frame-negative", "source-too-short", "wrong-model",
+                                  "baseline", "face-target", "face-model-body-clip", "other-skeleton",
+                                  "reference-without-frames", "no-flow", "zero-samples", "bad-suffix"])
+def test_bad_input(case, ckpts, clips, face_dir, other_skeleton, tmp_path, capsys):
+    out, npz = tmp_path / "out.mp4", tmp_path / "out.npz"
+    face = str(face_dir / "llv" / "dao.csv")
+    base = ["transfer", "--model", str(ckpts["behavior"]), "--style", "skeleton", "--size", "32", "-o", str(out),
+            "--npz", str(npz)]
+    src = ["--behavior", clips["source"]]
+    argv = {
+        "frame-too-large": base + src + ["--target", clips["target"], "--target-frame", "100000"],
+        "frame-negative": base + src + ["--target", clips["target"], "--target-frame", "-1"],
+        "source-too-short": base + ["--behavior", clips["source"], "--behavior-start", "1000", "--target",
+                                    clips["target"], "--horizon", "40"],
+        "wrong-model": base[:2] + [str(ckpts["mtvae"])] + base[3:] + src + ["--target", clips["target"]],
+        "baseline": base[:2] + ["zero-velocity"] + base[3:] + src + ["--target", clips["target"]],
+        "face-target": base + src + ["--target", face],
+        "face-model-body-clip": base[:2] + [str(ckpts["face"])] + base[3:] + ["--behavior", face, "--target",
+                                                                               clips["target"]],
+        "other-skeleton": base + src + ["--target", str(other_skeleton)],
+        "reference-without-frames": base + src + ["--target", clips["target"], "--reference", clips["target"]],
+        "no-flow": None,
+        "zero-samples": base + ["--sample", "0", "--target", clips["target"]],
+        "bad-suffix": base[:-4] + ["-o", str(tmp_path / "out.avi")] + src + ["--target", clips["target"]],
+    }[case]
+    if case == "no-flow":
+        bundle = load_model(ckpts["behavior"])
+        bundle.model.flow_fitted.fill_(False)
+        unfitted = save_checkpoint(tmp_path / "noflow.safetensors", model=bundle.model,
+                                   meta=dataclasses.replace(bundle.meta))
+        argv = base[:2] + [str(unfitted)] + base[3:] + ["--sample", "2", "--target", clips["target"]]
+    err = _fails(argv, capsys, out, npz)
+    expected = {"frame-too-large": "--target-frame 100000 is outside", "frame-negative": "--target-frame -1",
+                "source-too-short": "behaviour source needs", "wrong-model": "'mtvae-add' model",
+                "baseline": "baseline", "face-target": "face motion", "face-model-body-clip": "body motion",
+                "other-skeleton": "coco-17", "reference-without-frames": "--style frames", "no-flow": "flow",
+                "zero-samples": "--sample must be >= 1", "bad-suffix": "extension"}[case]
+    assert expected in err
