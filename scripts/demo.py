@@ -8,7 +8,8 @@ Writes, from the committed ``demo_inputs/`` only (nothing outside the repository
   ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-128``;
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
-  ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``.
+  ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``;
+- ``out/inputs/<clip>_<style>.mp4``: every demo input rendered in every style that fits it (skip: --no-inputs).
 
 Every video plays the observed frames framed green, then each sampled future framed red.
 """
@@ -76,6 +77,30 @@ def run_demo(out: Path, *, samples: int = 5, seed: int = 0, weights: Path = WEIG
     return written
 
 
+def render_inputs(out: Path, *, size: int = 128) -> dict[str, Path]:
+    """Render every demo input in every style that fits it (body: skeleton, heatmap, mesh; face: face) into
+    ``out/inputs/<clip>_<style>.mp4``: the structure renderers on their own, as ``motion2video render`` does."""
+    from motion2video.io import load_motion
+    from motion2video.motion import FaceMotion
+    from motion2video.render import render_motion
+    from motion2video.video import write_video
+
+    written: dict[str, Path] = {}
+    (out / "inputs").mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    for clip in sorted(DEMO_INPUTS.glob("*.npz")):
+        if clip.name.endswith(".pose.npz"):
+            continue
+        motion = load_motion(clip)
+        styles = ("face",) if isinstance(motion, FaceMotion) else ("skeleton", "heatmap", "mesh")
+        for style in styles:
+            frames = render_motion(motion, style=style, size=size)
+            written[f"{clip.stem}_{style}"] = write_video(out / "inputs" / f"{clip.stem}_{style}.mp4", frames,
+                                                          motion.fps)
+    print(f"demo inputs in every style: {len(written)} videos in {time.perf_counter() - t0:.1f} s")
+    return written
+
+
 def _shown(path: Path) -> str:
     """A path relative to the repository when it lies inside it."""
     path = path.resolve()
@@ -89,6 +114,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     parser.add_argument("--weights", type=Path, default=WEIGHTS,
                         help="folder holding the four checkpoints (default: the shipped motion2video/weights)")
+    parser.add_argument("--no-inputs", dest="inputs", action="store_false",
+                        help="skip rendering every demo input in every style into OUT/inputs/")
     args = parser.parse_args(argv)
     if args.samples < 1:
         print(f"demo: error: --samples must be >= 1, got {args.samples}", file=sys.stderr)
@@ -105,6 +132,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     try:
         written = run_demo(args.out, samples=args.samples, seed=args.seed, weights=args.weights)
+        if args.inputs:
+            written.update(render_inputs(args.out))
     except InputError as err:
         print(f"demo: error: {err}", file=sys.stderr)
         return 2
