@@ -182,7 +182,7 @@ def convert_openpose_to_h36m(joints: np.ndarray, skeleton: Skeleton) -> np.ndarr
 
 
 # --- BVH rigs -----------------------------------------------------------------------------------------
-# For each rig in ../shared/data/mocap: canonical joint -> BVH joint whose ORIGIN is that joint.
+# For each rig in ../shared/data/mocap (plus cmu-amc, the raw conversions of two CMU clips): canonical joint -> BVH joint whose ORIGIN is that joint.
 # A tuple of two names means "midpoint of the two origins"; a name ending in ":end" means "the end site
 # of that joint".
 RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
@@ -224,5 +224,17 @@ RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
         "left_wrist": "Character1_LeftHand",
         "right_shoulder": "Character1_RightArm", "right_elbow": "Character1_RightForeArm",
         "right_wrist": "Character1_RightHand",
+    },
+    # Raw amc2bvh conversions of CMU captures (cmu/16_01.bvh, cmu/16_02.bvh) keep the ASF bone names (the
+    # manifest calls them cmu-daz, but their joints say otherwise). The ASF bone named X starts where its parent ends, so each BVH joint's
+    # origin is the proximal end of that bone (lfemur = hip, ltibia = knee, lhumerus = shoulder, ...). The
+    # correspondence mirrors the MotionBuilder renaming used by ``cmu-mb`` (upperback = Spine, thorax =
+    # Spine1, upperneck = Neck1).
+    "cmu-amc": {
+        "pelvis": "hip", "right_hip": "rfemur", "right_knee": "rtibia", "right_ankle": "rfoot",
+        "left_hip": "lfemur", "left_knee": "ltibia", "left_ankle": "lfoot",
+        "spine": "upperback", "thorax": "thorax", "neck": "upperneck", "head": "head",
+        "left_shoulder": "lhumerus", "left_elbow": "lradius", "left_wrist": "lwrist",
+        "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
     },
 }

@@ -48,21 +48,6 @@ RIG_UNITS: dict[str, float] = {
     "mass-character1": 0.01,
 }
 
-# Raw amc2bvh conversions of CMU captures (cmu/16_01.bvh, cmu/16_02.bvh) keep the ASF bone names, which no
-# entry of RIG_JOINT_MAPS covers. The ASF bone named X starts where its parent ends, so each BVH joint's
-# origin is the proximal end of that bone (lfemur = hip, ltibia = knee, lhumerus = shoulder, ...). The
-# correspondence mirrors the MotionBuilder renaming used by ``cmu-mb`` (upperback = Spine, thorax =
-# Spine1, upperneck = Neck1).
-EXTRA_RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
-    "cmu-amc": {
-        "pelvis": "hip", "right_hip": "rfemur", "right_knee": "rtibia", "right_ankle": "rfoot",
-        "left_hip": "lfemur", "left_knee": "ltibia", "left_ankle": "lfoot",
-        "spine": "upperback", "thorax": "thorax", "neck": "upperneck", "head": "head",
-        "left_shoulder": "lhumerus", "left_elbow": "lradius", "left_wrist": "lwrist",
-        "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
-    },
-}
-
 # Height of the ankle joint centre above the floor with the foot flat, metres. Anny's default body (the mesh
 # the renderers pose from these joints) has its ankle (bone ``foot.R``) 0.071 m above its soles; adults
 # measure 6-8 cm. The floor is put this far below the lowest ankle (:func:`floor_height`).
@@ -442,8 +427,8 @@ def bvh_rest_positions(clip: BvhClip) -> np.ndarray:
 # --- canonical conversion -------------------------------------------------------------------------------
 
 def rig_joint_maps() -> dict[str, dict[str, str | tuple[str, str]]]:
-    """All known rigs: :data:`motion2video.skeletons.RIG_JOINT_MAPS` plus :data:`EXTRA_RIG_JOINT_MAPS`."""
-    return {**RIG_JOINT_MAPS, **EXTRA_RIG_JOINT_MAPS}
+    """All known rigs (:data:`motion2video.skeletons.RIG_JOINT_MAPS`)."""
+    return RIG_JOINT_MAPS
 
 
 def _map_node_names(mapping: dict[str, str | tuple[str, str]]) -> set[str]:
