@@ -340,21 +340,21 @@ def draw_skeleton(
             d = np.asarray(depth, np.float64)
             mean_depth = np.array([d[a] + d[b] for a, b in limbs])
             order = np.argsort(-mean_depth, kind="stable")  # far first
-    ok = _visible(joints_2d, depth)
-    pts = _fixed(joints_2d)  # (J, 2) int32
+    ok = _visible(joints_2d, depth).tolist()
+    pts = [tuple(p) for p in _fixed(joints_2d).tolist()]  # J (x, y) fixed-point int pairs, as OpenCV wants
+    thickness = int(style.thickness)
     for i in order:
         a, b = limbs[i]
         if ok[a] and ok[b]:
-            cv2.line(out, tuple(int(v) for v in pts[a]), tuple(int(v) for v in pts[b]), limb_colours[i],
-                     int(style.thickness), cv2.LINE_AA, SHIFT)
+            cv2.line(out, pts[a], pts[b], limb_colours[i], thickness, cv2.LINE_AA, SHIFT)
     radius = int(round(style.joint_radius * _ONE))
     if radius > 0:
         joint_order = range(len(pts))
         if depth is not None and style.palette != "openpose":
-            joint_order = np.argsort(-np.asarray(depth, np.float64), kind="stable")
+            joint_order = np.argsort(-np.asarray(depth, np.float64), kind="stable").tolist()
         for j in joint_order:
             if ok[j]:
-                cv2.circle(out, tuple(int(v) for v in pts[j]), radius, joint_colours[j], -1, cv2.LINE_AA, SHIFT)
+                cv2.circle(out, pts[j], radius, joint_colours[j], -1, cv2.LINE_AA, SHIFT)
     return out
 
 
