@@ -17,7 +17,6 @@ Optimizer state for resuming lives in a sidecar file written by :mod:`motion2vid
 from __future__ import annotations
 
 import json
-import os
 import re
 from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
@@ -26,9 +25,9 @@ import torch
 from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
 
-import motion2video.models  # noqa: F401  (registers the learned models)
-import motion2video.models.baselines  # noqa: F401  (registers the baselines)
+import motion2video.models  # noqa: F401  (registers the learned models and the baselines)
 from motion2video import __version__
+from motion2video.atomic import atomic_output
 from motion2video.data.dataset import DatasetConfig, Split
 from motion2video.data.windows import FeatureLayout, NormStats
 from motion2video.errors import InputError
@@ -163,15 +162,9 @@ def resolve_checkpoint(path_or_name: str | Path) -> Path:
 def save_checkpoint(path: str | Path, *, model: torch.nn.Module, meta: CheckpointMeta) -> Path:
     """Write ``model``'s weights and ``meta`` atomically (temporary file + rename)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tensors = {k: v.detach().contiguous().cpu() for k, v in model.state_dict().items()}
-    tmp = path.with_name(path.name + ".tmp")
-    try:
+    with atomic_output(path) as tmp:
         save_file(tensors, str(tmp), metadata={"format": FORMAT, "motion2video": meta.to_json()})
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return path
 
 

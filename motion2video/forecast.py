@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motion2video.atomic import save_npz
 from motion2video.checkpoint import ModelBundle
 from motion2video.data.dataset import (
     DatasetConfig,
@@ -179,18 +180,8 @@ def _render_faces(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.ndarray]
 def save_forecast_npz(fc: Forecast, path: str | Path) -> Path:
     """Write ``observed``, ``futures``, ``fps``, ``layout``, ``model``, ``seed`` (and ``skeleton`` for body
     layouts) to an .npz, atomically."""
-    import os
-
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp.npz")
     arrays = {"observed": fc.observed, "futures": fc.futures, "fps": np.float64(fc.fps),
               "layout": np.str_(fc.layout), "model": np.str_(fc.model), "seed": np.int64(fc.seed)}
     if fc.layout != "face":
         arrays["skeleton"] = np.str_("h36m-17")
-    try:
-        np.savez(tmp, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    return save_npz(path, arrays)

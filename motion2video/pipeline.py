@@ -64,6 +64,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from motion2video.atomic import save_npz
 from motion2video.errors import InputError
 
 DOMAIN_OF_LAYOUT = {"body3d": "body", "body2d": "body", "face": "face"}
@@ -164,14 +165,7 @@ def save_reference_pose(path: str | Path, pose: ReferencePose) -> Path:
         arrays.update(face=np.asarray(pose.face, np.float32), identity=np.str_(json.dumps(pose.identity)),
                       camera_position=np.asarray(cam.position, np.float64),
                       camera_target=np.asarray(cam.target, np.float64), camera_yfov=np.float64(cam.yfov))
-    tmp = path.with_name(path.name + ".tmp.npz")
-    try:
-        np.savez(tmp, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    return save_npz(path, arrays)
 
 
 def load_reference_pose(path: str | Path) -> ReferencePose:

@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,6 +37,7 @@ from safetensors.torch import save_file
 from tqdm import tqdm
 
 from motion2video import __version__
+from motion2video.atomic import atomic_output
 from motion2video.checkpoint import CheckpointMeta, config_dict, read_meta, save_checkpoint
 from motion2video.data.dataset import MotionDataset
 from motion2video.errors import InputError
@@ -180,10 +180,9 @@ def _save_sidecar(path: Path, optimizers: dict[str, torch.optim.Optimizer], reco
             for key, value in state.items():
                 tensors[f"{name}/{pid}/{key}"] = torch.as_tensor(value).detach().contiguous().cpu()
         groups[name] = sd["param_groups"]
-    tmp = path.with_name(path.name + ".tmp")
-    save_file(tensors, str(tmp), metadata={"format": "motion2video-optim", "param_groups": json.dumps(groups),
-                                           "record": json.dumps(record)})
-    os.replace(tmp, path)
+    with atomic_output(path) as tmp:
+        save_file(tensors, str(tmp), metadata={"format": "motion2video-optim", "param_groups": json.dumps(groups),
+                                               "record": json.dumps(record)})
 
 
 def _load_sidecar(path: Path, optimizers: dict[str, torch.optim.Optimizer]) -> dict:

@@ -24,7 +24,6 @@ real clip with ``--bvh PATH``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -38,6 +37,7 @@ import numpy as np
 
 from motion2video.motion import Motion
 from motion2video.skeletons import H36M_17
+from motion2video.atomic import write_json
 from motion2video.testing import synthetic_walk
 from motion2video.video import write_video
 from renderers.camera import fit_camera
@@ -222,13 +222,6 @@ def bench_mesh(motion: Motion, *, frames: int, recreate_frames: int, repeats: in
 
 # --- main ---------------------------------------------------------------------------------------------
 
-def _write_json(path: Path, record: dict) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
-    os.replace(tmp, path)
-
-
 def _rounded(value):
     if isinstance(value, float):
         return round(value, 4)
@@ -275,7 +268,7 @@ def main(argv: list[str] | None = None) -> int:
     record["skeleton_vs_matplotlib"] = details["skeleton"]["opencv_over_matplotlib"]
     record["mp4_fps"] = details["mp4"]["medium_fps"]
     record["mesh_fps"] = record["mesh_reuse_vs_recreate"] = None
-    _write_json(args.json, _rounded(record))  # keep these results if the mesh part fails
+    write_json(args.json, _rounded(record))  # keep these results if the mesh part fails
     if args.mesh:
         mesh = bench_mesh(motion, frames=args.mesh_frames, recreate_frames=args.recreate_frames,
                           repeats=max(1, args.repeats // 2))
@@ -283,7 +276,7 @@ def main(argv: list[str] | None = None) -> int:
         record["mesh_fps"] = mesh["mesh_fps"]["fps"]
         # "Creating a renderer per frame" = a new pyrender OffscreenRenderer (GL context) per frame.
         record["mesh_reuse_vs_recreate"] = mesh["mesh_reuse_vs_recreate"]["reuse_over_recreate_with_new_gl_context"]
-        _write_json(args.json, _rounded(record))
+        write_json(args.json, _rounded(record))
 
     skel = details["skeleton"]
     print(f"skeleton maps {SIZE}x{SIZE}: OpenCV {skel['opencv_fps']:.0f} fps, matplotlib {skel['matplotlib_fps']:.0f} "

@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import os
 import subprocess
 import sys
 import time
@@ -42,6 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from motion2video import metrics as M  # noqa: E402
+from motion2video.atomic import write_text  # noqa: E402
 from motion2video.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_FACE,
@@ -103,10 +103,7 @@ def write_section(path: Path, body: str) -> None:
         text = head + block + rest.split(END, 1)[1]
     else:
         text = text.rstrip() + "\n\n" + block + "\n"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    write_text(path, text)
 
 
 SHIPPED_DIR = [WEIGHTS_DIR]  # --weights replaces it (e.g. for a smoke run on other checkpoints)

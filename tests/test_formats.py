@@ -8,6 +8,7 @@ import os
 import numpy as np
 import pytest
 
+from motion2video import atomic
 from motion2video.errors import InputError
 from motion2video.formats import face_csv, npz, openpose, videopose3d
 from motion2video.io import load_motion, save_motion
@@ -57,7 +58,7 @@ def test_overwrite_is_atomic_and_keeps_the_old_file_on_failure(tmp_path):
     before = path.read_bytes()
     unpicklable = np.array([lambda: None], dtype=object)  # np.savez fails while writing it
     with pytest.raises(Exception, match="pickle|lambda"):
-        npz._atomic_savez(path, {"joints": unpicklable})
+        atomic.save_npz(path, {"joints": unpicklable})
     assert path.read_bytes() == before
     assert sorted(os.listdir(tmp_path)) == ["clip.npz"]  # the temporary file was removed
 

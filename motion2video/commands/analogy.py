@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
 
     from motion2video.analogy import analogy, analogy_model, render_analogy
     from motion2video.checkpoint import load_model
-    from motion2video.commands.transfer import check_outputs, save_npz
+    from motion2video.atomic import save_npz
+    from motion2video.commands.transfer import check_outputs
     from motion2video.models.baselines import BASELINES
     from motion2video.transfer import load_clip
     from motion2video.video import write_video

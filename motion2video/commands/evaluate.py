@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
-import os
 from pathlib import Path
 
+from motion2video.atomic import write_json
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -84,9 +83,6 @@ def run(args: argparse.Namespace) -> int:
           f"units: {result.protocol['units']}")
     print(result.table(columns))
     if args.json is not None:
-        out = Path(args.json)
-        tmp = out.with_name(out.name + ".tmp")
-        tmp.write_text(json.dumps(result.to_json(), indent=2) + "\n")
-        os.replace(tmp, out)
+        out = write_json(args.json, result.to_json())
         print(f"wrote {out}")
     return 0

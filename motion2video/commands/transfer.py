@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from motion2video.atomic import save_npz
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -77,23 +78,6 @@ def check_outputs(output: str, npz: str | None) -> Path:
     if npz and Path(npz).suffix.lower() != ".npz":
         raise InputError("--npz must name a .npz file", npz)
     return out
-
-
-def save_npz(path: str | Path, arrays: dict) -> Path:
-    """Write ``arrays`` to an .npz atomically (temporary file + rename)."""
-    import os
-
-    import numpy as np
-
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    try:
-        np.savez(tmp, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
 
 
 def run(args: argparse.Namespace) -> int:

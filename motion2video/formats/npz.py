@@ -5,37 +5,23 @@ Body motion keys: ``joints`` (T, J, 2|3) float32, ``fps`` (scalar), ``skeleton``
 string, Anny phenotype values), optional ``label``. Strings are stored as numpy unicode scalars so that
 reading never needs ``allow_pickle``.
 
-Writing is atomic: the archive goes to a temporary file in the target's folder, then ``os.replace``.
+Writing is atomic (:mod:`motion2video.atomic`).
 """
 
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from motion2video.atomic import save_npz
 from motion2video.errors import InputError
 from motion2video.motion import FACE_DIM, FaceMotion, Motion
 
 BODY_KEYS = ("joints", "fps", "skeleton")
 FACE_KEYS = ("face", "fps", "identity")
-
-
-def _atomic_savez(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """``np.savez`` to a temporary file beside ``path``, then rename it over ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def save_motion_npz(motion: Motion, path: str | Path) -> Path:
@@ -48,7 +34,7 @@ def save_motion_npz(motion: Motion, path: str | Path) -> Path:
     }
     if motion.label is not None:
         arrays["label"] = np.str_(motion.label)
-    _atomic_savez(path, arrays)
+    save_npz(path, arrays)
     return path
 
 
@@ -62,7 +48,7 @@ def save_face_npz(face: FaceMotion, path: str | Path) -> Path:
     }
     if face.label is not None:
         arrays["label"] = np.str_(face.label)
-    _atomic_savez(path, arrays)
+    save_npz(path, arrays)
     return path
 
 

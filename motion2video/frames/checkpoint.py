@@ -12,7 +12,6 @@ config, data summary, wall time, ...).
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,6 +20,7 @@ from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
 
 from motion2video import __version__
+from motion2video.atomic import atomic_output
 from motion2video.errors import InputError
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
 
@@ -51,10 +51,8 @@ def state_path(path: str | Path) -> Path:
 
 
 def _atomic_save(tensors: dict[str, torch.Tensor], path: Path, metadata: dict[str, str]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    save_file({k: v.detach().contiguous().cpu() for k, v in tensors.items()}, str(tmp), metadata=metadata)
-    os.replace(tmp, path)
+    with atomic_output(path) as tmp:
+        save_file({k: v.detach().contiguous().cpu() for k, v in tensors.items()}, str(tmp), metadata=metadata)
 
 
 def save_frame_model(model: FrameGenerator, path: str | Path, *, step: int, train: dict | None = None) -> Path:

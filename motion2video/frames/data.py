@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motion2video.atomic import save_npz
 from motion2video.errors import InputError
 from motion2video.skeletons import H36M_17
 
@@ -467,14 +468,11 @@ def default_spec(domain: str, split: str, image_size: int = 128, *, seed: int = 
 
 def save_shard(path: Path, seqs: FrameSequences) -> None:
     """Write sequences to an npz shard atomically (tmp file + rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".tmp.npz")
     arrays = dict(images=seqs.images, points=seqs.points.astype(np.float32), identity=seqs.identity,
                   clip=np.asarray(seqs.clip, dtype=str), start=seqs.start, domain=np.asarray(seqs.domain))
     if seqs.structure_images is not None:
         arrays["structure_images"] = seqs.structure_images
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)
+    save_npz(path, arrays, compressed=True)
 
 
 def load_shard(path: Path) -> FrameSequences:

@@ -3,9 +3,9 @@
 See :mod:`motion2video.models.base` for the interface and :data:`MODEL_REGISTRY` / :func:`build_model`.
 """
 
-from motion2video.models import behavior, blocks, cvae, flow, lcpvae, mtvae, pred_lstm  # noqa: F401  (registration)
+from motion2video.models import (  # noqa: F401  (importing registers the models)
+    baselines, behavior, blocks, cvae, flow, lcpvae, mtvae, pred_lstm,
+)
 from motion2video.models.base import MODEL_REGISTRY, LatentPosterior, LossOutput, build_model, register_model
-
-from motion2video.models import baselines  # noqa: E402,F401  (registration; another engineer's module)
 
 __all__ = ["MODEL_REGISTRY", "LatentPosterior", "LossOutput", "build_model", "register_model"]
