@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from motion2video.commands.common import add_threads_argument, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -49,14 +50,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
     p.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
     p.add_argument("--npz", default=None, help="also write A->B, C->D and z to this .npz")
-    p.add_argument("--threads", type=int, default=1, help="torch CPU threads (default 1)")
+    add_threads_argument(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
-    import torch
-
     from motion2video.analogy import analogy, analogy_model, render_analogy
     from motion2video.checkpoint import load_model
     from motion2video.atomic import save_npz
@@ -65,9 +64,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.transfer import load_clip
     from motion2video.video import write_video
 
-    if args.threads < 1:
-        raise InputError(f"--threads must be >= 1, got {args.threads}")
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if not 32 <= args.size <= 2048:
         raise InputError(f"--size must be in 32..2048, got {args.size}")
     out = check_outputs(args.output, args.npz)

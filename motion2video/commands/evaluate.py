@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from motion2video.atomic import write_json
+from motion2video.commands.common import add_threads_argument, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -40,23 +41,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     p.add_argument("--extended", action="store_true",
                    help="also report S-MSE, R-MSE and the Parzen conditional log-likelihood (MT-VAE metrics)")
-    p.add_argument("--threads", type=int, default=1,
-                   help="torch CPU threads (default 1: the recurrent models run fastest single-threaded on a "
-                   "shared CPU)")
+    add_threads_argument(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    import torch
-
     from motion2video.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import build_dataset
     from motion2video.evaluation import EvalProtocol, evaluate_bundles
     from motion2video.models.baselines import BASELINES
 
-    if args.threads < 1:
-        raise InputError(f"--threads must be >= 1, got {args.threads}")
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if args.samples < 1:
         raise InputError(f"--samples must be >= 1, got {args.samples}")
     if args.stride < 1:

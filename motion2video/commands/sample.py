@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from motion2video.commands.common import add_threads_argument, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -43,24 +44,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
                    help="skeleton maps or the Anny body mesh (body models; face models draw the Anny face)")
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
-    p.add_argument("--threads", type=int, default=1,
-                   help="torch CPU threads (default 1: the recurrent models run fastest single-threaded on a "
-                   "shared CPU)")
+    add_threads_argument(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    import torch
-
     from motion2video.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import DatasetConfig
     from motion2video.forecast import forecast, load_clip_for, render_forecast, save_forecast_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.video import VIDEO_SUFFIXES, write_video
 
-    if args.threads < 1:
-        raise InputError(f"--threads must be >= 1, got {args.threads}")
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if args.samples < 1:
         raise InputError(f"--samples must be >= 1, got {args.samples}")
     if not 32 <= args.size <= 2048:

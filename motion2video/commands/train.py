@@ -7,6 +7,7 @@ import dataclasses
 import json
 from pathlib import Path
 
+from motion2video.commands.common import add_threads_argument, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -45,9 +46,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="feature layout; auto: face for a folder of .csv face captures, else body3d")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT's last periodic checkpoint")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.add_argument("--threads", type=int, default=1,
-                   help="torch CPU threads (default 1: the recurrent models run fastest single-threaded on a "
-                   "shared CPU)")
+    add_threads_argument(p)
     p.set_defaults(run=run)
 
 
@@ -99,16 +98,12 @@ def _dataclass(cls, values: dict, section: str):
 
 
 def run(args: argparse.Namespace) -> int:
-    import torch
-
     import motion2video.checkpoint  # noqa: F401  (registers every model)
     from motion2video.data.dataset import DatasetConfig, build_dataset
     from motion2video.models.base import MODEL_REGISTRY
     from motion2video.training import TrainConfig, train_model
 
-    if args.threads < 1:
-        raise InputError(f"--threads must be >= 1, got {args.threads}")
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if args.model not in MODEL_REGISTRY:
         raise InputError(f"unknown model {args.model!r}; known: {', '.join(sorted(MODEL_REGISTRY))}")
     if MODEL_REGISTRY[args.model].kind == "baseline":

@@ -6,6 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
+from motion2video.commands.common import add_threads_argument, set_threads
+
 EXAMPLES = """\
 examples:
   motion2video train-frames --domain body -o out/frames-body-128.safetensors --steps 4000 --cache /tmp/m2v-cache
@@ -43,8 +45,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
-    p.add_argument("--threads", type=int, default=1,
-                   help="torch CPU threads (default 1: on 2 shared cores one thread ran 3x faster than two)")
+    add_threads_argument(p)
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
     p.set_defaults(run=run)
 
@@ -62,11 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
     from motion2video.frames.train import TrainFramesConfig, train_frames
 
-    if args.threads < 1:
-        raise InputError(f"--threads must be >= 1, got {args.threads}")
-    import torch
-
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if args.steps < 1:
         raise InputError(f"--steps must be >= 1, got {args.steps}")
     if args.batch_size < 1:
