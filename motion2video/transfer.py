@@ -411,7 +411,7 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
 
     Args:
         frame_model: a loaded frame generator (:func:`motion2video.frames.checkpoint.load_frame_model`).
-        reference: a :class:`motion2video.pipeline.Reference` (:func:`motion2video.pipeline.load_reference`),
+        reference: a :class:`motion2video.reference.Reference` (:func:`motion2video.reference.load_reference`),
             or None for 3D body models: the start posture rendered with the target's Anny look (and its
             exact pose) becomes the reference.
     Returns:
@@ -450,14 +450,8 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
 def rendered_reference(fc, size: int):
     """A reference for the frame generator made from the start posture (``fc.observed[0]``): the target's Anny
     look rendered through the camera a single-frame placement uses, with that exact 2D pose."""
-    from motion2video.pipeline import (
-        BODY_ELEVATION_DEG,
-        BODY_MARGIN,
-        BODY_YFOV_DEG,
-        Reference,
-        ReferencePose,
-        place_body,
-    )
+    from motion2video.pipeline import BODY_ELEVATION_DEG, BODY_MARGIN, BODY_YFOV_DEG, place_body
+    from motion2video.reference import Reference, ReferencePose
     from renderers.body import BodyRenderer
     from renderers.camera import fit_camera
 

@@ -16,6 +16,7 @@ import pytest
 import torch
 
 from motion2video import pipeline as P
+from motion2video import reference as R
 from motion2video.cli import main
 from motion2video.errors import InputError
 from motion2video.video import GREEN, RED, read_image, read_video
@@ -101,7 +102,7 @@ def checkpoints(tmp_path_factory, mocap_dir) -> dict[str, Path]:
 
 def test_output_names():
     assert P.output_paths("out/x.mp4") == (Path("out/x.mp4"), Path("out/x-structure.mp4"), Path("out/x-sheet.png"))
-    assert P.reference_pose_path("a/ref.png") == Path("a/ref.pose.npz")
+    assert R.reference_pose_path("a/ref.png") == Path("a/ref.pose.npz")
 
 
 def test_similarity_fit_recovers_scale_and_shift():
@@ -128,7 +129,7 @@ def test_body_placement_puts_the_reference_pose_on_the_reference_picture():
     """The first observed frame is the pose the demo reference shows: after placement it lands on the
     reference pose file's joints (this fails if left/right, y-down or the scale were wrong)."""
     joints = np.load(DEMO / "walk_to_run.npz")["joints"].astype(np.float64)
-    ref = P.load_reference_pose(DEMO / "reference_body_128.pose.npz")
+    ref = R.load_reference_pose(DEMO / "reference_body_128.pose.npz")
     placed = P.place_body(joints[:8], np.stack([joints[8:14], joints[8:14] + [0.0, 0.0, 0.2]]), size=128,
                           reference_points=ref.points)
     err = np.linalg.norm(placed.observed[0] - ref.points, axis=-1)
@@ -161,7 +162,7 @@ def test_reference_image_conversions(tmp_path):
             iio.imwrite(tmp_path / name, array)
         else:
             assert cv2.imwrite(str(tmp_path / name), array)
-        image, notes = P.read_reference_image(tmp_path / name)
+        image, notes = R.read_reference_image(tmp_path / name)
         assert image.shape == (40, 30, 3) and image.dtype == np.uint8, name
         assert tuple(image[20, 15]) == colour, name
         assert (note is None and not notes) or any(note in n for n in notes), (name, notes)
@@ -169,7 +170,7 @@ def test_reference_image_conversions(tmp_path):
     (tmp_path / "empty.png").write_bytes(b"")
     for name, message in (("missing.png", "no such"), ("text.png", "cannot decode"), ("empty.png", "cannot decode")):
         with pytest.raises(InputError, match=message) as err:
-            P.read_reference_image(tmp_path / name)
+            R.read_reference_image(tmp_path / name)
         assert name in str(err.value) and "\n" not in str(err.value)
 
 
@@ -179,28 +180,28 @@ def test_non_square_reference_is_padded_and_its_pose_follows(tmp_path):
     points[0] = [30.5, 40.5]
     cv2.circle(image, (30, 40), 3, (0, 0, 255), -1)  # a red dot (BGR) at joint 0
     cv2.imwrite(str(tmp_path / "wide.png"), image)
-    P.save_reference_pose(tmp_path / "wide.pose.npz", P.ReferencePose("body", 100, 60, points=points))
-    ref = P.load_reference(tmp_path / "wide.png", size=50, domain="body")
+    R.save_reference_pose(tmp_path / "wide.pose.npz", R.ReferencePose("body", 100, 60, points=points))
+    ref = R.load_reference(tmp_path / "wide.png", size=50, domain="body")
     assert ref.image.shape == (50, 50, 3)
     assert any("padded to 100x100 and resized to 50x50" in n for n in ref.notes)
     x, y = ref.pose.points[0]
     assert (x, y) == pytest.approx((30.5 * 0.5, (40.5 + 20) * 0.5))
     assert ref.image[int(y), int(x), 0] > 200 and ref.image[int(y), int(x), 1] < 80  # the dot is there
     with pytest.raises(InputError, match="body pose, but the frame model makes face"):
-        P.load_reference(tmp_path / "wide.png", size=50, domain="face")
+        R.load_reference(tmp_path / "wide.png", size=50, domain="face")
     (tmp_path / "bad.pose.npz").write_bytes(b"junk")
     with pytest.raises(InputError, match="not a valid reference pose file"):
-        P.load_reference(tmp_path / "wide.png", size=50, domain="body", pose_path=tmp_path / "bad.pose.npz")
-    face = P.load_reference(DEMO / "reference_face.png", size=64, domain="face")  # its pose file is found
-    assert face.pose.camera.width == 64 and face.pose.camera.yfov == P.load_reference_pose(
+        R.load_reference(tmp_path / "wide.png", size=50, domain="body", pose_path=tmp_path / "bad.pose.npz")
+    face = R.load_reference(DEMO / "reference_face.png", size=64, domain="face")  # its pose file is found
+    assert face.pose.camera.width == 64 and face.pose.camera.yfov == R.load_reference_pose(
         DEMO / "reference_face.pose.npz").camera.yfov
 
 
 def test_face_reference_pose_round_trip(tmp_path):
-    pose = P.load_reference_pose(DEMO / "reference_face.pose.npz")
+    pose = R.load_reference_pose(DEMO / "reference_face.pose.npz")
     assert pose.kind == "face" and pose.face.shape == (58,) and pose.camera.width == 256
-    path = P.save_reference_pose(tmp_path / "f.pose.npz", pose)
-    again = P.load_reference_pose(path)
+    path = R.save_reference_pose(tmp_path / "f.pose.npz", pose)
+    again = R.load_reference_pose(path)
     np.testing.assert_array_equal(again.face, pose.face)
     assert again.camera == pose.camera and again.identity == pose.identity
 
@@ -253,7 +254,7 @@ def test_synthesize_body_end_to_end(checkpoints, mocap_dir, tmp_path):
     assert sheet.shape == (3 * FRAME_SIZE + 2 * 2, 8 * FRAME_SIZE + 7 * 2, 3)
     # The reference structure came from the pose file: the first observed pose is aligned with it.
     st = result.structures
-    ref_pose = P.load_reference_pose(DEMO / "reference_body_128.pose.npz")
+    ref_pose = R.load_reference_pose(DEMO / "reference_body_128.pose.npz")
     np.testing.assert_allclose(st.points[0], ref_pose.points * FRAME_SIZE / 128, atol=1e-4)
 
 
@@ -275,7 +276,7 @@ def test_synthesize_face_end_to_end_and_same_seed_same_frames(face_dir, tmp_path
     grey = result.structures.images
     assert grey.shape == (1 + 4 + 3 * 4, FRAME_SIZE, FRAME_SIZE) and grey.max() > 100  # the face mesh is drawn
     # The reference structure is the pose file's face in its camera: it covers the reference picture's face.
-    ref = P.load_reference(DEMO / "reference_face.png", size=FRAME_SIZE, domain="face")
+    ref = R.load_reference(DEMO / "reference_face.png", size=FRAME_SIZE, domain="face")
     face_pixels = np.abs(ref.image.astype(int) - 255).sum(-1) > 60
     assert ((grey[0] > 20) & face_pixels).sum() > 0.7 * (grey[0] > 20).sum()
 

@@ -106,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
     frame_model = reference = None
     if style == "frames":
         from motion2video.frames.checkpoint import load_frame_model
-        from motion2video.pipeline import DOMAIN_OF_LAYOUT, load_reference
+        from motion2video.pipeline import DOMAIN_OF_LAYOUT
+        from motion2video.reference import load_reference
 
         frame_name = args.frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
         frame_model = load_frame_model(frame_name)
