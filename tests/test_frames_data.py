@@ -19,8 +19,6 @@ from motion2video.frames.render_data import is_test_face_clip
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-needs_data = pytest.mark.skipif(not (DATA / "mocap" / "manifest.csv").is_file(),
-                                reason="real captures not found at ../shared/data")
 
 
 @pytest.fixture(autouse=True)
@@ -45,7 +43,6 @@ def test_held_out_clip_rules():
     assert is_test_face_clip("livelinkface/S07-001.csv") and not is_test_face_clip("llv/dao.csv")
 
 
-@needs_data
 @pytest.mark.slow
 def test_rendered_body_sequences(tmp_path):
     spec = tiny_spec("body", "test")
@@ -72,7 +69,6 @@ def test_rendered_body_sequences(tmp_path):
     np.testing.assert_allclose(redone.points, seqs.points)
 
 
-@needs_data
 @pytest.mark.slow
 def test_rendered_face_sequences(tmp_path):
     seqs = load_or_generate(tiny_spec("face", "train"), cache_dir=tmp_path, progress=False)
@@ -86,7 +82,6 @@ def test_rendered_face_sequences(tmp_path):
     assert pairs.ref_structures.shape == (4, 1, 64, 64)
 
 
-@needs_data
 @pytest.mark.slow
 def test_train_and_evaluate_commands(tmp_path, capsys):
     ckpt = tmp_path / "tiny.safetensors"
