@@ -443,9 +443,10 @@ def cmd_results(args: argparse.Namespace) -> int:
     record: dict = {"started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t0 = time.perf_counter()
     sections = ["## Issue 3: stochastic motion generators\n\n"
-                "Regenerate with `python scripts/make_results.py results` after `scripts/train_shipped.sh` "
-                "(numbers below are from one real CPU run; checkpoints in motion2video/weights, comparison "
-                f"models in {args.runs}/)."]
+                f"Regenerate with `python scripts/make_results.py {' '.join(sys.argv[1:]) or 'results'}` after "
+                "`scripts/train_shipped.sh` (numbers below are from one real CPU run; checkpoints in "
+                f"motion2video/weights, comparison models in {args.runs}/, trained by the first run of this "
+                "command and reused by later ones: training them all takes about 25 minutes on 2 cores)."]
     t_train = time.perf_counter()
     steps_for = dict((name, int(n)) for name, n in (item.split("=") for item in args.mm_steps_for))
     run_tasks(body_tasks(runs, steps=args.body_steps)
