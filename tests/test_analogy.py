@@ -7,7 +7,6 @@ from collections import Counter
 
 import numpy as np
 import pytest
-import torch
 
 from motion2video.analogy import (
     known_answer_labels,
@@ -28,14 +27,6 @@ from motion2video.video import read_video
 CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh")
 OBSERVED, HORIZON = 8, 12
 LATENT = {"latent_dim": 4}
-
-
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
 
 
 def _train(name: str, data, out, *, steps: int = 3, model: dict | None = None, **data_kw):

@@ -11,6 +11,7 @@ from safetensors.torch import save_file
 
 from motion2video.cli import main
 from motion2video.checkpoint import load_model
+from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_02.bvh", "cmu/01_01.bvh", "mass/mass_pirouette.bvh",
          "deepmimic/humanoid3d_spin.bvh")
@@ -18,21 +19,9 @@ TINY = json.dumps({"model": {"hidden_dim": 8, "latent_dim": 4},
                    "train": {"batch_size": 4, "checkpoint_every": 2, "val_every": 2, "val_windows": 8}})
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
-
-
 @pytest.fixture(scope="module")
 def small_data(tmp_path_factory, mocap_dir):
-    root = tmp_path_factory.mktemp("mocap_cli")
-    for rel in CLIPS:
-        (root / rel).parent.mkdir(parents=True, exist_ok=True)
-        (root / rel).symlink_to(mocap_dir / rel)
-    return root
+    return link_clips(tmp_path_factory.mktemp("mocap_cli"), mocap_dir, CLIPS)
 
 
 @pytest.fixture(scope="module")

@@ -29,15 +29,6 @@ from motion2video.skeletons import H36M_17
 TINY = dict(image_size=32, channels=(8, 12, 16))
 
 
-@pytest.fixture(autouse=True)
-def one_thread():
-    """Tiny models run ~10x faster on one thread than on two busy cores (and runs are bit-reproducible)."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
-
-
 def tiny_config(domain: str = "body") -> FrameGeneratorConfig:
     return FrameGeneratorConfig(domain=domain, structure_channels=BODY_STRUCTURE_CHANNELS if domain == "body" else 1,
                                 **TINY)

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
 
 from motion2video.cli import main
 from motion2video.frames.data import (DatasetSpec, body_structures, cache_folder, evaluation_pair_index,
@@ -19,14 +18,6 @@ from motion2video.frames.render_data import is_test_face_clip
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-
-
-@pytest.fixture(autouse=True)
-def one_thread():
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
 
 
 def tiny_spec(domain: str, split: str) -> DatasetSpec:

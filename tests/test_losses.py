@@ -29,14 +29,6 @@ F = 5
 
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny recurrent models run far faster on one thread (and 2 shared cores make threads contend)."""
-    previous = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(previous)
-
 def _gaussians(seed: int, b: int = 3, z: int = 4) -> tuple[torch.Tensor, ...]:
     g = torch.Generator().manual_seed(seed)
     return tuple(torch.randn(b, z, generator=g, dtype=torch.float64) for _ in range(4))

@@ -38,14 +38,6 @@ def _sample(model: torch.nn.Module, obs: torch.Tensor, *, k: int, horizon: int, 
 
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny recurrent models run far faster on one thread (and 2 shared cores make threads contend)."""
-    previous = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(previous)
-
 # ---------------------------------------------------------------------------------------------- registry
 
 

@@ -84,14 +84,6 @@ def assert_framed(frames: np.ndarray, *, observed: int, cells: int, columns: int
             assert np.abs(colour - want).max() < 40, (t, cell, colour)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
-
-
 @pytest.fixture(scope="module")
 def checkpoints(tmp_path_factory, mocap_dir) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("pipeline_ckpt")

@@ -8,21 +8,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-import torch
 
 from motion2video.cli import main
 from motion2video.pipeline import output_paths
 from motion2video.video import read_image, read_video
 from tests.test_pipeline import (DEMO, FRAME_SIZE, assert_framed, train_body_motion_model, train_face_motion_model,
                                  train_frame_model)
-
-
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
 
 
 @pytest.fixture(scope="module")

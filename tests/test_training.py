@@ -14,30 +14,17 @@ from motion2video import checkpoint as C
 from motion2video.data.dataset import DatasetConfig, build_dataset
 from motion2video.errors import InputError
 from motion2video.training import TrainConfig, last_paths, learning_rate, train_model, validation_loss
+from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_02.bvh", "cmu/01_01.bvh", "mass/mass_pirouette.bvh",
          "deepmimic/humanoid3d_spin.bvh")
 TINY = {"hidden_dim": 16}
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    """Tiny recurrent models run far faster single-threaded on a shared 2-core machine."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
-
-
 @pytest.fixture(scope="module")
 def small_data(tmp_path_factory, mocap_dir):
     """Five real clips (four split groups) linked into a temporary folder (no manifest: header rates)."""
-    root = tmp_path_factory.mktemp("mocap_small")
-    for rel in CLIPS:
-        target = root / rel
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.symlink_to(mocap_dir / rel)
-    return root
+    return link_clips(tmp_path_factory.mktemp("mocap_small"), mocap_dir, CLIPS)
 
 
 @pytest.fixture(scope="module")

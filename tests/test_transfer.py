@@ -27,18 +27,11 @@ from motion2video.transfer import (
     transfer_pairs,
 )
 from motion2video.video import read_video, write_image
+from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh", "mass/mass_walk.bvh")
 TINY = {"hidden_dim": 16, "latent_dim": 4}
 HORIZON = 10
-
-
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
 
 
 def _train(name: str, data, out, *, model: dict | None = None, steps: int = 3, **data_kw):
@@ -54,11 +47,7 @@ def _train(name: str, data, out, *, model: dict | None = None, steps: int = 3, *
 
 @pytest.fixture(scope="module")
 def small_data(tmp_path_factory, mocap_dir):
-    root = tmp_path_factory.mktemp("mocap_transfer")
-    for rel in CLIPS:
-        (root / rel).parent.mkdir(parents=True, exist_ok=True)
-        (root / rel).symlink_to(mocap_dir / rel)
-    return root
+    return link_clips(tmp_path_factory.mktemp("mocap_transfer"), mocap_dir, CLIPS)
 
 
 @pytest.fixture(scope="module")
