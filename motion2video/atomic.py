@@ -15,6 +15,25 @@ from typing import Iterator
 import numpy as np
 
 
+def check_output_path(path: str | Path, extensions: tuple[str, ...]) -> Path:
+    """Validate an output path before any work is done: one of ``extensions`` (lower-case, with the dot), an
+    existing and writable folder, not itself a folder. Raises InputError naming the path."""
+    from motion2video.errors import InputError
+
+    out = Path(path)
+    if out.suffix.lower() not in extensions:
+        raise InputError(f"unsupported output extension {out.suffix or '(none)'!r}: the output must be an "
+                         f"{' or '.join(extensions)} file", out)
+    folder = out.parent
+    if not folder.is_dir():
+        raise InputError("the output folder does not exist", out)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError("the output folder is not writable", out)
+    if out.is_dir():
+        raise InputError("the output path is a directory", out)
+    return out
+
+
 @contextmanager
 def atomic_output(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path in ``path``'s folder (same suffix, so format-sniffing writers behave); when the

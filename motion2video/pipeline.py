@@ -48,6 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motion2video.atomic import check_output_path
 from motion2video.errors import InputError
 from motion2video.reference import Reference, load_reference
 
@@ -560,13 +561,7 @@ def check_output(path: str | Path) -> tuple[Path, Path, Path]:
     Returns:
         :func:`output_paths` of it.
     """
-    path = Path(path)
-    if path.suffix.lower() != ".mp4":
-        raise InputError(f"the output must be an .mp4 file, got {path.suffix or 'no extension'!r}", path)
-    if not path.parent.is_dir():
-        raise InputError("the output folder does not exist", path)
-    if not os.access(path.parent, os.W_OK | os.X_OK):
-        raise InputError("the output folder is not writable", path)
+    path = check_output_path(path, (".mp4",))
     for p in output_paths(path):
         if p.is_dir():
             raise InputError("the output path is a directory", p)

@@ -6,18 +6,18 @@ atomically, so bad input never leaves a partial file behind.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from motion2video.atomic import check_output_path
 from motion2video.errors import InputError
 from motion2video.io import load_motion, resample_motion
 from motion2video.motion import FaceMotion, Motion
+from motion2video.video import VIDEO_SUFFIXES
 
 STYLES = ("skeleton", "heatmap", "mesh", "face")
-VIDEO_EXTENSIONS = (".mp4", ".gif")
 MIN_SIZE, MAX_SIZE = 32, 2048
 CHUNK = 32  # frames per progress-bar step
 
@@ -55,21 +55,6 @@ class RenderResult:
     width: int
     height: int
     fps: float
-
-
-def check_output_path(path: str | Path, extensions: tuple[str, ...] = VIDEO_EXTENSIONS) -> Path:
-    """Validate an output path before any work: a known extension and a writable, existing directory."""
-    out = Path(path)
-    if out.suffix.lower() not in extensions:
-        raise InputError(f"unknown output extension {out.suffix!r}; use one of {', '.join(extensions)}", out)
-    directory = out.parent if str(out.parent) else Path(".")
-    if not directory.is_dir():
-        raise InputError("output directory does not exist", directory)
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise InputError("output directory is not writable", directory)
-    if out.is_dir():
-        raise InputError("output path is a directory", out)
-    return out
 
 
 def check_size(size: int) -> int:
@@ -145,7 +130,7 @@ def render_file(request: RenderRequest) -> RenderResult:
     """Load ``request.input``, render it and write ``request.output``; see :class:`RenderRequest`."""
     from motion2video.video import write_video
 
-    out = check_output_path(request.output)
+    out = check_output_path(request.output, VIDEO_SUFFIXES)
     size = check_size(request.size)
     if request.style not in STYLES:
         raise InputError(f"unknown style {request.style!r}; choose one of {', '.join(STYLES)}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import add_threads_argument, set_threads
+from motion2video.commands.common import add_threads_argument, check_video_and_npz, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -59,7 +59,6 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.analogy import analogy, analogy_model, render_analogy
     from motion2video.checkpoint import load_model
     from motion2video.atomic import save_npz
-    from motion2video.commands.transfer import check_outputs
     from motion2video.models.baselines import BASELINES
     from motion2video.transfer import load_clip
     from motion2video.video import write_video
@@ -67,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     if not 32 <= args.size <= 2048:
         raise InputError(f"--size must be in 32..2048, got {args.size}")
-    out = check_outputs(args.output, args.npz)
+    out = check_video_and_npz(args.output, args.npz)
     if args.model in BASELINES:
         raise InputError(f"analogy needs a latent-variable model (mtvae-add, ...); {args.model!r} is a baseline "
                          "without a latent space")

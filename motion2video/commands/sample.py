@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from motion2video.commands.common import add_threads_argument, set_threads
+from motion2video.commands.common import add_threads_argument, check_video_and_npz, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -53,21 +52,14 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.data.dataset import DatasetConfig
     from motion2video.forecast import forecast, load_clip_for, render_forecast, save_forecast_npz
     from motion2video.models.baselines import BASELINES
-    from motion2video.video import VIDEO_SUFFIXES, write_video
+    from motion2video.video import write_video
 
     set_threads(args.threads)
     if args.samples < 1:
         raise InputError(f"--samples must be >= 1, got {args.samples}")
     if not 32 <= args.size <= 2048:
         raise InputError(f"--size must be in 32..2048, got {args.size}")
-    out = Path(args.output)
-    if out.suffix.lower() not in VIDEO_SUFFIXES:
-        raise InputError(f"unsupported video extension {out.suffix!r}; use one of {', '.join(VIDEO_SUFFIXES)}", out)
-    for target in [out] + ([Path(args.npz)] if args.npz else []):
-        if not target.parent.exists():
-            raise InputError("the output folder does not exist", target)
-    if args.npz and Path(args.npz).suffix.lower() != ".npz":
-        raise InputError("--npz must name a .npz file", args.npz)
+    out = check_video_and_npz(args.output, args.npz)
     if args.model in BASELINES:
         bundle = baseline_bundle(args.model, DatasetConfig())
     else:

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from motion2video.atomic import save_npz
-from motion2video.commands.common import add_threads_argument, set_threads
+from motion2video.commands.common import add_threads_argument, check_video_and_npz, set_threads
 from motion2video.errors import InputError
 
 EXAMPLES = """\
@@ -66,21 +65,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-def check_outputs(output: str, npz: str | None) -> Path:
-    """Validate the output paths before any work (nothing is written on a bad argument)."""
-    from motion2video.video import VIDEO_SUFFIXES
-
-    out = Path(output)
-    if out.suffix.lower() not in VIDEO_SUFFIXES:
-        raise InputError(f"unsupported video extension {out.suffix!r}; use one of {', '.join(VIDEO_SUFFIXES)}", out)
-    for target in [out] + ([Path(npz)] if npz else []):
-        if not target.parent.exists():
-            raise InputError("the output folder does not exist", target)
-    if npz and Path(npz).suffix.lower() != ".npz":
-        raise InputError("--npz must name a .npz file", npz)
-    return out
-
-
 def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.checkpoint import load_model
@@ -91,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     if not 32 <= args.size <= 2048:
         raise InputError(f"--size must be in 32..2048, got {args.size}")
-    out = check_outputs(args.output, args.npz)
+    out = check_video_and_npz(args.output, args.npz)
     style = args.style or ("frames" if args.reference else None)
     if args.reference and style != "frames":
         raise InputError(f"--reference is only used with --style frames (got --style {style})", args.reference)
