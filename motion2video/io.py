@@ -4,13 +4,17 @@
 path                                    read as
 ======================================  ==============================================================
 ``*.bvh``                               :func:`~motion2video.formats.bvh.load_bvh` (canonical h36m-17, metres,
-                                        z up); a ``manifest.csv`` in its folder or up to two folders above
+                                        z up); a ``manifest.csv`` in its folder or up to three folders above
                                         that lists the file supplies fps, label and the rig's default trim
+``*.txt``, or ``*.json`` holding        DeepMimic motion file (:mod:`~motion2video.formats.deepmimic`, the
+``"Frames"``                            character file found beside it), same manifest rules
+other ``*.txt``                         exp-map text file (:mod:`~motion2video.formats.expmap`, with the
+                                        ``skeleton.json`` layout found beside or above it), same manifest rules
 ``*.npz`` with ``joints``               body :class:`~motion2video.motion.Motion`
 ``*.npz`` with ``face``                 :class:`~motion2video.motion.FaceMotion`
 ``*.npz`` with ``positions_3d``         VideoPose3D Human3.6M file holding exactly one clip (else use
                                         :func:`~motion2video.formats.videopose3d.load_videopose3d`)
-a directory, or ``*.json``              OpenPose keypoints (2D, image pixels)
+a directory, or another ``*.json``      OpenPose keypoints (2D, image pixels)
 ``*.csv``                               Live Link Face ARKit capture -> FaceMotion
 ======================================  ==============================================================
 """
@@ -22,8 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from motion2video.errors import InputError
-from motion2video.formats.bvh import load_bvh
 from motion2video.formats.face_csv import load_face_csv
+from motion2video.formats.mocap import is_deepmimic_file, load_mocap
 from motion2video.formats.npz import (
     load_face_npz,
     load_motion_npz,
@@ -37,7 +41,7 @@ from motion2video.formats.resample import resample_linear
 from motion2video.formats.videopose3d import load_videopose3d
 from motion2video.motion import NUM_EXPRESSIONS, FaceMotion, Motion
 
-MOTION_SUFFIXES = (".bvh", ".npz", ".json", ".csv")
+MOTION_SUFFIXES = (".bvh", ".txt", ".npz", ".json", ".csv")
 
 
 def _check_rate(value: float | None, name: str, path: Path) -> None:
@@ -76,10 +80,10 @@ def load_motion(
     if not path.exists():
         raise InputError("no such file or directory", path)
     suffix = path.suffix.lower()
+    if suffix in (".bvh", ".txt") or (suffix == ".json" and path.is_file() and is_deepmimic_file(path)):
+        return load_mocap(path, fps=fps, target_fps=target_fps, manifest=True)
     if path.is_dir() or suffix == ".json":
         motion: Motion | FaceMotion = load_openpose_folder(path, fps=25.0 if fps is None else fps)
-    elif suffix == ".bvh":
-        return load_bvh(path, fps=fps, target_fps=target_fps, manifest=True)
     elif suffix == ".csv":
         motion = load_face_csv(path, fps=fps)
     elif suffix == ".npz":

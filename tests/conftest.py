@@ -2,9 +2,16 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+from motion2video.formats.canonical import CanonicalClip, floor_height
+from motion2video.formats.manifest import ManifestEntry, read_manifest
+from motion2video.formats.mocap import default_trim, load_mocap, mocap_canonical
+from motion2video.motion import Motion
 
 SHARED_DIR = Path(__file__).resolve().parents[2] / "shared"
 
@@ -23,8 +30,45 @@ def shared_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def mocap_dir(shared_dir: Path) -> Path:
-    """The 72 real BVH clips with their ``manifest.csv`` (``shared/data/mocap``)."""
+    """The real mocap clips (275 files: BVH, DeepMimic, exp-map) with their ``manifest.csv``
+    (``shared/data/mocap``)."""
     return _existing(shared_dir / "data" / "mocap")
+
+
+@dataclass
+class LoadedClip:
+    """One manifest row, loaded as the corpus loads it.
+
+    Attributes:
+        entry: the manifest row.
+        canonical: the whole file in the project frame (every node, no trim, no floor).
+        motion: the canonical Motion (true fps, default trim, floor at 0), as ``load_mocap`` gives it.
+        nodes: (T, N, 3) every node over the motion's frames, with the same floor.
+    """
+
+    entry: ManifestEntry
+    canonical: CanonicalClip
+    motion: Motion
+    nodes: np.ndarray
+
+
+@pytest.fixture(scope="session")
+def mocap_manifest(mocap_dir: Path) -> dict[str, ManifestEntry]:
+    return read_manifest(mocap_dir / "manifest.csv")
+
+
+@pytest.fixture(scope="session")
+def mocap_clips(mocap_dir: Path, mocap_manifest) -> dict[str, LoadedClip]:
+    """Every row of the mocap manifest, loaded once per test session (about 15 s on a free core)."""
+    out = {}
+    for name, entry in mocap_manifest.items():
+        canon = mocap_canonical(mocap_dir / name, entry=entry)
+        motion = load_mocap(mocap_dir / name, manifest=entry, canonical=canon)
+        trim = default_trim(canon.rig)
+        nodes = canon.nodes[trim:].copy()
+        nodes[..., 2] -= floor_height(canon.joints[trim:])
+        out[name] = LoadedClip(entry, canon, motion, nodes)
+    return out
 
 
 @pytest.fixture(scope="session")

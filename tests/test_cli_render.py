@@ -28,6 +28,11 @@ def _run(argv: list[str], capsys) -> tuple[int, str, str]:
     ("heatmap", "mocap/deepmimic/humanoid3d_walk.bvh"),
     ("mesh", "mocap/mass/mass_kick.bvh"),
     ("face", "face/llv/dao.csv"),
+    # The readers beyond BVH: a DeepMimic motion file, an exp-map benchmark file, an acrnn salsa clip.
+    ("skeleton", "mocap/deepmimic-cmu/49_06.txt"),
+    ("mesh", "mocap/deepmimic/txt/humanoid3d_spinkick.txt"),
+    ("skeleton", "mocap/cmu-bench/test/soccer/soccer_1.txt"),
+    ("skeleton", "mocap/acrnn/salsa_03b.bvh"),
 ])
 def test_render_each_style_to_a_real_mp4(style, clip, shared_dir, tmp_path, capsys):
     out = tmp_path / f"{style}.mp4"
@@ -118,9 +123,10 @@ def test_bad_input_one_line_exit_2_no_output(case, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_every_mocap_clip_converts_and_renders(mocap_dir):
-    """All 72 real clips: canonical joints, then a skeleton map and the Anny mesh of two frames each."""
+    """All 275 real clips (every reader): canonical joints, then a skeleton map and the Anny mesh of two frames
+    each."""
     entries = read_manifest(mocap_dir / "manifest.csv")
-    assert len(entries) == 72
+    assert len(entries) == 275
     for name in sorted(entries):
         motion = load_motion(mocap_dir / name)
         assert motion.skeleton == "h36m-17" and motion.num_frames > 10, name

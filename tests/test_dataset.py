@@ -28,7 +28,7 @@ from motion2video.skeletons import H36M_17
 
 @pytest.fixture(scope="module")
 def mocap(mocap_dir):
-    """The real mocap folder (72 clips, manifest) as a body3d dataset."""
+    """The real mocap folder (275 clips of every format, manifest) as a body3d dataset."""
     return build_dataset(mocap_dir, DatasetConfig())
 
 
@@ -123,7 +123,7 @@ def test_split_holds_out_whole_groups_deterministically():
 
 def test_real_split_is_by_subject_and_recorded(mocap):
     split = mocap.split
-    assert len(split.train) + len(split.val) + len(split.test) == 72
+    assert len(split.train) + len(split.val) + len(split.test) == 275
     subjects = {s: {clip_group(n) for n in split.names(s) if n.startswith("cmu/")} for s in ("train", "val", "test")}
     assert subjects["test"] and not subjects["test"] & (subjects["train"] | subjects["val"])
     assert Split.from_dict(split.to_dict()) == split

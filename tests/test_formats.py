@@ -107,11 +107,16 @@ def test_missing_file_unknown_extension_and_bad_rates(tmp_path):
     with pytest.raises(InputError, match="no such file") as err:
         load_motion(tmp_path / "nope.bvh")
     _one_line(err, tmp_path / "nope.bvh")
-    other = tmp_path / "clip.txt"
+    other = tmp_path / "clip.xyz"
     other.write_text("1 2 3")
     with pytest.raises(InputError, match="unknown motion file extension") as err:
         load_motion(other)
     _one_line(err, other)
+    text = tmp_path / "clip.txt"  # a .txt that is not DeepMimic JSON is read as exp-map text, which needs a layout
+    text.write_text("1 2 3")
+    with pytest.raises(InputError, match="no exp-map layout file") as err:
+        load_motion(text)
+    _one_line(err, text)
     path = save_motion(_motion(), tmp_path / "m.npz")
     for kwargs in ({"fps": 0}, {"fps": -1}, {"target_fps": 0}, {"fps": float("nan")}):
         with pytest.raises(InputError, match="must be a positive number"):

@@ -10,6 +10,8 @@ EXAMPLES = """\
 examples:
   motion2video render ../shared/data/mocap/cmu/08_01.bvh -o out/walk_skeleton.mp4
   motion2video render ../shared/data/mocap/mass/mass_kick.bvh -o out/kick_mesh.mp4 --style mesh --size 256
+  motion2video render ../shared/data/mocap/deepmimic-cmu/49_06.txt -o out/cartwheel.mp4
+  motion2video render ../shared/data/mocap/cmu-bench/test/soccer/soccer_1.txt -o out/soccer.mp4
   motion2video render demo_inputs/walk_to_run.npz -o out/heatmaps.mp4 --style heatmap --start 10 --frames 50
   motion2video render ../shared/data/face/llv/dao.csv -o out/dao_face.mp4 --style face
   motion2video render demo_inputs/smile.npz -o out/smile.gif --style face --fps 12.5
@@ -19,13 +21,16 @@ examples:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "render",
-        help="render a motion file (BVH, npz, OpenPose JSON folder, Live Link Face CSV) to mp4/GIF",
+        help="render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) "
+        "to mp4/GIF",
         description="Render a motion clip offscreen: skeleton maps, Gaussian heatmaps, the Anny body mesh, "
         "or the Anny face. Body inputs are converted to the canonical H36M-17 skeleton first.",
         epilog=EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("input", help="a .bvh, .npz (Motion or FaceMotion), OpenPose JSON folder, or .csv face capture")
+    p.add_argument("input", help="a .bvh, DeepMimic motion file (.txt/.json with \"Frames\"), exp-map text file "
+                   "(.txt with a skeleton.json beside or above it), .npz (Motion or FaceMotion), OpenPose JSON "
+                   "folder, or .csv face capture")
     p.add_argument("-o", "--output", required=True, help="output .mp4 or .gif")
     p.add_argument("--style", choices=STYLES, default="skeleton", help="what to draw (default: skeleton)")
     p.add_argument("--size", type=int, default=256, help="frame width and height in pixels, 32..2048 (default 256)")

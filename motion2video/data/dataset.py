@@ -456,7 +456,7 @@ def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
         return [_face_clip_from_motion(load_face_clip(f), name=_relative_name(f, root), fps=fps,
                                        head_pose=config.face_head_pose) for f in files]
     if path.is_dir():
-        from motion2video.formats.bvh import load_mocap_folder
+        from motion2video.formats.mocap import load_mocap_folder
 
         motions = load_mocap_folder(path, target_fps=None)
         return [_body_clip_from_motion(m, name=_relative_name(Path(m.source), path) if m.source else f"clip{i}",

@@ -26,10 +26,20 @@ from pathlib import Path
 import numpy as np
 
 from motion2video.errors import InputError
-from motion2video.formats.manifest import ManifestEntry, find_manifest_entry, read_manifest
-from motion2video.formats.resample import resample_linear, round_fps
+from motion2video.formats.canonical import (  # noqa: F401 (ANKLE_HEIGHT, Y_UP_TO_Z_UP: re-exported)
+    ANKLE_HEIGHT,
+    Y_UP_TO_Z_UP,
+    CanonicalClip,
+    canonical_from_map,
+    canonical_motion,
+    floor_height,
+    to_project_frame,
+)
+from motion2video.formats.manifest import ManifestEntry, resolve_manifest
+from motion2video.formats.mocap import default_trim  # noqa: F401 (re-exported)
+from motion2video.formats.resample import round_fps
 from motion2video.motion import Motion
-from motion2video.skeletons import H36M_17, RIG_JOINT_MAPS
+from motion2video.skeletons import RIG_JOINT_MAPS
 
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 _CHANNEL_LOOKUP = {c.lower(): c for c in CHANNEL_NAMES}
@@ -47,16 +57,6 @@ RIG_UNITS: dict[str, float] = {
     "deepmimic-humanoid": 0.01,
     "mass-character1": 0.01,
 }
-
-# Height of the ankle joint centre above the floor with the foot flat, metres. Anny's default body (the mesh
-# the renderers pose from these joints) has its ankle (bone ``foot.R``) 0.071 m above its soles; adults
-# measure 6-8 cm. The floor is put this far below the lowest ankle (:func:`floor_height`).
-ANKLE_HEIGHT = 0.07
-
-# BVH is y-up; the project is z-up. (x, y, z)_bvh -> (x, -z, y): a +90 degree rotation about x
-# (determinant +1), so left and right are preserved.
-Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
-
 
 @dataclass(frozen=True)
 class BvhClip:
@@ -455,7 +455,7 @@ def detect_rig(names: tuple[str, ...] | list[str], source: str | None = None) ->
 
 
 def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) -> np.ndarray:
-    """Pick the canonical H36M-17 joints out of per-node positions.
+    """Pick the canonical H36M-17 joints out of per-node positions of a BVH ``rig``.
 
     Args:
         nodes: (T, N, 3) node positions (any units and axes).
@@ -464,77 +464,23 @@ def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) ->
     Returns:
         (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
     """
-    mapping = rig_joint_maps()[rig]
-    index = {n: i for i, n in enumerate(names)}
-    out = []
-    for joint in H36M_17.joints:
-        target = mapping[joint]
-        if isinstance(target, tuple):
-            out.append(nodes[:, [index[t] for t in target]].mean(axis=1))
-        else:
-            out.append(nodes[:, index[target]])
-    return np.stack(out, axis=1)  # (T, 17, 3)
+    return canonical_from_map(nodes, names, rig_joint_maps()[rig])
 
 
-def to_project_frame(points: np.ndarray, unit: float) -> np.ndarray:
-    """File units, y up -> metres, z up: ``(x, y, z) -> unit * (x, -z, y)``.
-
-    Args:
-        points: (..., 3) positions in file units.
-        unit: metres per file unit.
-    Returns:
-        (..., 3) float64 positions in metres.
-    """
-    return unit * (np.asarray(points, dtype=np.float64) @ Y_UP_TO_Z_UP.T)
+# A BVH clip in the project frame (the shared container of every mocap reader).
+CanonicalBvh = CanonicalClip
 
 
-def floor_height(joints: np.ndarray, *, ankle_height: float = ANKLE_HEIGHT) -> float:
-    """Height of the floor under a z-up canonical clip.
-
-    The floor is put ``ankle_height`` below the lowest ankle of the clip. "Lowest" is the 1st percentile
-    (not the minimum) of the per-frame lower ankle, so that a glitch of a few frames cannot drag the floor
-    down; in a clip where the body stands or walks, the lowest ankle is a flat stance foot. A clip that
-    never touches the ground (none in the shared data) would get a floor under its lowest ankle.
-
-    The floor is a level plane: it is not fitted for tilt. In several CMU walks the stance ankle rises by
-    up to ~6 cm over a 4 m walk (the capture floor is ~1 degree off the file's horizontal), so feet float
-    that much at the far end of those clips.
-
-    Args:
-        joints: (T, 17, 3) canonical joints, metres, z up.
-    Returns:
-        the floor height (the value to subtract from z).
-    """
-    ankles = joints[:, [H36M_17.index("right_ankle"), H36M_17.index("left_ankle")], 2]  # (T, 2)
-    return float(np.percentile(ankles.min(axis=1), 1.0)) - ankle_height
-
-
-@dataclass(frozen=True)
-class CanonicalBvh:
-    """A whole BVH clip in the project frame (metres, z up), before trimming and floor placement.
-
-    Attributes:
-        joints: (T, 17, 3) canonical H36M-17 joints.
-        nodes: (T, N, 3) every BVH node (joints and end sites) in the same frame.
-        rig: detected (or given) rig name.
-        unit: metres per file unit used.
-    """
-
-    joints: np.ndarray
-    nodes: np.ndarray
-    rig: str
-    unit: float
-
-
-def canonical_positions(clip: BvhClip, *, rig: str | None = None) -> CanonicalBvh:
-    """Forward kinematics, rig detection, unit and axis conversion for a whole clip (no floor shift)."""
+def canonical_positions(clip: BvhClip, *, rig: str | None = None) -> CanonicalClip:
+    """Forward kinematics, rig detection, unit and axis conversion for a whole clip (no floor shift);
+    ``fps`` of the result is the header's rate."""
     rig = detect_rig(clip.names, clip.path) if rig is None else rig
     if rig not in rig_joint_maps():
         raise InputError(f"unknown rig {rig!r}; known: {', '.join(rig_joint_maps())}", clip.path)
     unit = RIG_UNITS[rig]
     nodes = to_project_frame(bvh_world_positions(clip), unit)  # (T, N, 3) metres, z up
     joints = canonical_from_nodes(nodes, clip.names, rig)  # (T, 17, 3)
-    return CanonicalBvh(joints=joints, nodes=nodes, rig=rig, unit=unit)
+    return CanonicalClip(joints=joints, nodes=nodes, names=clip.names, rig=rig, unit=unit, fps=clip.header_fps)
 
 
 def bvh_to_canonical(
@@ -546,7 +492,7 @@ def bvh_to_canonical(
     frames: int | None = None,
     target_fps: float | None = None,
     label: str | None = None,
-    canonical: CanonicalBvh | None = None,
+    canonical: CanonicalClip | None = None,
 ) -> Motion:
     """Convert a parsed BVH clip to a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
 
@@ -567,31 +513,16 @@ def bvh_to_canonical(
             forward kinematics).
     """
     rate = clip.header_fps if fps is None else float(fps)
-    if not np.isfinite(rate) or rate <= 0:
-        raise InputError(f"fps must be a positive number, got {fps}", clip.path)
-    if target_fps is not None and (not np.isfinite(target_fps) or target_fps <= 0):
-        raise InputError(f"target fps must be a positive number, got {target_fps}", clip.path)
     if start < 0 or start >= clip.num_frames:
         raise InputError(f"start frame {start} is outside the clip (0..{clip.num_frames - 1})", clip.path)
-    if frames is not None and frames <= 0:
-        raise InputError(f"frames must be positive, got {frames}", clip.path)
     if canonical is None:
         canonical = canonical_positions(clip, rig=rig)
     elif canonical.joints.shape[0] != clip.num_frames or (rig is not None and canonical.rig != rig):
         raise ValueError("canonical= does not belong to this clip / rig")
-    joints = canonical.joints.copy()  # (T, 17, 3)
-    stop = clip.num_frames if frames is None else min(start + frames, clip.num_frames)
-    joints = joints[start:stop]  # (T', 17, 3)
-    joints[..., 2] -= floor_height(joints)
-    if target_fps is not None and float(target_fps) != rate:
-        joints = resample_linear(joints, rate, float(target_fps))
-        rate = float(target_fps)
-    return Motion(joints.astype(np.float32), rate, "h36m-17", clip.path, label)
+    return canonical_motion(canonical.joints, fps=rate, source=clip.path, start=start, frames=frames,
+                            target_fps=target_fps, label=label)
 
 
-def default_trim(rig: str) -> int:
-    """Frames to drop at the start of a clip of this rig (cgspeed's DAZ files begin with a T-pose)."""
-    return 5 if rig == "cmu-daz" else 0
 
 
 def load_bvh(
@@ -619,15 +550,7 @@ def load_bvh(
         label: action label (wins over the manifest's).
     """
     clip = read_bvh(path)
-    entry: ManifestEntry | None = None
-    if isinstance(manifest, ManifestEntry):
-        entry = manifest
-    elif manifest is True:
-        entry = find_manifest_entry(path)
-    elif manifest not in (None, False):
-        entry = find_manifest_entry(path, manifest=manifest)
-        if entry is None:
-            raise InputError(f"not listed in {manifest}", path)
+    entry = resolve_manifest(path, manifest)
     rig = detect_rig(clip.names, clip.path)
     if entry is not None:
         fps = entry.fps if fps is None else fps
@@ -636,23 +559,3 @@ def load_bvh(
             trim_start = default_trim(rig)
     return bvh_to_canonical(clip, rig=rig, fps=fps, start=trim_start or 0, frames=frames,
                             target_fps=target_fps, label=label)
-
-
-def load_mocap_folder(folder: str | Path, *, target_fps: float | None = 25) -> list[Motion]:
-    """Load every clip of a mocap folder, resampled to ``target_fps`` (None: native rates).
-
-    With a ``manifest.csv`` in ``folder`` the clips it lists are loaded in its order with its fps, labels
-    and the rig's default trim; without one every ``*.bvh`` below ``folder`` is loaded (sorted by path)
-    with header rates and no trim.
-    """
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise InputError("no such directory", folder)
-    manifest_path = folder / "manifest.csv"
-    if manifest_path.is_file():
-        entries = read_manifest(manifest_path)
-        return [load_bvh(folder / e.file, target_fps=target_fps, manifest=e) for e in entries.values()]
-    paths = sorted(folder.rglob("*.bvh"))
-    if not paths:
-        raise InputError("no .bvh files in the directory", folder)
-    return [load_bvh(p, target_fps=target_fps) for p in paths]

@@ -88,14 +88,15 @@ def _optional_number(text: str | None, column: str, line: int, path: Path) -> fl
 
 
 def find_manifest_entry(
-    clip_path: str | Path, *, manifest: str | Path | None = None, levels: int = 3
+    clip_path: str | Path, *, manifest: str | Path | None = None, levels: int = 4
 ) -> ManifestEntry | None:
     """The manifest row for a clip: true fps, label and rig.
 
     Args:
         clip_path: the clip file.
         manifest: a manifest.csv to look in; None searches ``manifest.csv`` in the clip's folder and up to
-            ``levels - 1`` folders above it, returning the first one that lists the clip.
+            ``levels - 1`` folders above it (cmu-bench files sit three folders below the mocap root),
+            returning the first one that lists the clip.
     Returns:
         the entry, or None when no manifest lists the clip.
     """
@@ -116,3 +117,26 @@ def find_manifest_entry(
         if entry is not None:
             return entry
     return None
+
+
+def resolve_manifest(clip_path: str | Path, manifest: str | Path | ManifestEntry | bool | None
+                     ) -> ManifestEntry | None:
+    """The manifest row a reader should use for ``clip_path``.
+
+    Args:
+        manifest: a :class:`ManifestEntry` (used as is), ``True`` (search with :func:`find_manifest_entry`;
+            None when no manifest lists the clip), a ``manifest.csv`` path (the clip must be listed there),
+            or None / False (no manifest).
+    Raises:
+        InputError: a manifest path that does not list the clip.
+    """
+    if isinstance(manifest, ManifestEntry):
+        return manifest
+    if manifest is True:
+        return find_manifest_entry(clip_path)
+    if manifest in (None, False):
+        return None
+    entry = find_manifest_entry(clip_path, manifest=manifest)
+    if entry is None:
+        raise InputError(f"not listed in {manifest}", clip_path)
+    return entry

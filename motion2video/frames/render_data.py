@@ -78,9 +78,9 @@ class SequenceSource:
         """The i-th clip, loaded once: a Motion (body) or a FaceMotion (face)."""
         if i not in self._clips:
             if self.spec.domain == "body":
-                from motion2video.formats.bvh import load_bvh
+                from motion2video.formats.mocap import load_mocap
 
-                self._clips[i] = load_bvh(self.clip_paths[i], manifest=self.manifest[self.clip_names[i]])
+                self._clips[i] = load_mocap(self.clip_paths[i], manifest=self.manifest[self.clip_names[i]])
             else:
                 from motion2video.data.face_data import load_face_clip
 
