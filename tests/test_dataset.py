@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from motion2video.data import corpus
 from motion2video.data import windows as W
 from motion2video.data.dataset import (
     Clip,
@@ -101,33 +102,103 @@ def test_labels_and_groups():
     assert coarse_label("walk (start-walk-stop, MJ style)") == "walk"
     assert coarse_label("dance_a") == "dance" and coarse_label(None) is None
     assert clip_group("cmu/08_11.bvh") == "cmu-08" and clip_group("cmu/131_02.bvh") == "cmu-131"
-    assert clip_group("mass/mass_walk.bvh") == "mass/mass_walk.bvh"
+    assert clip_group("mass/mass_walk.bvh") == "mass" and clip_group("other/clip.bvh") == "other/clip.bvh"
+    # Across folders: the CMU subject from the stem, or from the trial a cmu-bench label names.
+    assert clip_group("deepmimic-cmu/88_06.txt") == "cmu-88"
+    assert clip_group("cmu-bench/train/jumping/jumping_1.txt", "jump (cmu-bench train jumping_1; CMU 13_11)") == "cmu-13"
+    assert clip_group("cmu-bench/train/jumping/jumping_2.txt", "jump (cmu-bench train jumping_2)") == "cmu-bench:jumping"
+    # acrnn by action: salsa is subjects 60/61 (both dancers of a take together), indian 94, martial 135.
+    assert clip_group("acrnn/salsa_03a.bvh") == clip_group("acrnn/salsa_03b.bvh") == "cmu-60-61"
+    assert clip_group("acrnn/indian_04.bvh") == "cmu-94" and clip_group("acrnn/martial_03.bvh") == "cmu-135"
+    # A DeepMimic BVH and its .txt original are one source.
+    assert clip_group("deepmimic/humanoid3d_run.bvh") == clip_group("deepmimic/txt/humanoid3d_run.txt")
+    assert coarse_label("salsa dance (partner a of take 01)") == "salsa"
+    assert coarse_label("HandStandKicks") == "handstand" and coarse_label("forward jump") == "jump"
 
 
 def test_split_holds_out_whole_groups_deterministically():
     clips = [Clip(f"cmu/{s:02d}_{t:02d}.bvh", np.zeros((100, 17, 3), np.float32), None, clip_group(f"{s:02d}_{t:02d}"))
              for s in range(1, 9) for t in range(1, 4)] + [Clip("other/a.bvh", np.zeros((50, 17, 3)), None, "other/a.bvh")]
-    a = make_split(clips, val_fraction=0.1, test_fraction=0.15, seed=0)
-    b = make_split(list(reversed(clips)), val_fraction=0.1, test_fraction=0.15, seed=0)
+    a = make_split(clips, val_fraction=0.1, test_fraction=0.15, seed=0, pinned=False)
+    b = make_split(list(reversed(clips)), val_fraction=0.1, test_fraction=0.15, seed=0, pinned=False)
     assert set(a.test) == set(b.test) and set(a.val) == set(b.val)
     groups = {name: clip_group(name) for name in a.train + a.val + a.test}
     for s1, s2 in [("train", "test"), ("train", "val"), ("val", "test")]:
         assert not {groups[n] for n in a.names(s1)} & {groups[n] for n in a.names(s2)}
     assert any(n.startswith("cmu/") for n in a.test)
     assert len(a.train) + len(a.val) + len(a.test) == len(clips)
-    assert make_split(clips, val_fraction=0.1, test_fraction=0.15, seed=1) != a
+    assert make_split(clips, val_fraction=0.1, test_fraction=0.15, seed=1, pinned=False) != a
+    # The corpus rule: pinned groups (cmu-02 test, cmu-03 val) decide; the seed does not matter.
+    pinned = make_split(clips, val_fraction=0.1, test_fraction=0.15, seed=0)
+    assert pinned == make_split(clips, val_fraction=0.1, test_fraction=0.15, seed=1)
+    assert {clip_group(n) for n in pinned.test} == {"cmu-02"} and {clip_group(n) for n in pinned.val} == {"cmu-03"}
+    assert len(pinned.train) == len(clips) - 6
+
+
+def test_duplicates_and_linked_groups():
+    rows = [("cmu/02_01.bvh", "walk"), ("deepmimic-cmu/02_01.txt", "walk"),
+            ("cmu-bench/train/walking/walking_1.txt", "walk (cmu-bench train walking_1; CMU 02_01)"),
+            ("cmu-bench/train/walking/walking_9.txt", "walk (cmu-bench train walking_9)"),
+            ("deepmimic-cmu/10_05.txt", "soccer"), ("cmu-bench/train/soccer/soccer_4.txt", "soccer (...; CMU 10_05)"),
+            ("deepmimic/humanoid3d_run.bvh", "run"), ("deepmimic/txt/humanoid3d_run.txt", "run")]
+    assert corpus.duplicates(rows) == {
+        "deepmimic-cmu/02_01.txt": "cmu/02_01.bvh", "cmu-bench/train/walking/walking_1.txt": "cmu/02_01.bvh",
+        "deepmimic-cmu/10_05.txt": "cmu-bench/train/soccer/soccer_4.txt",
+        "deepmimic/txt/humanoid3d_run.txt": "deepmimic/humanoid3d_run.bvh"}
+    # An unidentified benchmark walk may be subject 2: its group is linked with cmu-02.
+    linked = corpus.link_groups([(n, clip_group(n, label)) for n, label in rows])
+    assert linked["cmu-02"] == linked["cmu-bench:walking"] == "cmu-02+cmu-bench:walking"
+    assert linked["cmu-10"] == "cmu-10" and corpus.pinned_split(linked["cmu-02"]) == "test"
 
 
 # --- the real dataset ---------------------------------------------------------------------------------------
 
 
-def test_real_split_is_by_subject_and_recorded(mocap):
+def test_real_split_is_subject_disjoint_across_folders_and_recorded(mocap, mocap_manifest):
     split = mocap.split
-    assert len(split.train) + len(split.val) + len(split.test) == 275
-    subjects = {s: {clip_group(n) for n in split.names(s) if n.startswith("cmu/")} for s in ("train", "val", "test")}
-    assert subjects["test"] and not subjects["test"] & (subjects["train"] | subjects["val"])
+    index = corpus.corpus_index(mocap.source)
+    assert len(index.dropped) == 50  # 15 cmu-bench, 20 deepmimic-cmu and 15 DeepMimic .txt copies
+    assert len(split.train) + len(split.val) + len(split.test) == len(mocap_manifest) - 50 == 225
+    assert not set(index.dropped) & set(split.train + split.val + split.test)
+    # Every CMU subject (and every source without subjects) sits in one split only, whatever its folder.
+    labels = {n: e.label for n, e in mocap_manifest.items()}
+    where: dict[str, set] = {}
+    for s in ("train", "val", "test"):
+        for n in split.names(s):
+            where.setdefault(clip_group(n, labels[n]), set()).add(s)
+    assert all(len(v) == 1 for v in where.values()), {g: v for g, v in where.items() if len(v) > 1}
+    assert where["cmu-60-61"] == {"train"} and where["cmu-94"] == {"test"} and where["cmu-131"] == {"test"}
+    assert where["mass"] == {"val"} and where["deepmimic"] == {"train"}
+    # The two dancers of a salsa take are together; test holds whole subjects of several actions.
+    assert {c.label for c in mocap.clips_of("test")} >= {"walk", "indian dance", "get up", "jump"}
+    minutes = {s: sum(c.num_frames for c in mocap.clips_of(s)) / 25 / 60 for s in ("train", "val", "test")}
+    assert 29 < minutes["train"] < 31 and 4 < minutes["test"] < 5 and 1.5 < minutes["val"] < 2
     assert Split.from_dict(split.to_dict()) == split
     assert mocap.summary["per_split"]["train"]["clips"] == len(split.train)
+
+
+def test_old_checkpoint_split_on_the_grown_folder(mocap):
+    """A shipped checkpoint's recorded split (72 clips) on the 275-file folder: its clips keep their split;
+    new clips are test clips only when no clip of their subject was trained or validated on."""
+    from motion2video.checkpoint import read_meta, resolve_checkpoint
+    from motion2video.data.dataset import extend_split
+
+    old = read_meta(resolve_checkpoint("mtvae-add")).split
+    assert len(old.train) + len(old.val) + len(old.test) == 72
+    ext = extend_split(old, mocap.clips)
+    assert (ext.train, ext.val) == (old.train, old.val) and ext.test[:len(old.test)] == old.test
+    groups = {c.name: c.group for c in mocap.clips}
+    seen = {groups[n] for n in old.train + old.val if n in groups}
+    new_test = ext.test[len(old.test):]
+    assert new_test and not {groups[n] for n in new_test} & seen
+    assert any(n.startswith("acrnn/salsa") for n in new_test)  # subjects the old models never saw
+    assert not any(groups[n] == "cmu-13+cmu-49+cmu-bench:jumping" for n in new_test)  # 13 was trained on
+    # --recorded-only: the checkpoint's own clips, as its results were measured; "all": every new clip.
+    assert extend_split(old, mocap.clips, new_clips="none") == old
+    assert len(extend_split(old, mocap.clips, new_clips="all").test) == len(old.test) + len(mocap.clips) - 72
+    again = build_dataset(mocap.source, mocap.config, split=old, stats=mocap.stats, clips=mocap.clips,
+                          recorded_only=True)
+    assert again.split == old and again.clips_of("test")[0].name == old.test[0]
 
 
 def test_stats_come_from_the_training_split(mocap):

@@ -16,8 +16,9 @@ examples:
   motion2video evaluate --model mtvae-add-face --data ../shared/data/face/livelinkface/S07-001.csv
 
 Windows: every (observed + future)-frame window, --stride frames apart, of the clips of --split: by default
-the checkpoint's held-out test clips plus any clip it has never seen (so a single new file is evaluated
-whole). Metrics (best of K for ADE/FDE) on root-relative poses, metres (face models: parameter units).
+the checkpoint's held-out test clips plus any clip it has never seen whose subject it did not train or
+validate on, and a single file given as --data whole; --recorded-only keeps the recorded test clips only.
+Metrics (best of K for ADE/FDE) on root-relative poses, metres (face models: parameter units).
 """
 
 
@@ -39,6 +40,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--split", choices=("test", "val", "train", "all"), default="test",
                    help="which clips (default test: held-out clips and clips the checkpoint never saw)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    p.add_argument("--recorded-only", action="store_true",
+                   help="only the clips the checkpoint's recorded split names (reproduces results measured on "
+                   "the folder it was trained on, e.g. the 72-clip models on the grown folder)")
     p.add_argument("--extended", action="store_true",
                    help="also report S-MSE, R-MSE and the Parzen conditional log-likelihood (MT-VAE metrics)")
     add_threads_argument(p)
@@ -60,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("the folder for --json does not exist", args.json)
     bundle = load_model(args.model)
     cfg = bundle.data_config
-    dataset = build_dataset(args.data, cfg, split=bundle.meta.split, stats=bundle.stats)
+    dataset = build_dataset(args.data, cfg, split=bundle.meta.split, stats=bundle.stats,
+                            recorded_only=args.recorded_only)
     windows = dataset.windows(args.split, stride=args.stride)
     if len(windows) == 0:
         longest = max((c.num_frames for c in dataset.clips_of(args.split)), default=0)

@@ -14,8 +14,16 @@ The feature encoding and the canonical window frame are pure functions in
 :mod:`motion2video.data.windows`; this module only organises clips. :func:`encode_observation` and
 :func:`decode_samples` carry one user clip to model features and sampled futures back to joints.
 
-Split rule: a file whose stem looks like ``<subject>_<take>`` (digits, the CMU naming) belongs to the
-group ``cmu-<subject>``; any other clip is its own group. Groups are ordered by a hash of
+Corpus (a mocap folder with ``manifest.csv``, :mod:`motion2video.data.corpus`): every file of every
+format is read (:func:`motion2video.formats.mocap.load_mocap`); copies of one recorded trial in several
+folders are dropped (``drop_duplicates``); each clip belongs to a split group, its performer (a CMU
+subject, across all folders) or its source, linked where a performer is unknown.
+
+Split rule (``held_out="corpus"``, the default): the groups pinned in
+:data:`motion2video.data.corpus.TEST_GROUPS` / :data:`~motion2video.data.corpus.VAL_GROUPS` hold out whole
+subjects and sources; every other group trains. When the clips hold none of the pinned groups (another
+folder), when pinning would leave fewer than two groups to train on (a few linked test clips), or with
+``held_out="hash"``, groups are ordered by a hash of
 ``(split_seed, group)`` and assigned in that order to test until it holds ``test_fraction`` of the frames,
 then to validation until ``val_fraction``, the rest to training; at least one CMU subject is held out for
 test when there are two or more subjects. The split is a list of clip names, written into checkpoints.
@@ -26,13 +34,14 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from motion2video.data import windows as W
+from motion2video.data.corpus import action_class, corpus_index, pinned_split
+from motion2video.data.corpus import clip_group as corpus_group
 from motion2video.data.face_data import face_files, load_face_clip, mirror_face
 from motion2video.errors import InputError
 from motion2video.motion import FaceMotion, Motion
@@ -41,7 +50,6 @@ from motion2video.skeletons import H36M_17
 DEFAULT_MOCAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "mocap"
 DEFAULT_FACE = Path(__file__).resolve().parents[3] / "shared" / "data" / "face"
 BODY_SUFFIXES = (".bvh", ".npz", ".json")
-_CMU_STEM = re.compile(r"^(\d+)_\d+$")
 MULTIMODAL_SOURCE = "procedural:multimodal"  # --data value naming the known-answer benchmark
 MULTIMODAL_CLIPS = 2000
 
@@ -64,6 +72,10 @@ class DatasetConfig:
         val_fraction, test_fraction: share of frames held out (by group) for validation and test.
         split_seed: seed of the deterministic split.
         min_std: floor of the normalisation standard deviation.
+        held_out: ``"corpus"``: the corpus's pinned held-out groups when the clips hold any of them, else
+            the hash rule; ``"hash"``: the hash rule only (module docstring).
+        drop_duplicates: keep one copy of a trial found in several folders of a mocap folder
+            (:func:`motion2video.data.corpus.duplicates`).
         face_head_pose: ``"procedural"``: a face capture whose head pose is all zero (Live Link Face takes
             recorded without head streaming) gets a head-pose track from
             :func:`motion2video.data.face_dynamics.head_pose_track` (seeded by the clip name); captures with
@@ -84,6 +96,8 @@ class DatasetConfig:
     split_seed: int = 0
     min_std: float = 1e-3
     face_head_pose: str = "procedural"
+    held_out: str = "corpus"
+    drop_duplicates: bool = True
 
     def __post_init__(self) -> None:
         W.FeatureLayout(self.layout)  # validates the name
@@ -93,6 +107,8 @@ class DatasetConfig:
             raise ValueError(f"stride must be >= 1, got {self.stride}")
         if not 0.0 <= self.speed < 1.0:
             raise ValueError(f"speed must be in [0, 1), got {self.speed}")
+        if self.held_out not in ("corpus", "hash"):
+            raise ValueError(f"held_out must be 'corpus' or 'hash', got {self.held_out!r}")
         if self.face_head_pose not in ("procedural", "zero"):
             raise ValueError(f"face_head_pose must be 'procedural' or 'zero', got {self.face_head_pose!r}")
 
@@ -123,8 +139,9 @@ class Clip:
     Attributes:
         name: clip name (path relative to the data folder, e.g. ``"cmu/08_01.bvh"``).
         data: (T, 17, 3) world joints (body) or (T, 58) face parameters, float32.
-        label: coarse action label (``"walk"``), or None.
-        group: split unit (``"cmu-08"`` for CMU subject 8, else the clip name).
+        label: coarse action class (``"walk"``, :func:`motion2video.data.corpus.action_class`), or None.
+        group: split unit (:func:`motion2video.data.corpus.clip_group`, linked by
+            :func:`motion2video.data.corpus.link_groups` in a mocap folder).
     """
 
     name: str
@@ -367,52 +384,57 @@ def observed_in_layout(data: np.ndarray, *, config: DatasetConfig) -> np.ndarray
 
 
 def coarse_label(action: str | None) -> str | None:
-    """A short action class from a manifest description: ``"walk (start-walk-stop)"`` -> ``"walk"``,
-    ``"dance_a"`` -> ``"dance"``."""
-    if not action:
-        return None
-    head = re.split(r"[(,]", action)[0].strip().lower()
-    if not head:
-        return None
-    return head.split()[0].split("_")[0]
+    """A short action class from a manifest description (:func:`motion2video.data.corpus.action_class`):
+    ``"walk (start-walk-stop)"`` -> ``"walk"``, ``"dance_a"`` -> ``"dance"``."""
+    return action_class(action)
 
 
-def clip_group(name: str) -> str:
-    """Split unit of a clip: ``cmu-<subject>`` for CMU-style names (``08_01.bvh``), else the name."""
-    match = _CMU_STEM.match(Path(name).stem)
-    return f"cmu-{int(match.group(1)):02d}" if match else name
+def clip_group(name: str, label: str | None = None) -> str:
+    """Split unit of a clip (:func:`motion2video.data.corpus.clip_group`): ``cmu-<subject>`` for CMU
+    clips (``08_01.bvh``, or a ``cmu-bench`` label naming the trial), the source for DeepMimic and MASS
+    clips, else the name."""
+    return corpus_group(name, label)
 
 
-def make_split(clips: list[Clip], *, val_fraction: float, test_fraction: float, seed: int) -> Split:
-    """Deterministic split by group (see the module docstring)."""
+def make_split(clips: list[Clip], *, val_fraction: float, test_fraction: float, seed: int,
+               pinned: bool = True) -> Split:
+    """Deterministic split by group (see the module docstring); ``pinned=False`` is the hash rule only."""
     frames: dict[str, int] = {}
     for c in clips:
         frames[c.group] = frames.get(c.group, 0) + c.num_frames
-    order = sorted(frames, key=lambda g: hashlib.sha1(f"{seed}:{g}".encode()).hexdigest())
-    cmu = [g for g in order if g.startswith("cmu-")]
-    if len(cmu) >= 2:  # hold out at least one whole CMU subject for test
-        order.remove(cmu[0])
-        order.insert(0, cmu[0])
-    total = sum(frames.values())
     assign: dict[str, str] = {}
-    held_test = held_val = 0
-    for g in order:
-        if len(frames) > 2 and held_test < test_fraction * total:
-            assign[g], held_test = "test", held_test + frames[g]
-        elif len(frames) > 2 and held_val < val_fraction * total:
-            assign[g], held_val = "val", held_val + frames[g]
-        else:
-            assign[g] = "train"
+    if pinned and len(frames) > 2:
+        assign = {g: s for g in frames if (s := pinned_split(g)) is not None}
+        if len(frames) - len(assign) < 2:  # fewer than two groups would be left to train on
+            assign = {}
+    if assign:
+        assign.update({g: "train" for g in frames if g not in assign})
+    else:
+        order = sorted(frames, key=lambda g: hashlib.sha1(f"{seed}:{g}".encode()).hexdigest())
+        cmu = [g for g in order if g.startswith("cmu-")]
+        if len(cmu) >= 2:  # hold out at least one whole CMU subject for test
+            order.remove(cmu[0])
+            order.insert(0, cmu[0])
+        total = sum(frames.values())
+        held_test = held_val = 0
+        for g in order:
+            if len(frames) > 2 and held_test < test_fraction * total:
+                assign[g], held_test = "test", held_test + frames[g]
+            elif len(frames) > 2 and held_val < val_fraction * total:
+                assign[g], held_val = "val", held_val + frames[g]
+            else:
+                assign[g] = "train"
     by = {s: tuple(c.name for c in clips if assign[c.group] == s) for s in ("train", "val", "test")}
     return Split(train=by["train"], val=by["val"], test=by["test"])
 
 
-def _body_clip_from_motion(motion: Motion, *, name: str, fps: float) -> Clip:
+def _body_clip_from_motion(motion: Motion, *, name: str, fps: float, group: str | None = None) -> Clip:
     if motion.skeleton != "h36m-17" or motion.dim != 3:
         raise InputError(f"body models need 3D h36m-17 joints, got {motion.skeleton} with D={motion.dim}",
                          motion.source or name)
     data = W.resample(motion.joints, motion.fps, fps).astype(np.float32)
-    return Clip(name=name, data=data, label=coarse_label(motion.label), group=clip_group(name))
+    return Clip(name=name, data=data, label=coarse_label(motion.label),
+                group=clip_group(name, motion.label) if group is None else group)
 
 
 def stable_seed(text: str) -> int:
@@ -440,8 +462,9 @@ def _relative_name(path: Path, root: Path) -> str:
 def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
     """Load every clip ``data`` names, resampled to ``config.fps``.
 
-    Body layouts: a folder of BVH files (with ``manifest.csv``: its clips, rates, labels and trims), one
-    motion file (``.bvh``, Motion ``.npz``, ...), or ``"procedural:multimodal"`` (:func:`multimodal_clips`). Face layout: one ``.csv`` / FaceMotion ``.npz`` capture
+    Body layouts: a mocap folder (with ``manifest.csv``: its clips of every format, rates, labels and
+    trims, duplicates dropped per ``config.drop_duplicates``; without one: its ``*.bvh`` files), one
+    motion file (``.bvh``, DeepMimic / exp-map ``.txt``, Motion ``.npz``, ...), or ``"procedural:multimodal"`` (:func:`multimodal_clips`). Face layout: one ``.csv`` / FaceMotion ``.npz`` capture
     or a folder of them. Clip names are paths relative to the folder (the file name for a single file).
     """
     if str(data) == MULTIMODAL_SOURCE:
@@ -456,11 +479,11 @@ def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
         return [_face_clip_from_motion(load_face_clip(f), name=_relative_name(f, root), fps=fps,
                                        head_pose=config.face_head_pose) for f in files]
     if path.is_dir():
-        from motion2video.formats.mocap import load_mocap_folder
+        from motion2video.formats.mocap import load_mocap
 
-        motions = load_mocap_folder(path, target_fps=None)
-        return [_body_clip_from_motion(m, name=_relative_name(Path(m.source), path) if m.source else f"clip{i}",
-                                       fps=fps) for i, m in enumerate(motions)]
+        index = corpus_index(path, drop_duplicates=config.drop_duplicates)
+        return [_body_clip_from_motion(load_mocap(path / row.name, manifest=row.entry or False), name=row.name,
+                                       fps=fps, group=row.group) for row in index.rows]
     if path.suffix.lower() in (".csv",):
         raise InputError("this is a face capture, but the model is a body model", path)
     from motion2video.io import load_motion
@@ -486,17 +509,41 @@ def multimodal_clips(config: DatasetConfig, *, count: int = MULTIMODAL_CLIPS) ->
             for i in range(count)]
 
 
+def extend_split(split: Split, clips: list[Clip], *, new_clips: str = "unseen_subjects") -> Split:
+    """A recorded split (a checkpoint's) applied to ``clips``, which may hold clips it does not name (the
+    checkpoint was trained on an older or smaller folder, or the clips are a user's file).
+
+    A clip the split names keeps its split. One it does not name goes to test with ``new_clips="all"``;
+    with ``"unseen_subjects"`` only when no clip of its group (subject) is in the recorded training or
+    validation split (else it would be no held-out clip, and it is left out of all three lists), so a
+    checkpoint trained on the first 72 clips evaluates on its own test clips plus the new clips of subjects
+    it never saw; with ``"none"`` it is left out (how a checkpoint's own results were measured).
+    """
+    if new_clips not in ("all", "unseen_subjects", "none"):
+        raise ValueError(f"new_clips must be 'all', 'unseen_subjects' or 'none', got {new_clips!r}")
+    if new_clips == "none":
+        return split
+    known = set(split.train) | set(split.val) | set(split.test)
+    seen_groups = {c.group for c in clips if c.name in set(split.train) | set(split.val)}
+    unseen = tuple(c.name for c in clips if c.name not in known
+                   and (new_clips == "all" or c.group not in seen_groups))
+    return Split(split.train, split.val, split.test + unseen)
+
+
 def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | None = None,
-                  stats: W.NormStats | None = None, clips: list[Clip] | None = None) -> MotionDataset:
+                  stats: W.NormStats | None = None, clips: list[Clip] | None = None,
+                  recorded_only: bool = False) -> MotionDataset:
     """Load ``data`` and prepare it for training or evaluation.
 
     Args:
         data: a BVH folder / motion file (body layouts) or face captures (face layout).
         config: the dataset config.
-        split: a split to reuse (from a checkpoint); clips it does not name go to ``test``.
+        split: a split to reuse (from a checkpoint); clips it does not name go to ``test``, from a folder
+            only when they share no group with its training or validation clips (:func:`extend_split`).
         stats: normalisation statistics to reuse (from a checkpoint); computed on the training windows when
             None.
         clips: already loaded clips (skips loading ``data``; ``data`` is then only recorded).
+        recorded_only: with ``split``, use only the clips it names (:func:`extend_split`).
     Returns:
         The :class:`MotionDataset`.
     """
@@ -506,11 +553,10 @@ def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | Non
         raise InputError("no clips to use", data)
     if split is None:
         split = make_split(clips, val_fraction=config.val_fraction, test_fraction=config.test_fraction,
-                           seed=config.split_seed)
+                           seed=config.split_seed, pinned=config.held_out == "corpus")
     else:
-        known = set(split.train) | set(split.val) | set(split.test)
-        unseen = tuple(c.name for c in clips if c.name not in known)
-        split = Split(split.train, split.val, split.test + unseen)
+        new_clips = "none" if recorded_only else "unseen_subjects" if Path(str(data)).is_dir() else "all"
+        split = extend_split(split, clips, new_clips=new_clips)
     if stats is None:
         train = [c for c in clips if c.name in set(split.train)]
         if not train:
@@ -531,6 +577,7 @@ def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | Non
             for s in ("train", "val", "test")
         },
         "test_groups": sorted({c.group for c in clips if c.name in set(split.test)}),
+        "val_groups": sorted({c.group for c in clips if c.name in set(split.val)}),
     }
     return MotionDataset(config=config, clips=list(clips), split=split, stats=stats, source=str(data),
                          summary=summary)

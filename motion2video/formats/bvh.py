@@ -19,7 +19,6 @@ BVH conventions used here:
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,6 +36,7 @@ from motion2video.formats.canonical import (  # noqa: F401 (ANKLE_HEIGHT, Y_UP_T
 )
 from motion2video.formats.manifest import ManifestEntry, resolve_manifest
 from motion2video.formats.mocap import default_trim  # noqa: F401 (re-exported)
+from motion2video.formats.numbers import parse_number_rows
 from motion2video.formats.resample import round_fps
 from motion2video.motion import Motion
 from motion2video.skeletons import RIG_JOINT_MAPS
@@ -271,25 +271,7 @@ def parse_bvh(text: str, source: str = "<bvh>") -> BvhClip:
         raise InputError(f"line {last}: file ends after {len(data)} of {num_frames} frames (truncated)", source)
     if len(data) > num_frames:
         raise InputError(f"line {data[num_frames][0]}: more frame lines than the declared {num_frames}", source)
-    try:
-        # numpy's C text parser; it rejects ragged rows and non-numbers, which are then located below.
-        values = np.loadtxt(io.StringIO("\n".join(line for _, line in data)), dtype=np.float64,
-                            ndmin=2, comments=None)  # (T, C)
-    except ValueError:
-        values = None
-    if values is None or values.shape != (num_frames, num_channels):
-        for num, line in data:
-            row = line.split()
-            if len(row) != num_channels:
-                raise InputError(f"line {num}: expected {num_channels} values, got {len(row)}", source)
-            try:
-                np.array(row, dtype=np.float64)
-            except ValueError:
-                raise InputError(f"line {num}: a motion value is not a number", source) from None
-        raise InputError("cannot parse the motion values", source)
-    if not np.all(np.isfinite(values)):
-        bad = int(np.argwhere(~np.isfinite(values))[0, 0])
-        raise InputError(f"line {data[bad][0]}: motion values contain NaN or Inf", source)
+    values = parse_number_rows(data, num_channels, source, what="motion value")  # (T, C)
 
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(int)
     return BvhClip(

@@ -19,7 +19,6 @@ data.
 
 from __future__ import annotations
 
-import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +29,7 @@ from scipy.spatial.transform import Rotation
 from motion2video.errors import InputError
 from motion2video.formats.canonical import CanonicalClip, canonical_motion, to_project_frame
 from motion2video.formats.manifest import ManifestEntry, resolve_manifest
+from motion2video.formats.numbers import parse_number_rows
 from motion2video.motion import Motion
 from motion2video.skeletons import H36M_17
 
@@ -165,25 +165,7 @@ def read_expmap_values(path: str | Path, layout: ExpmapLayout) -> np.ndarray:
     except UnicodeDecodeError:
         raise InputError("not a text file (exp-map motion is comma-separated text)", path) from None
     lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
-    width = layout.values_per_frame
-    try:
-        values = np.loadtxt(io.StringIO("\n".join(line for _, line in lines)), delimiter=",", dtype=np.float64,
-                            ndmin=2)
-    except ValueError:
-        values = None
-    if values is None or values.shape[1:] != (width,):
-        for num, line in lines:
-            row = line.split(",")
-            if len(row) != width:
-                raise InputError(f"line {num}: expected {width} comma-separated values, got {len(row)}", path)
-            try:
-                np.array(row, dtype=np.float64)
-            except ValueError:
-                raise InputError(f"line {num}: a value is not a number", path) from None
-        raise InputError("cannot parse the values", path)
-    if not np.all(np.isfinite(values)):
-        bad = int(np.argwhere(~np.isfinite(values))[0, 0])
-        raise InputError(f"line {lines[bad][0]}: values contain NaN or Inf", path)
+    values = parse_number_rows(lines, layout.values_per_frame, str(path), delimiter=",")  # (T + rest, V)
     values = values[layout.rest_pose_lines:]
     if values.shape[0] == 0:
         raise InputError(f"no motion lines after the {layout.rest_pose_lines} rest-pose line(s)", path)

@@ -1,0 +1,56 @@
+"""`motion2video corpus-stats`: minutes per source, action and split of the training corpus."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from motion2video.atomic import write_json
+from motion2video.errors import InputError
+
+EXAMPLES = """\
+examples:
+  motion2video corpus-stats --data ../shared/data/mocap
+  motion2video corpus-stats --data ../shared/data/mocap --json out/corpus.json
+  motion2video corpus-stats --data ../shared/data/mocap --keep-duplicates --held-out hash
+
+The clips, the duplicates dropped and the split are exactly what `motion2video train --data DIR` uses with
+the default data config (25 fps, 16 observed + 48 future frames).
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "corpus-stats",
+        help="print minutes per source, action and split of a mocap folder as the trainer uses it",
+        description="Load every clip of a mocap folder as the dataset builder does (all formats, true frame "
+        "rates, duplicate copies of one trial dropped, the subject-disjoint split) and print Markdown tables: "
+        "minutes per source, per split and per action, and the held-out groups.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--data", required=True, help="mocap folder (with manifest.csv)")
+    p.add_argument("--json", default=None, help="also write the statistics as JSON here")
+    p.add_argument("--held-out", choices=("corpus", "hash"), default="corpus",
+                   help="split rule (default corpus: the pinned held-out subjects and sources)")
+    p.add_argument("--keep-duplicates", action="store_true",
+                   help="keep every copy of a trial found in several folders")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from motion2video.data.corpus_stats import corpus_stats, stats_markdown
+    from motion2video.data.dataset import DatasetConfig
+
+    data = Path(args.data)
+    if not data.is_dir():
+        raise InputError("not a folder (corpus-stats takes a mocap folder)", data)
+    if args.json is not None and not Path(args.json).parent.exists():
+        raise InputError("the folder for --json does not exist", args.json)
+    config = DatasetConfig(held_out=args.held_out, drop_duplicates=not args.keep_duplicates)
+    stats = corpus_stats(data, config)
+    print(stats_markdown(stats), end="")
+    if args.json is not None:
+        write_json(args.json, stats)
+        print(f"wrote {args.json}")
+    return 0
