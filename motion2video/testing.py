@@ -209,9 +209,14 @@ def failure_panel(golden: np.ndarray, actual: np.ndarray, lines: Sequence[str]) 
 def _panel_lines(t: int, actual: np.ndarray, golden: np.ndarray, metric: str, error: float,
                  tolerance: float) -> list[str]:
     changed = np.abs(actual.astype(np.int16) - golden.astype(np.int16)).max(axis=-1) > 0  # (H, W)
-    others = "  ".join(describe_error(m, frame_error(actual, golden, m)).split(" (")[0] for m in METRICS)
+    numbers = []
+    for m in METRICS:
+        try:
+            numbers.append(describe_error(m, frame_error(actual, golden, m)).split(" (")[0])
+        except ValueError:  # SSIM of frames under 3x3 pixels
+            numbers.append(f"{m} n/a")
     return [f"frame {t}: {describe_error(metric, error)} > tolerance {tolerance:g}",
-            others,
+            "  ".join(numbers),
             f"{int(changed.sum())} of {changed.size} pixels differ ({100.0 * changed.mean():.1f}%)"]
 
 
@@ -353,6 +358,7 @@ def assert_frames_match(
             another size; or a frame differs by more than ``tolerance`` (never skipped).
         ValueError: a programming error (unknown metric, frames not uint8 RGB, bad indices).
     """
+    __tracebackhide__ = True  # pytest shows the caller's line and this message, not the checks below
     if metric not in METRICS:
         raise ValueError(f"unknown metric {metric!r}; choose one of {', '.join(METRICS)}")
     clip = np.asarray(frames)
@@ -410,7 +416,7 @@ def assert_frames_match(
     if corrupt or sized:
         parts = ([f"cannot decode {', '.join(corrupt)} (corrupt PNG)"] if corrupt else []) + \
                 ([f"size: {'; '.join(sized)}"] if sized else [])
-        raise _fail(name, f"bad golden files in {golden_dir}: {'; '.join(parts)}. {REGENERATE_HINT}")
+        raise _fail(name, f"bad golden files in {golden_dir}: {'; '.join(parts)}; {REGENERATE_HINT}")
 
     out = _output_dir(out_dir, name)
     errors: list[float] = []
@@ -441,7 +447,7 @@ def _write_failures(out: Path, clip: np.ndarray, goldens: dict[int, np.ndarray],
         for t, err in failing:
             write_image(out / f"actual_{t:03d}.png", clip[t])
             lines = _panel_lines(t, clip[t], goldens[t], metric, err, tolerance)
-            panels.append(str(write_image(out / f"diff_{t:03d}.png", failure_panel(goldens[t], clip[t], lines))))
+            panels.append(str(write_image(out / f"diff_{t:03d}.png", failure_panel(goldens[t], clip[t], lines)).absolute()))
     except (OSError, InputError) as err:
         return f"(could not write the failure images to {out}: {err})."
     return (f"Golden | actual | diff pictures: {', '.join(panels)} (actual frames beside them as "
