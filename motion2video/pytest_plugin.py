@@ -119,7 +119,8 @@ class GoldenFrames:
                                          out_dir=None if results is None else Path(results) / name,
                                          indices=indices, every=every, fps=clip.fps, update=update)
         except AssertionError:
-            state.compared += 0 if update else 1
+            if not update:
+                state.compared += 1
             state.failed.append((self._nodeid, golden_dir))
             raise
         if result.updated:
