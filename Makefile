@@ -27,7 +27,7 @@ test-fast: setup
 	$(PY) -m pytest -q -m "not slow"
 
 golden: setup
-	UPDATE_GOLDEN=1 $(PY) -m pytest -q tests/test_golden.py
+	$(PY) -m pytest -q --update-golden tests/test_golden.py
 
 bench: setup
 	$(PY) scripts/bench_render.py --json out/bench_render.json
