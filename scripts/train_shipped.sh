@@ -59,7 +59,7 @@ train_one() {
 
 lane_a() {
   train_one mtvae-add mtvae-add "$MOCAP" 4000 "{$MTVAE, $BODY_DATA, $TRAIN}"
-  train_one mtvae-add-dlow dlow "$MOCAP" 600 "{$DLOW, $BODY_DATA}" --base "$WEIGHTS/mtvae-add.safetensors"
+  train_one mtvae-add-dlow dlow "$MOCAP" 600 "{$DLOW}" --base "$WEIGHTS/mtvae-add.safetensors"
   train_one behavior behavior "$MOCAP" 3000 \
       "{\"model\": {\"hidden_dim\": 128, \"latent_dim\": 32, \"regressor_dim\": 128}, $BODY_DATA, $TRAIN}"
 }
