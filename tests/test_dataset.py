@@ -178,12 +178,16 @@ def test_real_split_is_subject_disjoint_across_folders_and_recorded(mocap, mocap
 
 
 def test_old_checkpoint_split_on_the_grown_folder(mocap):
-    """A shipped checkpoint's recorded split (72 clips) on the 275-file folder: its clips keep their split;
-    new clips are test clips only when no clip of their subject was trained or validated on."""
-    from motion2video.checkpoint import read_meta, resolve_checkpoint
-    from motion2video.data.dataset import extend_split
+    """A 72-clip checkpoint's recorded split (the 5-minute mtvae-add's, kept as a fixture) on the 275-file
+    folder: its clips keep their split; new clips are test clips only when no clip of their subject was trained
+    or validated on."""
+    import json
+    from pathlib import Path
 
-    old = read_meta(resolve_checkpoint("mtvae-add")).split
+    from motion2video.data.dataset import Split, extend_split
+
+    fixture = Path(__file__).parent / "fixtures" / "split_72clips.json"
+    old = Split.from_dict(json.loads(fixture.read_text())["split"])
     assert len(old.train) + len(old.val) + len(old.test) == 72
     ext = extend_split(old, mocap.clips)
     assert (ext.train, ext.val) == (old.train, old.val) and ext.test[:len(old.test)] == old.test
