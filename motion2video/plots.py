@@ -39,6 +39,11 @@ def plot_ade_per_frame(curves: dict[str, list[float]], out: str | Path, *, fps: 
         color, style = BASELINE_STYLE.get(name, (None, "-"))
         ax.plot(t, values, style, color=color, linewidth=2.2 if name not in BASELINE_STYLE else 1.5,
                 label=f"{name} (ADE {np.mean(values):.3f})")
+    # Extrapolating baselines (last-step, sequence-motion) run far above the rest: keep the y range on the
+    # models and zero-velocity, and let the clipped lines leave the top (their ADE is in the legend).
+    near = [max(v) for n, v in curves.items() if n not in ("last-step", "sequence-motion")]
+    if near and max(max(v) for v in curves.values()) > 1.5 * max(near):
+        ax.set_ylim(0, 1.3 * max(near))
     ax.set_xlabel("time into the future (s)")
     ax.set_ylabel(f"{'best-of-' + str(best_of) + ' ' if best_of else ''}displacement ({units})")
     ax.set_title(title)
