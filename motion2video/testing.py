@@ -515,9 +515,10 @@ def synthetic_walk(num_frames: int = 60, *, fps: float = 30.0, seed: int = 0) ->
 def command_peak_rss_mb(argv: list[str], *, env: dict | None = None, cwd: str | None = None) -> float:
     """Peak resident memory, in MB, of ``python -m motion2video.cli ARGV`` run in a fresh process.
 
-    The child reports ``getrusage``'s ``ru_maxrss`` of itself plus that of its own children (ffmpeg), i.e.
-    an upper bound of the peak resident memory of the whole command. Raises RuntimeError when the command
-    fails.
+    The child reports its own peak (``VmHWM`` of ``/proc/self/status``, which starts afresh at exec, unlike
+    ``ru_maxrss``, which inherits the forking parent's peak) plus ``getrusage``'s ``ru_maxrss`` of its own
+    children (ffmpeg): an upper bound of the whole command's peak resident memory. Linux only. Raises
+    RuntimeError when the command fails.
     """
     import json
     import os
@@ -527,9 +528,9 @@ def command_peak_rss_mb(argv: list[str], *, env: dict | None = None, cwd: str | 
     code = ("import json, resource, sys\n"
             "from motion2video.cli import main\n"
             "rc = main(sys.argv[1:])\n"
-            "mb = lambda who: resource.getrusage(who).ru_maxrss / 1024.0\n"
-            "print(json.dumps({'rc': rc, 'self': mb(resource.RUSAGE_SELF), "
-            "'children': mb(resource.RUSAGE_CHILDREN)}))\n")
+            "hwm = [l for l in open('/proc/self/status') if l.startswith('VmHWM:')][0].split()[1]\n"
+            "print(json.dumps({'rc': rc, 'self': int(hwm) / 1024.0, "
+            "'children': resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0}))\n")
     result = subprocess.run([sys.executable, "-c", code, *map(str, argv)], capture_output=True, text=True,
                             env={**os.environ, **(env or {})}, cwd=cwd, check=False)
     lines = result.stdout.strip().splitlines()
