@@ -98,6 +98,9 @@ def _open_temp(path: Path) -> Path:
     except OSError as err:
         raise InputError(f"cannot write in the output directory {parent}: {err.strerror or err}", path) from None
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; the output gets the usual permissions
     return Path(tmp)
 
 
