@@ -418,6 +418,21 @@ def _crashed(job: Job, attempts: int) -> JobResult:
                      error=f"the worker process died {attempts} time(s) running this job", attempts=attempts)
 
 
+def init_ray(workers: int, address: str | None = None) -> None:
+    """``ray.init``: connect to ``address`` or start a local instance with ``workers`` CPUs (no dashboard).
+
+    Workers get this process's ``sys.path`` as PYTHONPATH (so they import the same motion2video) and no
+    progress bars.
+    """
+    import ray
+
+    env = {"env_vars": {"TQDM_DISABLE": "1", "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}}
+    if address is None:
+        ray.init(num_cpus=workers, include_dashboard=False, runtime_env=env, log_to_driver=False)
+    else:
+        ray.init(address=address, runtime_env=env, log_to_driver=False)
+
+
 def _ray_task(job: Job) -> JobResult:
     return run_job(job)
 
@@ -435,11 +450,7 @@ def run_ray(jobs: list[Job], *, workers: int, retries: int, address: str | None,
         raise InputError("--engine ray needs Ray: pip install 'motion2video[ray]'") from None
     started = False
     if not ray.is_initialized():
-        env = {"env_vars": {"TQDM_DISABLE": "1", "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}}
-        if address is None:
-            ray.init(num_cpus=workers, include_dashboard=False, runtime_env=env, log_to_driver=False)
-        else:
-            ray.init(address=address, runtime_env=env, log_to_driver=False)
+        init_ray(workers, address)
         started = True
     try:
         task = ray.remote(num_cpus=1, max_retries=retries, retry_exceptions=False)(_ray_task)
