@@ -364,34 +364,51 @@ def run_job(job: Job) -> JobResult:
 OnResult = Callable[[JobResult], None]
 
 
-def run_local(jobs: list[Job], *, workers: int, retries: int, on_result: OnResult) -> None:
-    """Run ``jobs`` on a pool of ``workers`` reused processes (spawned, so no GL or torch state is inherited).
+class LocalPool:
+    """A pool of ``workers`` reused worker processes (spawned, so no GL or torch state is inherited; each
+    runs :func:`init_worker` once). Use as a context manager; :meth:`run` may be called many times."""
 
-    At most ``workers`` jobs are in flight. When a worker dies (the pool breaks), every job that was in
-    flight counts an attempt and is resubmitted to a new pool while it has attempts left (1 + retries).
-    """
-    import multiprocessing
+    def __init__(self, workers: int) -> None:
+        import multiprocessing
 
-    pending = list(reversed(jobs))
-    attempts = {job.name: 0 for job in jobs}
-    context = multiprocessing.get_context("spawn")
-    while pending:
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=init_worker)
+        self.workers = int(workers)
+        self._context = multiprocessing.get_context("spawn")
+        self._pool: ProcessPoolExecutor | None = None
+
+    def _executor(self) -> ProcessPoolExecutor:
+        if self._pool is None:
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self._context,
+                                             initializer=init_worker)
+        return self._pool
+
+    def warm(self) -> None:
+        """Start every worker process now (and import the commands), instead of on the first jobs."""
+        pool = self._executor()
+        list(pool.map(_warm, [0.5] * self.workers))
+
+    def run(self, jobs: list[Job], *, retries: int, on_result: OnResult) -> None:
+        """Run ``jobs``, calling ``on_result`` with each row as it finishes.
+
+        At most ``workers`` jobs are in flight. When a worker dies (the pool breaks), every job that was in
+        flight counts an attempt and is resubmitted to a new pool while it has attempts left (1 + retries).
+        """
+        pending = list(reversed(jobs))
+        attempts = {job.name: 0 for job in jobs}
         running: dict = {}
-        broken = False
-        try:
-            while pending or running:
-                while pending and len(running) < workers and not broken:
-                    job = pending.pop()
-                    attempts[job.name] += 1
-                    try:
-                        running[pool.submit(run_job, job)] = job
-                    except BrokenProcessPool:
-                        attempts[job.name] -= 1
-                        pending.append(job)
-                        broken = True
-                if not running:
+        while pending or running:
+            pool = self._executor()
+            broken = False
+            while pending and len(running) < self.workers:
+                job = pending.pop()
+                attempts[job.name] += 1
+                try:
+                    running[pool.submit(run_job, job)] = job
+                except BrokenProcessPool:
+                    attempts[job.name] -= 1
+                    pending.append(job)
+                    broken = True
                     break
+            if running:
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
                 for future in done:
                     job = running.pop(future)
@@ -407,10 +424,32 @@ def run_local(jobs: list[Job], *, workers: int, retries: int, on_result: OnResul
                         continue
                     row.attempts = attempts[job.name]
                     on_result(row)
-                if broken and not running:
-                    break
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+            if broken and not running:  # every in-flight future has failed: start a new pool
+                self._pool.shutdown(wait=True, cancel_futures=True)
+                self._pool = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def __enter__(self) -> "LocalPool":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _warm(seconds: float) -> int:
+    init_worker()
+    time.sleep(seconds)  # keep this worker busy so the next warm-up call starts another one
+    return os.getpid()
+
+
+def run_local(jobs: list[Job], *, workers: int, retries: int, on_result: OnResult) -> None:
+    """Run ``jobs`` on a :class:`LocalPool` of ``workers`` processes (see :meth:`LocalPool.run`)."""
+    with LocalPool(workers) as pool:
+        pool.run(jobs, retries=retries, on_result=on_result)
 
 
 def _crashed(job: Job, attempts: int) -> JobResult:
@@ -431,6 +470,14 @@ def init_ray(workers: int, address: str | None = None) -> None:
         ray.init(num_cpus=workers, include_dashboard=False, runtime_env=env, log_to_driver=False)
     else:
         ray.init(address=address, runtime_env=env, log_to_driver=False)
+
+
+def warm_ray(workers: int) -> None:
+    """Start ``workers`` Ray worker processes now (and import the commands in them)."""
+    import ray
+
+    warm = ray.remote(num_cpus=1)(_warm)
+    ray.get([warm.remote(1.0) for _ in range(workers)])
 
 
 def _ray_task(job: Job) -> JobResult:
