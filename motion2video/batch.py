@@ -484,6 +484,18 @@ def _ray_task(job: Job) -> JobResult:
     return run_job(job)
 
 
+_RAY_TASKS: dict = {}
+
+
+def _ray_task_with(retries: int):
+    """The Ray remote function for :func:`run_job` (made once per retry count, so it is exported once)."""
+    import ray
+
+    if retries not in _RAY_TASKS:
+        _RAY_TASKS[retries] = ray.remote(num_cpus=1, max_retries=retries, retry_exceptions=False)(_ray_task)
+    return _RAY_TASKS[retries]
+
+
 def run_ray(jobs: list[Job], *, workers: int, retries: int, address: str | None, on_result: OnResult) -> None:
     """Run ``jobs`` as Ray tasks (1 CPU each, ``max_retries=retries`` when a worker dies).
 
@@ -500,7 +512,7 @@ def run_ray(jobs: list[Job], *, workers: int, retries: int, address: str | None,
         init_ray(workers, address)
         started = True
     try:
-        task = ray.remote(num_cpus=1, max_retries=retries, retry_exceptions=False)(_ray_task)
+        task = _ray_task_with(retries)
         refs = {task.remote(job): job for job in jobs}
         while refs:
             done, _ = ray.wait(list(refs), num_returns=1)
