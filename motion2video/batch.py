@@ -461,12 +461,15 @@ def init_ray(workers: int, address: str | None = None) -> None:
     """``ray.init``: connect to ``address`` or start a local instance with ``workers`` CPUs (no dashboard).
 
     Workers get this process's ``sys.path`` as PYTHONPATH (so they import the same motion2video) and no
-    progress bars.
+    progress bars. A local instance runs its workers at niceness 0 like the local pool's (Ray's default
+    is 15, measured here: on a machine shared with other jobs that starves them and made Ray 2x slower than
+    the pool); set ``RAY_worker_niceness`` to override, or pass it to ``ray start`` for a cluster.
     """
     import ray
 
     env = {"env_vars": {"TQDM_DISABLE": "1", "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}}
     if address is None:
+        os.environ.setdefault("RAY_worker_niceness", "0")
         ray.init(num_cpus=workers, include_dashboard=False, runtime_env=env, log_to_driver=False)
     else:
         ray.init(address=address, runtime_env=env, log_to_driver=False)
