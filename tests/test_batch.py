@@ -81,6 +81,10 @@ def test_jsonl_jobs_with_list_and_object_args(mocap_dir, tmp_path):
          "output": "sub/object.gif"},
         {"command": "render", "args": [str(clip), "--style", "nonsense"], "output": "badarg.mp4"},
         {"command": "render", "args": [str(clip), "--size", "8"], "output": "small.mp4"},
+        {"command": "render", "args": [str(clip), "--style", "mesh", "--size", "48", "--frames", "3"],
+         "output": "mesh.mp4"},  # the GL context is made in the worker
+        {"command": "sample", "args": {"model": "zero-velocity", "input": str(clip), "samples": 2, "horizon": 4,
+                                       "size": 48}, "output": "futures.mp4"},
     ]
     jobs_file = tmp_path / "jobs.jsonl"
     jobs_file.write_text("# a comment\n\n" + "\n".join(json.dumps(line) for line in lines) + "\n")
@@ -92,7 +96,9 @@ def test_jsonl_jobs_with_list_and_object_args(mocap_dir, tmp_path):
     assert read_video(out / "sub" / "object.gif")[0].shape == (12, 48, 48, 3)
     assert rows["badarg.mp4"].status == "failed" and "invalid choice" in rows["badarg.mp4"].error
     assert rows["small.mp4"].status == "failed" and "between 32 and 2048" in rows["small.mp4"].error
-    assert summary.line().startswith("batch: 2 done, 0 skipped, 2 failed of 4 jobs")
+    assert rows["mesh.mp4"].status == "ok" and rows["mesh.mp4"].frames == 3
+    assert rows["futures.mp4"].status == "ok" and rows["futures.mp4"].frames > 4
+    assert summary.line().startswith("batch: 4 done, 0 skipped, 2 failed of 6 jobs")
 
 
 @pytest.mark.parametrize("line,problem", [
