@@ -11,6 +11,8 @@ setup: $(STAMP)
 
 $(STAMP): pyproject.toml
 	@dpkg -s libosmesa6 >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libosmesa6; }
+	@# Debian's chromium: the batch gallery test opens index.html in it (Playwright drives the system browser)
+	@command -v chromium >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq chromium; }
 	@[ -x $(PY) ] || python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install

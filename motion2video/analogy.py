@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import numpy as np
 import torch
@@ -46,11 +47,11 @@ from motion2video.transfer import (
     TARGET_LOOK,
     LoadedClip,
     decode_sequences,
-    mark_segments,
+    iter_mark_segments,
+    iter_sequence,
     model_frame,
-    render_sequence,
 )
-from motion2video.video import GREEN, RED, grid
+from motion2video.video import GREEN, RED, iter_grid
 
 STYLES = ("skeleton", "mesh")
 
@@ -201,19 +202,25 @@ def render_analogy(result: AnalogyResult, *, style: str = "skeleton", size: int 
     Returns:
         (observed + horizon, H, W, 3) uint8.
     """
+    return np.concatenate(list(iter_analogy(result, style=style, size=size)))
+
+
+def iter_analogy(result: AnalogyResult, *, style: str = "skeleton", size: int = 256) -> Iterator[np.ndarray]:
+    """:func:`render_analogy` as a stream of (t, H, W, 3) uint8 chunks (both cells drawn lazily)."""
     if style not in STYLES:
         raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
     names = [_stem(n) for n in result.names]
     same_face = result.layout == "face" and result.a_identity == result.c_identity
-    left = render_sequence(result.ab, layout=result.layout, style=style, size=size, fps=result.fps,
-                           look=SOURCE_LOOK, identity=result.a_identity)
-    right = render_sequence(result.cd, layout=result.layout, style=style, size=size, fps=result.fps,
-                            look=TARGET_LOOK, identity=ALT_FACE_IDENTITY if same_face else result.c_identity,
-                            face_colours=ALT_FACE_COLOURS if same_face else None)
+    left = iter_sequence(result.ab, layout=result.layout, style=style, size=size, fps=result.fps,
+                         look=SOURCE_LOOK, identity=result.a_identity)
+    right = iter_sequence(result.cd, layout=result.layout, style=style, size=size, fps=result.fps,
+                          look=TARGET_LOOK, identity=ALT_FACE_IDENTITY if same_face else result.c_identity,
+                          face_colours=ALT_FACE_COLOURS if same_face else None)
     to, h = result.observed, result.ab.shape[0] - result.observed
-    left = mark_segments(left, [(to, GREEN, f"A: {names[0]}"), (h, GREEN, f"B: {names[1]}")])
-    right = mark_segments(right, [(to, GREEN, f"C: {names[2]}"), (result.cd.shape[0] - to, RED, "D = C + (B - A)")])
-    return grid([left, right], None, 2)
+    left = iter_mark_segments(left, [(to, GREEN, f"A: {names[0]}"), (h, GREEN, f"B: {names[1]}")])
+    right = iter_mark_segments(right, [(to, GREEN, f"C: {names[2]}"),
+                                       (result.cd.shape[0] - to, RED, "D = C + (B - A)")])
+    return iter_grid([left, right], None, 2)
 
 
 def _stem(path: str) -> str:

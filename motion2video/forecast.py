@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 import torch
@@ -28,6 +29,7 @@ from motion2video.errors import InputError
 from motion2video.motion import FaceMotion, Motion
 
 STYLES = ("skeleton", "mesh")
+CHUNK = 32  # frames per drawn chunk of a future
 
 
 @dataclass
@@ -110,27 +112,66 @@ def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -
 
     Body motion is drawn with one camera (or 2D framing) fitted to the observed frames and all futures,
     so the cells are comparable; ``style="mesh"`` poses the Anny body (3D body models only). Face models
-    are drawn with the Anny face renderer.
+    are drawn with the Anny face renderer. All frames in memory: :func:`iter_forecast` streams them.
 
     Returns:
         (To + horizon, H, W, 3) uint8.
     """
-    from motion2video.video import observed_future_video
+    return np.concatenate(list(iter_forecast(fc, style=style, size=size)))
 
+
+def iter_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> Iterator[np.ndarray]:
+    """:func:`render_forecast` as a stream of (t, H, W, 3) uint8 chunks.
+
+    The style is checked at once (InputError); the observed frames are drawn once, each future is drawn
+    lazily chunk by chunk as the grid (:func:`motion2video.video.iter_observed_future`) consumes it.
+    """
     if style not in STYLES:
         raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
+    if fc.layout == "body2d" and style == "mesh":
+        raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+    return _iter_forecast(fc, style, size)
+
+
+def _joint_chunks(draw, joints: np.ndarray) -> Iterator[np.ndarray]:
+    for start in range(0, len(joints), CHUNK):
+        yield draw(joints[start:start + CHUNK])
+
+
+def _iter_forecast(fc: Forecast, style: str, size: int) -> Iterator[np.ndarray]:
+    from motion2video.video import iter_observed_future
+
     labels = [f"sample {k + 1}" for k in range(len(fc.futures))]
     if fc.layout == "face":
-        obs_frames, fut_frames = _render_faces(fc, size)
-    elif fc.layout == "body2d":
-        if style == "mesh":
-            raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
-        obs_frames, fut_frames = _render_skeleton_2d(fc, size)
-    elif style == "mesh":
-        obs_frames, fut_frames = _render_mesh(fc, size)
+        from renderers.face import FaceRenderer, FaceStyle
+
+        with FaceRenderer(FaceStyle(size=(size, size))) as r:
+            observed = FaceMotion(fc.observed, fc.fps)
+            camera = r.camera_for(observed)  # one close-up camera for every cell
+            cells = [r.iter_frames(FaceMotion(f, fc.fps), camera=camera) for f in fc.futures]
+            yield from iter_observed_future(r.render(observed, camera=camera), cells, labels)
+    elif style == "mesh" and fc.layout != "body2d":
+        from renderers.body import BodyRenderer, BodyStyle
+
+        camera = _shared_camera(fc, size)
+        with BodyRenderer(BodyStyle(size=(size, size))) as r:
+            cells = [r.iter_frames(Motion(f, fc.fps), camera=camera) for f in fc.futures]
+            yield from iter_observed_future(r.render(Motion(fc.observed, fc.fps), camera=camera), cells, labels)
     else:
-        obs_frames, fut_frames = _render_skeleton_3d(fc, size)
-    return observed_future_video(obs_frames, fut_frames, labels)
+        from renderers.camera import fit_image_framing
+        from renderers.skeleton import SkeletonRenderer, SkeletonStyle
+
+        if fc.layout == "body2d":
+            points = np.concatenate([fc.observed.reshape(-1, 2), fc.futures.reshape(-1, 2)])
+            placement = {"framing": fit_image_framing(points, size, size)}
+        else:
+            placement = {"camera": _shared_camera(fc, size)}
+        with SkeletonRenderer(style=SkeletonStyle(size=(size, size))) as r:
+            def draw(joints):
+                return r.render(joints, **placement)
+
+            cells = [_joint_chunks(draw, f) for f in fc.futures]
+            yield from iter_observed_future(draw(fc.observed), cells, labels)
 
 
 def _shared_camera(fc: Forecast, size: int):
@@ -138,43 +179,6 @@ def _shared_camera(fc: Forecast, size: int):
 
     points = np.concatenate([fc.observed.reshape(-1, 3), fc.futures.reshape(-1, 3)])
     return fit_camera(points, size, size, margin=0.1)
-
-
-def _render_skeleton_3d(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.ndarray]]:
-    from renderers.skeleton import SkeletonRenderer, SkeletonStyle
-
-    camera = _shared_camera(fc, size)
-    with SkeletonRenderer(style=SkeletonStyle(size=(size, size))) as r:
-        return r.render(fc.observed, camera=camera), [r.render(f, camera=camera) for f in fc.futures]
-
-
-def _render_skeleton_2d(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.ndarray]]:
-    from renderers.camera import fit_image_framing
-    from renderers.skeleton import SkeletonRenderer, SkeletonStyle
-
-    points = np.concatenate([fc.observed.reshape(-1, 2), fc.futures.reshape(-1, 2)])
-    framing = fit_image_framing(points, size, size)
-    with SkeletonRenderer(style=SkeletonStyle(size=(size, size))) as r:
-        return r.render(fc.observed, framing=framing), [r.render(f, framing=framing) for f in fc.futures]
-
-
-def _render_mesh(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.ndarray]]:
-    from renderers.body import BodyRenderer, BodyStyle
-
-    camera = _shared_camera(fc, size)
-    with BodyRenderer(BodyStyle(size=(size, size))) as r:
-        obs = r.render(Motion(fc.observed, fc.fps), camera=camera)
-        return obs, [r.render(Motion(f, fc.fps), camera=camera) for f in fc.futures]
-
-
-def _render_faces(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.ndarray]]:
-    from renderers.face import FaceRenderer, FaceStyle
-
-    with FaceRenderer(FaceStyle(size=(size, size))) as r:
-        observed = FaceMotion(fc.observed, fc.fps)
-        camera = r.camera_for(observed)  # one close-up camera for every cell
-        obs = r.render(observed, camera=camera)
-        return obs, [r.render(FaceMotion(f, fc.fps), camera=camera) for f in fc.futures]
 
 
 def save_forecast_npz(fc: Forecast, path: str | Path) -> Path:

@@ -19,7 +19,9 @@ The stages are plain functions with typed results, so each can be called (and ti
    structures, and a contact-sheet PNG.
 
 :func:`synthesize` runs them all and writes ``OUT.mp4``, ``OUT-structure.mp4`` and ``OUT-sheet.png``, all
-three or none.
+three or none. It streams: :func:`iter_generated` generates the video a chunk of time steps at a time (all K
+cells of a step together), :func:`compose_chunk` lays each chunk out and the encoders take it at once, so
+only a chunk of frames (and the few the contact sheet shows) is ever in memory.
 
 The reference image and its pose (the reference structure) are loaded by :mod:`motion2video.reference`.
 
@@ -45,6 +47,7 @@ import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -431,20 +434,90 @@ def compose_video(observed: np.ndarray, futures: np.ndarray, *, border: int = BO
     return observed_future_video(obs, futs, None, border=border)
 
 
-def structure_previews(structures: Structures) -> np.ndarray:
-    """RGB pictures of the structures: (1 + To + K*Tf, S, S, 3) uint8 (reference row first).
+def structure_previews(structures: Structures, rows: slice | np.ndarray = slice(None)) -> np.ndarray:
+    """RGB pictures of the structures: (1 + To + K*Tf, S, S, 3) uint8 (reference row first), or of the
+    chosen ``rows`` only.
 
     Body: the skeleton drawn with the left/right palette; face: the grey structure render.
     """
     size = structures.size
     if structures.domain == "face":
-        return np.repeat(structures.images[..., None], 3, axis=-1)
+        return np.repeat(structures.images[rows][..., None], 3, axis=-1)
     from motion2video.skeletons import H36M_17
     from renderers.skeleton import SkeletonStyle, draw_skeleton
 
     style = SkeletonStyle(size=(size, size), thickness=max(1, round(size / 64)), joint_radius=size / 96)
     canvas = np.zeros((size, size, 3), np.uint8)
-    return np.stack([draw_skeleton(canvas, p, H36M_17, style) for p in structures.points.astype(np.float64)])
+    return np.stack([draw_skeleton(canvas, p, H36M_17, style) for p in structures.points[rows].astype(np.float64)])
+
+
+def timeline_rows(structures: Structures, start: int, stop: int) -> np.ndarray:
+    """Structure rows of timeline steps ``start..stop-1`` for each of the K cells: (stop - start, K) ints.
+
+    Step t < To is observed row ``1 + t`` in every cell; step t >= To is cell k's future row
+    ``1 + To + k*Tf + (t - To)``.
+    """
+    to, k, tf = structures.observed, structures.samples, structures.horizon
+    t = np.arange(start, stop)[:, None]
+    future = 1 + to + np.arange(k)[None] * tf + (t - to)
+    return np.where(t < to, 1 + t, future)
+
+
+def iter_generated(model, reference: Reference, structures: Structures, *, batch_size: int = 4,
+                   threads: int | None = None, channels_last: bool = True, chunk: int = 16,
+                   clock: dict | None = None) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """Generate the video time step by time step (all K cells of a step together), a chunk of steps at a
+    time, so the grid video can be encoded while it is generated and never held whole.
+
+    Each distinct structure row is generated once (the observed steps are shared by the K cells).
+    ``clock["generation"]`` (when given) accumulates the seconds spent generating.
+
+    Yields:
+        (start, frames, previews): frames (t, K, S, S, 3) uint8 generated for steps start..start+t-1,
+        previews the same shape, the structures drawn (:func:`structure_previews`).
+    """
+    net = getattr(model, "model", model)
+    size = net.config.image_size
+    if structures.size != size:
+        raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
+    ref_structure = structure_maps(structures, slice(0, 1))[0]
+    steps = structures.observed + structures.horizon
+    for start in range(0, steps, chunk):
+        rows = timeline_rows(structures, start, min(steps, start + chunk))  # (t, K)
+        unique, inverse = np.unique(rows, return_inverse=True)
+        t0 = time.perf_counter()
+        with torch_threads(threads):
+            frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),
+                                     batch_size=batch_size, channels_last=channels_last)
+        if clock is not None:
+            clock["generation"] = clock.get("generation", 0.0) + time.perf_counter() - t0
+        previews = structure_previews(structures, unique)
+        shape = rows.shape
+        yield start, frames[inverse.reshape(shape)], previews[inverse.reshape(shape)]
+
+
+def compose_chunk(frames: np.ndarray, start: int, observed: int, *, border: int = BORDER) -> np.ndarray:
+    """:func:`compose_video` for steps ``start..start+t-1`` of the timeline.
+
+    Args:
+        frames: (t, K, H, W, 3) uint8, cell k's frame of each step (observed steps: the observed frame).
+        start: the first step; steps < ``observed`` are observed (green, ``observed``), later ones cell k's
+            future (red, ``sample k``).
+    Returns:
+        (t, H', W', 3) uint8, equal to the same rows of :func:`compose_video`.
+    """
+    from motion2video.video import GREEN, RED, add_border, grid, label
+
+    t, k = frames.shape[:2]
+    cells = []
+    for j in range(k):
+        parts = []
+        for step in range(t):
+            is_obs = start + step < observed
+            text = "observed" if is_obs else f"sample {j + 1}"
+            parts.append(add_border(label(frames[step, j], text, inset=border), GREEN if is_obs else RED, border))
+        cells.append(np.stack(parts))
+    return grid(cells, None, None)
 
 
 def split_rows(rows: np.ndarray, structures: Structures) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -466,22 +539,35 @@ def contact_sheet(observed: np.ndarray, futures: np.ndarray, *, header: tuple = 
     Returns:
         (H', W', 3) uint8.
     """
+    to, tf = observed.shape[0], futures.shape[1]
+    return contact_sheet_of(lambda t: observed[t], lambda k, t: futures[k, t], to, tf, len(futures),
+                            header=header, columns=columns, border=border)
+
+
+def sheet_steps(observed: int, horizon: int, *, header: int = 0, columns: int = SHEET_COLUMNS) -> tuple[list, list]:
+    """The observed and future indices :func:`contact_sheet` shows (so a stream can keep just those)."""
+    return _spread(observed, columns - header), _spread(horizon, columns)
+
+
+def contact_sheet_of(observed_frame, future_frame, to: int, tf: int, k: int, *, header: tuple = (),
+                     columns: int = SHEET_COLUMNS, border: int = BORDER) -> np.ndarray:
+    """:func:`contact_sheet` from frame getters: ``observed_frame(t)`` and ``future_frame(k, t)`` return
+    (H, W, 3) uint8 and are only asked for the indices of :func:`sheet_steps`."""
     from motion2video.video import GREEN, RED, add_border, grid
 
-    to, tf = observed.shape[0], futures.shape[1]
     cells = [image for image, _ in header]
     labels = [text for _, text in header]
     for t in _spread(to, columns - len(cells)):
-        cells.append(add_border(observed[t], GREEN, border))
+        cells.append(add_border(observed_frame(t), GREEN, border))
         labels.append(f"observed {t}")
-    blank = np.zeros_like(observed[0])
+    blank = np.zeros_like(observed_frame(0))
     cells += [blank] * (columns - len(cells))
     labels += [""] * (columns - len(labels))
-    for k, future in enumerate(futures):
+    for j in range(k):
         index = _spread(tf, columns)
         for t in index:
-            cells.append(add_border(future[t], RED, border))
-            labels.append(f"s{k + 1} +{t + 1}")
+            cells.append(add_border(future_frame(j, t), RED, border))
+            labels.append(f"s{j + 1} +{t + 1}")
         cells += [blank] * (columns - len(index))
         labels += [""] * (columns - len(index))
     return grid([c[None] for c in cells], labels, columns)[0]
@@ -608,6 +694,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     from motion2video.checkpoint import load_model
     from motion2video.forecast import load_clip_for
     from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.video import VideoWriter, write_image
 
     timings: dict[str, float] = {}
     t_all = t0 = time.perf_counter()
@@ -635,22 +722,48 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
 
     t0 = time.perf_counter()
     threads = config.generator_threads or default_generator_threads()
-    generated = generate_video_frames(frames_model, ref, structures, batch_size=config.batch_size, threads=threads)
-    timings["generation"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    video = compose_video(generated.observed, generated.futures)
-    ref_preview, obs_preview, fut_preview = split_rows(structure_previews(structures), structures)
-    structure_video = compose_video(obs_preview, fut_preview)
-    sheet = contact_sheet(generated.observed, generated.futures,
-                          header=((ref.image, "reference"), (ref_preview, "ref. structure")))
-    timings["compose"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    write_outputs(paths, video, structure_video, sheet, fps=fc.fps, crf=config.crf, preset=config.preset)
-    timings["encoding"] = time.perf_counter() - t0
+    clock: dict[str, float] = {}
+    to, tf = structures.observed, structures.horizon
+    ref_preview = structure_previews(structures, slice(0, 1))[0]
+    header = ((ref.image, "reference"), (ref_preview, "ref. structure"))
+    obs_steps, fut_steps = sheet_steps(to, tf, header=len(header))
+    picked: dict[tuple[int, int], np.ndarray] = {}  # (cell, step) -> frame, for the contact sheet
+    compose_s = 0.0
+    chunks = iter_generated(frames_model, ref, structures, batch_size=config.batch_size, threads=threads,
+                            clock=clock)
+    temps = [p.with_name(f".{p.stem}.{os.getpid()}.partial{p.suffix}") for p in paths]
+    try:
+        with VideoWriter(temps[0], fc.fps, crf=config.crf, preset=config.preset) as video, \
+                VideoWriter(temps[1], fc.fps, crf=config.crf, preset=config.preset) as structure_video:
+            for start, frames, previews in chunks:
+                c0 = time.perf_counter()
+                video.write(compose_chunk(frames, start, to))
+                structure_video.write(compose_chunk(previews, start, to))
+                for i in range(len(frames)):
+                    step = start + i
+                    if step < to and step in obs_steps:
+                        picked[0, step] = frames[i, 0]
+                    elif step >= to and step - to in fut_steps:
+                        for j in range(frames.shape[1]):
+                            picked[j, step] = frames[i, j]
+                compose_s += time.perf_counter() - c0
+        c0 = time.perf_counter()
+        sheet = contact_sheet_of(lambda t: picked[0, t], lambda j, t: picked[j, to + t], to, tf,
+                                 structures.samples, header=header)
+        write_image(temps[2], sheet)
+        compose_s += time.perf_counter() - c0
+        for tmp, final in zip(temps, paths):
+            os.replace(tmp, final)
+    finally:
+        for tmp in temps:
+            tmp.unlink(missing_ok=True)
+    loop_s = time.perf_counter() - t0
+    timings["generation"] = clock.get("generation", 0.0)
+    timings["compose"] = compose_s
+    timings["encoding"] = max(0.0, loop_s - timings["generation"] - compose_s)
     timings["total"] = time.perf_counter() - t_all
-    return SynthesisResult(video=paths[0], structure_video=paths[1], sheet=paths[2], frames=tuple(video.shape),
+    return SynthesisResult(video=paths[0], structure_video=paths[1], sheet=paths[2],
+                           frames=(video.num_frames, video.height, video.width, 3),
                            samples=structures.samples, observed=structures.observed, horizon=structures.horizon,
                            fps=float(fc.fps), domain=domain, notes=ref.notes, timings=timings, forecast=fc,
                            structures=structures)

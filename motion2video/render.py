@@ -1,13 +1,15 @@
 """Motion file -> structure video: what ``motion2video render`` does, as a plain function.
 
 Every check that can fail on user input runs BEFORE anything is rendered or written, and the video is written
-atomically, so bad input never leaves a partial file behind.
+atomically, so bad input never leaves a partial file behind. Frames stream from the renderer to the encoder
+in chunks (:func:`iter_frames`), so memory does not grow with the clip's length.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -69,20 +71,8 @@ def _progress_bar(total: int, enabled: bool, desc: str):
     return tqdm(total=total, unit="frame", desc=desc, disable=not enabled, leave=False)
 
 
-def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette: str = "leftright",
-                  progress: bool = False) -> np.ndarray:
-    """Render a motion in one style.
-
-    Args:
-        motion: a canonical 3D body :class:`Motion`, a 2D one (skeleton/heatmap styles only), or a
-            :class:`FaceMotion` (face style only).
-        style: one of :data:`STYLES`.
-        size: square frame size in pixels.
-        palette: skeleton palette.
-        progress: show a progress bar.
-    Returns:
-        (T, size, size, 3) uint8 frames. The camera (or 2D framing) is fitted once to the whole clip.
-    """
+def check_style(motion: Motion | FaceMotion, style: str) -> None:
+    """Raise InputError when ``style`` cannot draw ``motion`` (see :func:`render_motion`)."""
     if style not in STYLES:
         raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
     is_face = isinstance(motion, FaceMotion)
@@ -95,6 +85,26 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
     if style == "mesh" and (motion.dim != 3 or motion.skeleton != "h36m-17"):
         raise InputError(f"style 'mesh' needs 3D h36m-17 joints, got {motion.skeleton} with D={motion.dim}",
                          motion.source)
+
+
+def iter_frames(motion: Motion | FaceMotion, *, style: str, size: int, palette: str = "leftright",
+                progress: bool = False) -> Iterator[np.ndarray]:
+    """Render a motion in one style, chunk by chunk: the streaming form of :func:`render_motion`.
+
+    The style is checked at once (InputError before any frame is drawn); the frames are drawn lazily, so
+    only one chunk (about :data:`CHUNK` frames, or the mesh renderer's batch) is in memory at a time. The
+    renderer (and its GL context, for mesh and face) lives as long as the iterator.
+
+    Args: as :func:`render_motion`.
+    Yields:
+        (t, size, size, 3) uint8 chunks, ``motion.num_frames`` frames in all. The camera (or 2D framing) is
+        fitted once to the whole clip.
+    """
+    check_style(motion, style)
+    return _iter_frames(motion, style, size, palette, progress)
+
+
+def _iter_frames(motion, style: str, size: int, palette: str, progress: bool) -> Iterator[np.ndarray]:
     total = motion.num_frames
     with _progress_bar(total, progress, f"render {style}") as bar:
         if style in ("skeleton", "heatmap"):
@@ -108,27 +118,46 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
                 placement = {"framing": fit_image_framing(joints, size, size)}
             renderer = (SkeletonRenderer(style=SkeletonStyle(size=(size, size), palette=palette))
                         if style == "skeleton" else HeatmapRenderer(style=HeatmapStyle(size=(size, size))))
-            chunks = []
             with renderer:
                 for start in range(0, total, CHUNK):
-                    chunk = joints[start:start + CHUNK]
-                    chunks.append(renderer.render(chunk, skeleton=motion.skeleton, **placement))
+                    chunk = renderer.render(joints[start:start + CHUNK], skeleton=motion.skeleton, **placement)
                     bar.update(len(chunk))
-            return np.concatenate(chunks)
+                    yield chunk
+            return
         if style == "mesh":
             from renderers.body import BodyRenderer, BodyStyle
 
-            with BodyRenderer(BodyStyle(size=(size, size))) as renderer:
-                return renderer.render(motion, progress=bar.update)
-        from renderers.face import FaceRenderer, FaceStyle
+            renderer = BodyRenderer(BodyStyle(size=(size, size)))
+        else:
+            from renderers.face import FaceRenderer, FaceStyle
 
-        with FaceRenderer(FaceStyle(size=(size, size))) as renderer:
-            return renderer.render(motion, progress=bar.update)
+            renderer = FaceRenderer(FaceStyle(size=(size, size)))
+        with renderer:
+            for chunk in renderer.iter_frames(motion):
+                bar.update(len(chunk))
+                yield chunk
+
+
+def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette: str = "leftright",
+                  progress: bool = False) -> np.ndarray:
+    """Render a motion in one style (all frames in memory; prefer :func:`iter_frames` for long clips).
+
+    Args:
+        motion: a canonical 3D body :class:`Motion`, a 2D one (skeleton/heatmap styles only), or a
+            :class:`FaceMotion` (face style only).
+        style: one of :data:`STYLES`.
+        size: square frame size in pixels.
+        palette: skeleton palette.
+        progress: show a progress bar.
+    Returns:
+        (T, size, size, 3) uint8 frames. The camera (or 2D framing) is fitted once to the whole clip.
+    """
+    return np.concatenate(list(iter_frames(motion, style=style, size=size, palette=palette, progress=progress)))
 
 
 def render_file(request: RenderRequest) -> RenderResult:
     """Load ``request.input``, render it and write ``request.output``; see :class:`RenderRequest`."""
-    from motion2video.video import write_video
+    from motion2video.video import VideoWriter
 
     out = check_output_path(request.output, VIDEO_SUFFIXES)
     size = check_size(request.size)
@@ -141,8 +170,10 @@ def render_file(request: RenderRequest) -> RenderResult:
         motion = resample_motion(motion, float(request.fps))
     if request.start != 0 or request.frames is not None:
         motion = motion.slice(request.start, request.frames)
-    frames = render_motion(motion, style=request.style, size=size, palette=request.palette,
-                           progress=request.progress)
-    path = write_video(out, frames, motion.fps)
-    return RenderResult(path=Path(path), num_frames=int(frames.shape[0]), width=int(frames.shape[2]),
-                        height=int(frames.shape[1]), fps=float(motion.fps))
+    frames = iter_frames(motion, style=request.style, size=size, palette=request.palette,
+                         progress=request.progress)
+    with VideoWriter(out, motion.fps) as writer:
+        for chunk in frames:
+            writer.write(chunk)
+    return RenderResult(path=writer.path, num_frames=writer.num_frames, width=writer.width,
+                        height=writer.height, fps=float(motion.fps))

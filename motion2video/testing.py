@@ -510,3 +510,42 @@ def synthetic_walk(num_frames: int = 60, *, fps: float = 30.0, seed: int = 0) ->
     joints = np.stack([x, y, rel[..., 2]], axis=-1) + pelvis[:, None, :]
     return Motion(joints.astype(np.float32), fps=fps, skeleton="h36m-17", source=f"synthetic_walk(seed={seed})",
                   label="walk")
+
+
+def command_peak_rss_mb(argv: list[str], *, env: dict | None = None, cwd: str | None = None) -> float:
+    """Peak resident memory, in MB, of ``python -m motion2video.cli ARGV`` run in a fresh process.
+
+    The child reports its own peak (``VmHWM`` of ``/proc/self/status``, which starts afresh at exec, unlike
+    ``ru_maxrss``, which inherits the forking parent's peak) plus ``getrusage``'s ``ru_maxrss`` of its own
+    children (ffmpeg): an upper bound of the whole command's peak resident memory. Linux only. Raises
+    RuntimeError when the command fails.
+    """
+    import json
+    import os
+    import subprocess
+    import sys
+
+    code = ("import json, resource, sys\n"
+            "from motion2video.cli import main\n"
+            "rc = main(sys.argv[1:])\n"
+            "hwm = [l for l in open('/proc/self/status') if l.startswith('VmHWM:')][0].split()[1]\n"
+            "print(json.dumps({'rc': rc, 'self': int(hwm) / 1024.0, "
+            "'children': resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0}))\n")
+    result = subprocess.run([sys.executable, "-c", code, *map(str, argv)], capture_output=True, text=True,
+                            env={**os.environ, **(env or {})}, cwd=cwd, check=False)
+    lines = result.stdout.strip().splitlines()
+    if result.returncode != 0 or not lines:
+        raise RuntimeError(f"motion2video {' '.join(map(str, argv))} failed: {result.stderr.strip()[-500:]}")
+    record = json.loads(lines[-1])
+    if record["rc"] != 0:
+        raise RuntimeError(f"motion2video {' '.join(map(str, argv))} exited {record['rc']}: {result.stderr[-500:]}")
+    return float(record["self"] + record["children"])
+
+
+def tiled_motion(motion, times: int):
+    """``motion`` played ``times`` times in a row (joints tiled along time): a longer clip of the same
+    content, for memory-versus-length measurements."""
+    from motion2video.motion import Motion
+
+    return Motion(np.tile(motion.joints, (int(times), 1, 1)), motion.fps, motion.skeleton, motion.source,
+                  motion.label)

@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterable, Iterator
 
 import numpy as np
 import torch
@@ -53,9 +54,10 @@ from motion2video.data.procedural import heading_of
 from motion2video.errors import InputError
 from motion2video.models.behavior import BehaviorModel
 from motion2video.motion import FaceMotion, Motion
-from motion2video.video import GREEN, RED, add_border, grid, label
+from motion2video.video import GREEN, RED, add_border, iter_chunks, iter_grid, label
 
 STYLES = ("mesh", "frames", "skeleton")
+CHUNK = 32  # frames per drawn skeleton chunk
 TABLE1_TIMESTEPS = (1, 10, 20, 30, 40)
 CM2 = 1.0e4  # m^2 -> cm^2
 
@@ -321,27 +323,46 @@ def render_sequence(seq: np.ndarray, *, layout: str, style: str, size: int, fps:
     Returns:
         (T, size, size, 3) uint8.
     """
+    return np.concatenate(list(iter_sequence(seq, layout=layout, style=style, size=size, fps=fps, look=look,
+                                             identity=identity, face_colours=face_colours)))
+
+
+def iter_sequence(seq: np.ndarray, *, layout: str, style: str, size: int, fps: float,
+                  look: dict | None = None, identity: dict | None = None,
+                  face_colours: dict | None = None) -> Iterator[np.ndarray]:
+    """:func:`render_sequence` as a stream of (t, size, size, 3) uint8 chunks (the style is checked at once)."""
+    if layout != "face":
+        if style == "mesh" and layout != "body3d":
+            raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+        if style not in ("mesh", "skeleton"):
+            raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
+    return _iter_sequence(seq, layout, style, size, fps, look, identity, face_colours)
+
+
+def _iter_sequence(seq, layout, style, size, fps, look, identity, face_colours) -> Iterator[np.ndarray]:
     if layout == "face":
         from renderers.face import FaceRenderer, FaceStyle
 
         with FaceRenderer(FaceStyle(size=(size, size), **(face_colours or {}))) as r:
-            return r.render(FaceMotion(seq, fps, dict(identity or {})))
+            yield from r.iter_frames(FaceMotion(seq, fps, dict(identity or {})))
+        return
     azimuth = float(np.degrees(heading_of(seq[0]))) if layout == "body3d" else 0.0
     if style == "mesh":
-        if layout != "body3d":
-            raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
         from renderers.body import BodyRenderer
 
         with BodyRenderer(body_style({**(look or {}), "azimuth_deg": azimuth}, size)) as r:
-            return r.render(Motion(seq, fps))
-    if style != "skeleton":
-        raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
-    from renderers.camera import fit_camera
+            yield from r.iter_frames(Motion(seq, fps))
+        return
+    from renderers.camera import fit_camera, fit_image_framing
     from renderers.skeleton import SkeletonRenderer, SkeletonStyle
 
-    camera = fit_camera(seq.reshape(-1, 3), size, size, azimuth_deg=azimuth) if layout == "body3d" else None
+    if layout == "body3d":
+        placement = {"camera": fit_camera(seq.reshape(-1, 3), size, size, azimuth_deg=azimuth)}
+    else:
+        placement = {"framing": fit_image_framing(seq, size, size)}
     with SkeletonRenderer(style=SkeletonStyle(size=(size, size))) as r:
-        return r.render(seq, camera=camera)
+        for start in range(0, len(seq), CHUNK):
+            yield r.render(seq[start:start + CHUNK], **placement)
 
 
 def mark_segments(frames: np.ndarray, segments: list[tuple[int, tuple[int, int, int], str]], *,
@@ -354,12 +375,24 @@ def mark_segments(frames: np.ndarray, segments: list[tuple[int, tuple[int, int, 
     """
     if sum(n for n, _, _ in segments) != frames.shape[0]:
         raise ValueError(f"segments cover {sum(n for n, _, _ in segments)} frames, the clip has {frames.shape[0]}")
-    parts, start = [], 0
-    for n, colour, text in segments:
-        part = add_border(frames[start:start + n], colour, border)
-        parts.append(label(part, text, inset=border))
-        start += n
-    return np.concatenate(parts, axis=0)
+    return np.concatenate(list(iter_mark_segments([frames], segments, border=border)))
+
+
+def iter_mark_segments(chunks: Iterable[np.ndarray], segments: list[tuple[int, tuple[int, int, int], str]], *,
+                       border: int = 4) -> Iterator[np.ndarray]:
+    """:func:`mark_segments` on a stream of (t, H, W, 3) chunks; yields the marked chunks (split at the
+    segment boundaries). Raises ValueError when the stream is longer than the segments."""
+    bounds = np.cumsum([n for n, _, _ in segments])
+    done = 0
+    for chunk in chunks:
+        while len(chunk):
+            k = int(np.searchsorted(bounds, done, side="right"))
+            if k >= len(segments):
+                raise ValueError(f"segments cover {int(bounds[-1])} frames, the clip has more")
+            take = min(len(chunk), int(bounds[k]) - done)
+            _, colour, text = segments[k]
+            yield label(add_border(chunk[:take], colour, border), text, inset=border)
+            chunk, done = chunk[take:], done + take
 
 
 def _short(path: str | None) -> str:
@@ -379,6 +412,14 @@ def render_transfer(result: TransferResult, *, style: str = "mesh", size: int = 
     Returns:
         (1 + H, H', W', 3) uint8.
     """
+    return np.concatenate(list(iter_transfer(result, style=style, size=size, frame_model=frame_model,
+                                             reference=reference)))
+
+
+def iter_transfer(result: TransferResult, *, style: str = "mesh", size: int = 256,
+                  frame_model=None, reference=None) -> Iterator[np.ndarray]:
+    """:func:`render_transfer` as a stream of (t, H', W', 3) uint8 chunks: every cell is drawn lazily as the
+    grid consumes it (the frame generator's re-enactments, ``style="frames"``, are generated first)."""
     if style not in STYLES:
         raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
     n = result.reenacted.shape[1]
@@ -387,19 +428,19 @@ def render_transfer(result: TransferResult, *, style: str = "mesh", size: int = 
     target_colours = ALT_FACE_COLOURS if face_alt else None
     cells = []
     if result.source is not None:
-        src = render_sequence(result.source, layout=result.layout, style="skeleton" if style == "frames" else style,
-                              size=size, fps=result.fps, look=SOURCE_LOOK, identity=result.source_identity)
-        cells.append(mark_segments(src, [(n, GREEN, f"behaviour: {_short(result.source_name)}")]))
+        src = iter_sequence(result.source, layout=result.layout, style="skeleton" if style == "frames" else style,
+                            size=size, fps=result.fps, look=SOURCE_LOOK, identity=result.source_identity)
+        cells.append(iter_mark_segments(src, [(n, GREEN, f"behaviour: {_short(result.source_name)}")]))
     if style == "frames":
         drawn = render_with_frame_model(result, frame_model, size=size, reference=reference)
     else:
-        drawn = [render_sequence(seq, layout=result.layout, style=style, size=size, fps=result.fps, look=TARGET_LOOK,
-                                 identity=target_identity, face_colours=target_colours) for seq in result.reenacted]
+        drawn = [iter_sequence(seq, layout=result.layout, style=style, size=size, fps=result.fps, look=TARGET_LOOK,
+                               identity=target_identity, face_colours=target_colours) for seq in result.reenacted]
     for k, frames in enumerate(drawn):
         text = (f"{_short(result.target_name)} @{result.target_frame} re-enacts" if result.source is not None
                 else f"flow behaviour {k + 1}")
-        cells.append(mark_segments(frames, [(1, GREEN, text), (n - 1, RED, text)]))
-    return grid(cells, None, 2 if result.source is not None else None)
+        cells.append(iter_mark_segments(iter_chunks(frames), [(1, GREEN, text), (n - 1, RED, text)]))
+    return iter_grid(cells, None, 2 if result.source is not None else None)
 
 
 def render_with_frame_model(result: TransferResult, frame_model, *, size: int, reference=None) -> list[np.ndarray]:

@@ -4,8 +4,11 @@
   status is checked: a failed encode raises with ffmpeg's message), with the frame rate passed as an exact
   fraction (``Fraction(fps).limit_denominator(100000)``: 30000/1001 stays 30000/1001). Odd frame sizes are
   padded to even by repeating the last row / column (yuv420p needs even sizes); nothing is rescaled.
-- GIF: by extension, through imageio (Pillow). GIF stores frame delays in 1/100 s, so its rate is only
-  approximate (30 fps is stored as 3/100 s per frame).
+- GIF: by extension, through the same ffmpeg binary with a palette per frame (so it streams too). GIF
+  stores frame delays in 1/100 s, so its rate is only approximate (30 fps is stored as 3/100 s per frame).
+- Streaming: :class:`VideoWriter` (and :func:`write_video`, which accepts any iterable of frames or chunks)
+  encode frames as they arrive; :func:`iter_grid` / :func:`iter_observed_future` tile clips lazily. A long
+  clip is never held in memory.
 - Writes are atomic: the file is written to a temporary name in the same directory and renamed with
   ``os.replace``; on any failure the temporary file is removed and the error is raised, so no partial file
   is ever left behind. A destination whose directory cannot be written raises
@@ -23,6 +26,7 @@ import subprocess
 import tempfile
 from fractions import Fraction
 from pathlib import Path
+from typing import Iterable, Iterator, Sequence
 
 import cv2
 import imageio.v3 as iio
@@ -94,6 +98,9 @@ def _open_temp(path: Path) -> Path:
     except OSError as err:
         raise InputError(f"cannot write in the output directory {parent}: {err.strerror or err}", path) from None
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; the output gets the usual permissions
     return Path(tmp)
 
 
@@ -121,70 +128,145 @@ def pad_to_even(frames: np.ndarray) -> np.ndarray:
 
 def write_video(
     path: str | Path,
-    frames: np.ndarray,
+    frames: np.ndarray | Iterable[np.ndarray],
     fps: float | Fraction,
     *,
+    n_frames: int | None = None,
     crf: int = 18,
     preset: str = "medium",
 ) -> Path:
-    """Write an mp4 (H.264, yuv420p) or a GIF, chosen by the file extension; atomically.
+    """Write an mp4 (H.264, yuv420p) or a GIF, chosen by the file extension; atomically and streaming.
 
     Args:
         path: destination ``.mp4`` or ``.gif``.
-        frames: (T, H, W, 3) uint8 RGB.
+        frames: a (T, H, W, 3) uint8 RGB array, or any iterable of (H, W, 3) frames and/or (t, H, W, 3)
+            chunks (a generator is consumed once, chunk by chunk: only one chunk is in memory at a time).
         fps: frames per second (float or Fraction), passed to ffmpeg as an exact fraction.
+        n_frames: the expected frame count, when known; a different count raises ValueError and writes
+            nothing.
         crf: x264 constant rate factor (0 lossless .. 51 worst; mp4 only).
         preset: x264 preset (``"ultrafast"`` .. ``"veryslow"``; mp4 only).
     Returns:
         The written path.
     """
-    path = Path(path)
-    frames = _check_clip(frames)
-    suffix = path.suffix.lower()
-    if suffix not in VIDEO_SUFFIXES:
-        raise InputError(f"unsupported video extension {path.suffix!r}; use one of {', '.join(VIDEO_SUFFIXES)}",
-                         path)
-    rate = _exact_fps(fps, path)
-    if not 0 <= int(crf) <= 51:
-        raise InputError(f"crf must be in 0..51, got {crf}", path)
-    if suffix == ".mp4" and preset not in X264_PRESETS:
-        raise InputError(f"unknown x264 preset {preset!r}; choose one of {', '.join(X264_PRESETS)}", path)
-    tmp = _open_temp(path)
-    if suffix == ".gif":
-        return _commit(tmp, path, lambda p: _write_gif(p, frames, float(rate)))
-    return _commit(tmp, path, lambda p: _write_mp4(p, pad_to_even(frames), rate, int(crf), str(preset), dest=path))
+    if isinstance(frames, np.ndarray):
+        frames = [_check_clip(frames)]
+    with VideoWriter(path, fps, crf=crf, preset=preset) as writer:
+        for chunk in frames:
+            writer.write(chunk)
+        if writer.num_frames == 0:
+            raise ValueError("frames must have shape (T, H, W, 3) with T >= 1, got no frames")
+        if n_frames is not None and writer.num_frames != int(n_frames):
+            raise ValueError(f"expected {n_frames} frames, got {writer.num_frames}")
+    return writer.path
 
 
-def _write_mp4(path: Path, frames: np.ndarray, rate: Fraction, crf: int, preset: str, *, dest: Path) -> None:
-    """Pipe raw RGB frames into imageio-ffmpeg's ffmpeg binary; raise with ffmpeg's message on failure."""
-    height, width = frames.shape[1:3]
-    cmd = [
-        imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-hide_banner", "-loglevel", "error",
-        "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", f"{rate.numerator}/{rate.denominator}",
-        "-i", "-", "-an", "-c:v", "libx264", "-preset", preset, "-crf", str(crf), "-pix_fmt", "yuv420p",
-        "-movflags", "+faststart", "-f", "mp4", str(path),
-    ]
-    with tempfile.TemporaryFile() as log:
-        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=log)
+class VideoWriter:
+    """A streaming, atomic video writer: frames go to an encoder as they come, the file appears on success.
+
+    mp4 frames are piped into ffmpeg (libx264, yuv420p; odd sizes padded to even by repeating the last row /
+    column). GIF frames are piped into ffmpeg's GIF encoder with a palette computed per frame
+    (``palettegen=stats_mode=single``), so GIF output streams too. The output goes to a temporary file in
+    the destination's folder and is renamed onto ``path`` when the ``with`` block ends normally; on an
+    exception or interrupt the encoder is killed and the temporary file removed.
+
+    Usage::
+
+        with VideoWriter("out.mp4", 25) as writer:
+            for chunk in chunks:            # (t, H, W, 3) or (H, W, 3) uint8
+                writer.write(chunk)
+        writer.num_frames, writer.width, writer.height
+
+    Raises InputError (naming the path) on a bad extension, fps, crf, preset or an unwritable folder, before
+    anything is encoded; RuntimeError with ffmpeg's message when the encode fails.
+    """
+
+    def __init__(self, path: str | Path, fps: float | Fraction, *, crf: int = 18, preset: str = "medium"):
+        self.path = Path(path)
+        suffix = self.path.suffix.lower()
+        if suffix not in VIDEO_SUFFIXES:
+            raise InputError(f"unsupported video extension {self.path.suffix!r}; use one of "
+                             f"{', '.join(VIDEO_SUFFIXES)}", self.path)
+        self.rate = _exact_fps(fps, self.path)
+        if not 0 <= int(crf) <= 51:
+            raise InputError(f"crf must be in 0..51, got {crf}", self.path)
+        if suffix == ".mp4" and preset not in X264_PRESETS:
+            raise InputError(f"unknown x264 preset {preset!r}; choose one of {', '.join(X264_PRESETS)}", self.path)
+        self.crf, self.preset, self.gif = int(crf), str(preset), suffix == ".gif"
+        self.num_frames = 0
+        self.width = self.height = 0
+        self._tmp: Path | None = None
+        self._proc: subprocess.Popen | None = None
+        self._log = None
+
+    def __enter__(self) -> "VideoWriter":
+        self._tmp = _open_temp(self.path)
+        return self
+
+    def _command(self, width: int, height: int) -> list[str]:
+        rate = f"{self.rate.numerator}/{self.rate.denominator}"
+        head = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-hide_banner", "-loglevel", "error",
+                "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", rate, "-i", "-", "-an"]
+        if self.gif:
+            return head + ["-vf", "split[a][b];[a]palettegen=stats_mode=single:reserve_transparent=0[p];"
+                           "[b][p]paletteuse=new=1:dither=none", "-loop", "0", "-f", "gif", str(self._tmp)]
+        return head + ["-c:v", "libx264", "-preset", self.preset, "-crf", str(self.crf), "-pix_fmt", "yuv420p",
+                       "-movflags", "+faststart", "-f", "mp4", str(self._tmp)]
+
+    def write(self, frames: np.ndarray) -> None:
+        """Encode one (H, W, 3) frame or a (t, H, W, 3) chunk of uint8 RGB frames (all the same size)."""
+        if self._tmp is None:
+            raise RuntimeError("VideoWriter.write outside its with-block")
+        clip, _ = _clip_or_image(frames)
+        if self._proc is None:
+            self.height, self.width = clip.shape[1:3]
+            even_h, even_w = self.height + self.height % 2, self.width + self.width % 2
+            if self.gif:
+                even_h, even_w = self.height, self.width
+            self._log = tempfile.TemporaryFile()
+            self._proc = subprocess.Popen(self._command(even_w, even_h), stdin=subprocess.PIPE,
+                                          stdout=subprocess.DEVNULL, stderr=self._log)
+        elif clip.shape[1:3] != (self.height, self.width):
+            raise ValueError(f"frame size changed from {self.width}x{self.height} to {clip.shape[2]}x{clip.shape[1]}")
+        if not self.gif:
+            clip = pad_to_even(clip)
         try:
-            for frame in frames:
-                proc.stdin.write(np.ascontiguousarray(frame).tobytes())
+            self._proc.stdin.write(np.ascontiguousarray(clip).tobytes())
+        except BrokenPipeError:
+            pass  # ffmpeg quit early; its exit status and message are reported on close
+        self.num_frames += len(clip)
+
+    def _finish(self) -> None:
+        proc, log = self._proc, self._log
+        try:
             proc.stdin.close()
         except BrokenPipeError:
-            pass  # ffmpeg quit early; its exit status and message are reported below
-        except BaseException:
-            proc.kill()
-            proc.wait()
-            raise
+            pass
         code = proc.wait()
         if code != 0:
             log.seek(0)
             message = " ".join(log.read().decode("utf-8", "replace").split())[-500:]
-            raise RuntimeError(f"ffmpeg failed writing {dest} (exit {code}): ...{message}")
+            raise RuntimeError(f"ffmpeg failed writing {self.path} (exit {code}): ...{message}")
 
-
-def _write_gif(path: Path, frames: np.ndarray, fps: float) -> None:
-    iio.imwrite(path, frames, extension=".gif", duration=1000.0 / fps, loop=0)
+    def __exit__(self, exc_type, exc, tb) -> None:
+        tmp, self._tmp = self._tmp, None
+        try:
+            if exc_type is None:
+                if self._proc is None:
+                    raise ValueError("frames must have shape (T, H, W, 3) with T >= 1, got no frames")
+                self._finish()
+                os.replace(tmp, self.path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        finally:
+            if self._proc is not None and self._proc.poll() is None:
+                self._proc.kill()
+                self._proc.wait()
+            if self._log is not None:
+                self._log.close()
+            if exc_type is not None:
+                tmp.unlink(missing_ok=True)
 
 
 def probe_frame_rate(path: str | Path) -> Fraction:
@@ -372,6 +454,133 @@ def grid(
         y, x = r * (height + gap), c * (width + gap)
         out[:, y:y + height, x:x + width] = _hold_last(clip, length)
     return out
+
+
+def iter_single_frames(frames: np.ndarray | Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+    """Yield (H, W, 3) frames one by one from a (T, H, W, 3) array or an iterable of frames / chunks."""
+    if isinstance(frames, np.ndarray):
+        frames = [frames]
+    for chunk in frames:
+        clip, _ = _clip_or_image(chunk)
+        yield from clip
+
+
+def iter_chunks(frames: Iterable[np.ndarray], size: int = 32) -> Iterator[np.ndarray]:
+    """Regroup an iterable of frames / chunks into (t <= size, H, W, 3) chunks (the last may be shorter)."""
+    batch: list[np.ndarray] = []
+    for frame in iter_single_frames(frames):
+        batch.append(frame)
+        if len(batch) == size:
+            yield np.stack(batch)
+            batch = []
+    if batch:
+        yield np.stack(batch)
+
+
+def iter_grid(
+    cells: Sequence[np.ndarray | Iterable[np.ndarray]],
+    labels: list[str] | None = None,
+    columns: int | None = None,
+    *,
+    gap: int = 2,
+    background: tuple[int, int, int] = (0, 0, 0),
+    chunk: int = 32,
+) -> Iterator[np.ndarray]:
+    """:func:`grid` as a stream: tile K clips given as arrays or iterables of frames / chunks.
+
+    Each cell is consumed lazily, so only about ``chunk`` frames per cell are in memory at once. A cell that
+    ends holds its last frame until every cell has ended; empty cells are ``background``.
+
+    Args:
+        cells: K clips, each a (T_k, H, W, 3) uint8 array or an iterable of (H, W, 3) frames / (t, H, W, 3)
+            chunks, all with the same H and W.
+        labels: K texts drawn in each cell's top-left corner, or None.
+        columns: cells per row (default ceil(sqrt(K))).
+        gap: pixels between cells.
+        chunk: frames per yielded chunk.
+    Yields:
+        (t <= chunk, rows*H + (rows-1)*gap, columns*W + (columns-1)*gap, 3) uint8 chunks, max T_k frames in all.
+    """
+    if not cells:
+        raise ValueError("grid needs at least one clip")
+    if labels is not None and len(labels) != len(cells):
+        raise ValueError(f"{len(labels)} labels for {len(cells)} clips")
+    n = len(cells)
+    cols = int(columns) if columns else math.ceil(math.sqrt(n))
+    if cols < 1:
+        raise ValueError(f"columns must be >= 1, got {columns}")
+    rows = math.ceil(n / cols)
+    streams = [iter_single_frames(c) for c in cells]
+    last: list[np.ndarray | None] = [None] * n
+    height = width = None
+    while True:
+        out = None
+        for t in range(chunk):
+            alive = False
+            for k, stream in enumerate(streams):
+                frame = next(stream, None)
+                if frame is not None:
+                    alive = True
+                    if height is None:
+                        height, width = frame.shape[:2]
+                    elif frame.shape[:2] != (height, width):
+                        raise ValueError(f"clip {k} is {frame.shape[1]}x{frame.shape[0]} but clip 0 is "
+                                         f"{width}x{height}")
+                    last[k] = label(frame, labels[k]) if labels is not None else frame
+                elif last[k] is None:
+                    raise ValueError(f"clip {k} must have shape (T, H, W, 3) with T >= 1, got no frames")
+            if not alive:
+                break
+            if out is None:
+                out = np.empty((chunk, rows * height + (rows - 1) * gap, cols * width + (cols - 1) * gap, 3),
+                               np.uint8)
+                out[:] = np.asarray(background, np.uint8)
+            for k, frame in enumerate(last):
+                r, c = divmod(k, cols)
+                y, x = r * (height + gap), c * (width + gap)
+                out[t, y:y + height, x:x + width] = frame
+        else:
+            t = chunk
+        if out is None or t == 0:
+            return
+        yield out[:t]
+        if t < chunk:
+            return
+
+
+def iter_observed_future(
+    observed: np.ndarray,
+    futures: Sequence[np.ndarray | Iterable[np.ndarray]],
+    labels: list[str] | None = None,
+    *,
+    columns: int | None = None,
+    border: int = 4,
+    chunk: int = 32,
+) -> Iterator[np.ndarray]:
+    """:func:`observed_future_video` as a stream: the futures may be iterables of frames / chunks.
+
+    Args:
+        observed: (To, H, W, 3) uint8 observed frames (shared by every cell).
+        futures: K predicted clips, arrays (Tf_k, H, W, 3) or iterables of frames / chunks.
+        labels: K texts, or None.
+    Yields:
+        (t <= chunk, H', W', 3) uint8 chunks, To + max Tf_k frames in all.
+    """
+    observed = _check_clip(observed, "observed")
+    if not futures:
+        raise ValueError("observed_future_video needs at least one future")
+    framed_obs = add_border(observed, GREEN, border)
+
+    def cell(k: int, future) -> Iterator[np.ndarray]:
+        text = labels[k] if labels is not None else ""
+        for part in (framed_obs, *(add_border(f[None], RED, border) for f in iter_single_frames(future))):
+            if part.shape[1:3] != observed.shape[1:3]:
+                raise ValueError(f"future {k} frames are {part.shape[1:3]} but observed are {observed.shape[1:3]}")
+            yield label(part, text, inset=border) if text else part
+
+    if labels is not None and len(labels) != len(futures):
+        raise ValueError(f"{len(labels)} labels for {len(futures)} futures")
+    yield from iter_grid([cell(k, f) for k, f in enumerate(futures)], None, columns, chunk=chunk)
 
 
 def observed_future_video(

@@ -31,7 +31,7 @@ them through the process-wide :class:`~renderers.mesh.MeshRenderer` backend.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping
+from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
@@ -579,6 +579,26 @@ class BodyRenderer(RendererBase):
             if progress is not None:
                 progress(len(verts))
         return BodyFrames(frames=frames, masks=masks, camera=camera, pose=pose)
+
+    def iter_frames(self, motion: Motion, *, camera: PinholeCamera | None = None) -> Iterator[np.ndarray]:
+        """Yield ``motion``'s frames as (b, H, W, 3) uint8 chunks of ``style.batch`` frames.
+
+        The camera is fitted over the whole sequence first (one extra skinning pass for clips longer than
+        KEEP_VERTICES_FRAMES), so the frames equal :meth:`render`'s while only one chunk is in memory.
+        """
+        pose = self.fit_pose(motion)
+        chunks = None
+        if camera is None:
+            if motion.num_frames <= KEEP_VERTICES_FRAMES:
+                chunks = list(posed_vertices(pose, batch=self.style.batch))
+            camera = self.camera_for(pose, motion.joints, chunks=chunks)
+        elif (camera.width, camera.height) != (self.width, self.height):
+            camera = camera.with_size(self.width, self.height)
+        faces = anny_model.triangles()
+        colors = self._vertex_colors()
+        for _, verts in (chunks if chunks is not None else posed_vertices(pose, batch=self.style.batch)):
+            yield np.stack([self._mesh.render_mesh(v, faces, vertex_colors=colors, camera=camera,
+                                                   background=self.style.background).color for v in verts])
 
     def render(self, motion: Motion, *, camera: PinholeCamera | None = None,
                progress: Callable[[int], object] | None = None) -> np.ndarray:

@@ -21,7 +21,7 @@ the render cheap.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -301,6 +301,19 @@ class FaceRenderer(RendererBase):
             if progress is not None:
                 progress(len(verts))
         return FaceFrames(frames=frames, masks=masks, camera=camera, landmarks=landmarks)
+
+    def iter_frames(self, face: FaceMotion, *, camera: PinholeCamera | None = None) -> Iterator[np.ndarray]:
+        """Yield ``face``'s close-up frames as (b, H, W, 3) uint8 chunks (equal to :meth:`render`'s)."""
+        if not isinstance(face, FaceMotion):
+            raise InputError(f"the face renderer needs a FaceMotion, got {type(face).__name__}")
+        head = self._head_mesh(face)
+        if camera is None:
+            camera = self.camera_for(face)
+        elif (camera.width, camera.height) != (self.width, self.height):
+            camera = camera.with_size(self.width, self.height)
+        for _, verts in self.vertices(face):
+            yield np.stack([self._mesh.render_mesh(v, head.faces, vertex_colors=head.colors, camera=camera,
+                                                   background=self.style.background).color for v in verts])
 
     def render(self, face: FaceMotion, *, camera: PinholeCamera | None = None,
                progress: Callable[[int], object] | None = None) -> np.ndarray:

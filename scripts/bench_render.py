@@ -15,6 +15,11 @@ Keys of the JSON record:
   one reused renderer, and with a new renderer per frame (sharing the process-wide GL context, and also
   with the GL context released after every frame). ``--no-mesh`` skips them (recorded as skipped);
   when the mesh part fails, the other results are still written, then the error is raised (exit != 0).
+- ``long_clip_peak_rss_mb``: peak resident memory (the command process plus its ffmpeg child, from
+  ``getrusage``) of ``motion2video render LONG_CLIP --size 768`` in a fresh process (default clip:
+  ``../shared/data/mocap/cmu/13_10.bvh``, 20 s at 120 fps); ``rss_ratio_4x_length``: the same for the clip
+  tiled 4 times (4x the frames, same content) over the clip itself (target <= 1.2: frames are streamed).
+  ``--no-long`` skips them.
 - ``machine``, ``versions``, ``config``: where and how it was measured.
 
 Input: a synthetic human-like H36M-17 walk (:func:`motion2video.testing.synthetic_walk`, fixed seed), or a
@@ -222,6 +227,21 @@ def bench_mesh(motion: Motion, *, frames: int, recreate_frames: int, repeats: in
 
 # --- main ---------------------------------------------------------------------------------------------
 
+def bench_long_clip(path: Path, *, size: int) -> dict:
+    """Peak RSS of ``render`` on ``path`` and on the clip tiled 4x, each in a fresh process."""
+    from motion2video.io import load_motion, save_motion
+    from motion2video.testing import command_peak_rss_mb, tiled_motion
+
+    motion = load_motion(path)
+    with tempfile.TemporaryDirectory() as tmp:
+        tiled = save_motion(tiled_motion(motion, 4), Path(tmp) / "tiled4.npz")
+        args = ["--size", str(size), "--no-progress"]
+        peak = command_peak_rss_mb(["render", path, "-o", Path(tmp) / "long.mp4", *args])
+        peak4 = command_peak_rss_mb(["render", tiled, "-o", Path(tmp) / "long4.mp4", *args])
+    return {"clip": str(path), "frames": motion.num_frames, "fps": motion.fps, "size": size,
+            "peak_rss_mb": peak, "peak_rss_4x_mb": peak4, "ratio_4x": peak4 / peak}
+
+
 def _rounded(value):
     if isinstance(value, float):
         return round(value, 4)
@@ -242,6 +262,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="include the mesh (Anny body) benchmark (default: yes)")
     parser.add_argument("--mesh-frames", type=int, default=24, help="frames per reused-renderer mesh measurement")
     parser.add_argument("--recreate-frames", type=int, default=6, help="frames for the renderer-per-frame variant")
+    parser.add_argument("--long-clip", type=Path,
+                        default=Path(__file__).resolve().parents[2] / "shared/data/mocap/cmu/13_10.bvh",
+                        help="clip for the peak-memory measurement (default ../shared/data/mocap/cmu/13_10.bvh)")
+    parser.add_argument("--long-size", type=int, default=768, help="frame size for the peak-memory measurement")
+    parser.add_argument("--long", action=argparse.BooleanOptionalAction, default=True,
+                        help="include the long-clip peak-memory measurement (default: yes)")
     args = parser.parse_args(argv)
 
     if args.bvh is not None:
@@ -268,6 +294,13 @@ def main(argv: list[str] | None = None) -> int:
     record["skeleton_vs_matplotlib"] = details["skeleton"]["opencv_over_matplotlib"]
     record["mp4_fps"] = details["mp4"]["medium_fps"]
     record["mesh_fps"] = record["mesh_reuse_vs_recreate"] = None
+    record["long_clip_peak_rss_mb"] = record["rss_ratio_4x_length"] = None
+    if args.long:
+        details["long_clip"] = bench_long_clip(args.long_clip, size=args.long_size)
+        record["long_clip_peak_rss_mb"] = details["long_clip"]["peak_rss_mb"]
+        record["rss_ratio_4x_length"] = details["long_clip"]["ratio_4x"]
+        print(f"render {args.long_clip.name} at {args.long_size}: peak {record['long_clip_peak_rss_mb']:.0f} MB, "
+              f"4x longer: x{record['rss_ratio_4x_length']:.2f}")
     write_json(args.json, _rounded(record))  # keep these results if the mesh part fails
     if args.mesh:
         mesh = bench_mesh(motion, frames=args.mesh_frames, recreate_frames=args.recreate_frames,

@@ -321,3 +321,18 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     mesh, _ = read_video(out / "mesh_body.mp4")
     assert mesh.shape == (16 + 48, 256, 256, 3)
     assert_framed(mesh, observed=16, cells=1, columns=1, size=256)
+
+
+def test_streamed_composition_equals_the_whole_video():
+    """compose_chunk over timeline chunks equals compose_video, and the sheet from picked frames equals
+    contact_sheet (what synthesize streams)."""
+    rng = np.random.default_rng(1)
+    obs = rng.integers(0, 255, (5, 24, 24, 3), dtype=np.uint8)
+    fut = rng.integers(0, 255, (3, 7, 24, 24, 3), dtype=np.uint8)
+    whole = P.compose_video(obs, fut)
+    steps = np.concatenate([np.repeat(obs[:, None], 3, axis=1), fut.transpose(1, 0, 2, 3, 4)])  # (12, K, ...)
+    streamed = np.concatenate([P.compose_chunk(steps[s:s + 4], s, 5) for s in range(0, 12, 4)])
+    np.testing.assert_array_equal(streamed, whole)
+    header = ((obs[0], "reference"),)
+    np.testing.assert_array_equal(P.contact_sheet_of(lambda t: obs[t], lambda k, t: fut[k, t], 5, 7, 3, header=header),
+                                  P.contact_sheet(obs, fut, header=header))

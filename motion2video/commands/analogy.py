@@ -56,12 +56,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
-    from motion2video.analogy import analogy, analogy_model, render_analogy
+    from motion2video.analogy import analogy, analogy_model, iter_analogy
     from motion2video.checkpoint import load_model
     from motion2video.atomic import save_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.transfer import load_clip
-    from motion2video.video import write_video
+    from motion2video.video import VideoWriter
 
     set_threads(args.threads)
     if not 32 <= args.size <= 2048:
@@ -79,10 +79,12 @@ def run(args: argparse.Namespace) -> int:
     c = load_clip(bundle, args.c)
     result = analogy(bundle, a, b, c, a_start=args.a_start, b_start=args.b_start, c_start=args.c_start,
                      observed=args.observed, horizon=args.horizon)
-    frames = render_analogy(result, style=args.style, size=args.size)
-    write_video(out, frames, result.fps)
+    chunks = iter_analogy(result, style=args.style, size=args.size)
+    with VideoWriter(out, result.fps) as writer:
+        for chunk in chunks:
+            writer.write(chunk)
     print(f"wrote {out} (A:B::C:D with {bundle.name}; {result.observed} observed + "
-          f"{result.cd.shape[0] - result.observed} generated frames, {frames.shape[2]}x{frames.shape[1]}, "
+          f"{result.cd.shape[0] - result.observed} generated frames, {writer.width}x{writer.height}, "
           f"{result.fps:g} fps{'' if result.consecutive else '; B placed after A'})")
     if args.npz:
         save_npz(args.npz, {"ab": result.ab, "cd": result.cd, "z": result.z, "observed": np.int64(result.observed),

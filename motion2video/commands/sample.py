@@ -50,9 +50,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from motion2video.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import DatasetConfig
-    from motion2video.forecast import forecast, load_clip_for, render_forecast, save_forecast_npz
+    from motion2video.forecast import forecast, iter_forecast, load_clip_for, save_forecast_npz
     from motion2video.models.baselines import BASELINES
-    from motion2video.video import write_video
+    from motion2video.video import VideoWriter
 
     set_threads(args.threads)
     if args.samples < 1:
@@ -67,10 +67,12 @@ def run(args: argparse.Namespace) -> int:
     clip = load_clip_for(bundle, args.input)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
                   start=args.start, seed=args.seed, source=args.input)
-    frames = render_forecast(fc, style=args.style, size=args.size)
-    write_video(out, frames, fc.fps)
+    chunks = iter_forecast(fc, style=args.style, size=args.size)
+    with VideoWriter(out, fc.fps) as writer:
+        for chunk in chunks:
+            writer.write(chunk)
     print(f"wrote {out} ({args.samples} futures of {fc.futures.shape[1]} frames after {fc.observed.shape[0]} "
-          f"observed, {frames.shape[2]}x{frames.shape[1]}, {fc.fps:g} fps)")
+          f"observed, {writer.width}x{writer.height}, {fc.fps:g} fps)")
     if args.npz:
         save_forecast_npz(fc, args.npz)
         print(f"wrote {args.npz}")

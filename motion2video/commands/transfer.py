@@ -69,8 +69,8 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.checkpoint import load_model
     from motion2video.models.baselines import BASELINES
-    from motion2video.transfer import behavior_model, load_clip, render_transfer, sample_behaviors, transfer_behavior
-    from motion2video.video import write_video
+    from motion2video.transfer import behavior_model, iter_transfer, load_clip, sample_behaviors, transfer_behavior
+    from motion2video.video import VideoWriter
 
     set_threads(args.threads)
     if not 32 <= args.size <= 2048:
@@ -115,14 +115,16 @@ def run(args: argparse.Namespace) -> int:
     else:
         result = sample_behaviors(bundle, target, num_samples=args.sample, target_frame=args.target_frame,
                                   horizon=args.horizon, seed=args.seed)
-    frames = render_transfer(result, style=style, size=args.size, frame_model=frame_model, reference=reference)
+    chunks = iter_transfer(result, style=style, size=args.size, frame_model=frame_model, reference=reference)
     for note in (reference.notes if reference is not None else ()):
         print(f"motion2video transfer: note: {note}", file=sys.stderr)
-    write_video(out, frames, result.fps)
+    with VideoWriter(out, result.fps) as writer:
+        for chunk in chunks:
+            writer.write(chunk)
     what = (f"behaviour of {args.behavior}" if args.behavior is not None
             else f"{args.sample} flow-sampled behaviours (seed {args.seed})")
     print(f"wrote {out} ({what} re-enacted from {args.target} frame {args.target_frame}: "
-          f"{result.reenacted.shape[1] - 1} generated frames, {style}, {frames.shape[2]}x{frames.shape[1]}, "
+          f"{result.reenacted.shape[1] - 1} generated frames, {style}, {writer.width}x{writer.height}, "
           f"{result.fps:g} fps)")
     if args.npz:
         arrays = {"reenacted": result.reenacted, "z": result.z, "fps": np.float64(result.fps),

@@ -1,0 +1,152 @@
+"""Batch throughput, measured side by side in one run and written as JSON.
+
+    python scripts/bench_batch.py --json out/bench_batch.json [--clips 24] [--frames 150] [--repeats 3]
+
+The same jobs (``render CLIP --style skeleton --size 256 --fps 30 --frames F`` for the first ``--clips``
+BVH clips of ``../shared/data/mocap/cmu``, every output written, ``--force``) run on:
+
+- the local pool with 1 worker and with 2 workers,
+- Ray (a local instance with 2 CPUs) with 2 workers,
+
+alternating, ``--repeats`` times each; the median wall time is kept. Every engine is started, its
+workers warmed up (processes started, commands imported) and one untimed round of 4 real jobs run before
+the clock starts, as in a long batch where start-up is paid once; the start-up times are recorded too.
+
+Keys:
+
+- ``workers2_vs_1``: wall(1 local worker) / wall(2 local workers); target >= 1.7 on an idle 2-core machine.
+- ``ray_vs_local``: wall(Ray, 2 workers) / wall(local pool, 2 workers); target <= 1.25.
+- ``clips_per_core_hour``: clips / (wall x 2 cores) of the 2-worker local run, in clips per core-hour.
+- ``capacity``: skeleton (the jobs above) and mesh (``--mesh-clips`` jobs of ``--mesh-frames`` frames,
+  1 worker) video seconds rendered per core-second, and the core-hours for 10,000 clips of 10 s at 30 fps
+  and 256x256 in each style.
+- ``load_average``: ``os.getloadavg()`` before and after: on a shared machine other jobs take cores and
+  the ratios drop; read them with it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from motion2video.atomic import write_json
+from motion2video.batch import (BatchConfig, Job, LocalPool, init_ray, jobs_from_template, run_ray, warm_ray)
+
+MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
+FPS = 30
+
+
+def make_jobs(clips: list[Path], out: Path, *, style: str, frames: int) -> list[Job]:
+    jobs = []
+    for clip in clips:
+        jobs += jobs_from_template(str(clip), f"render {{input}} -o {{output}} --style {style} --size 256 "
+                                   f"--fps {FPS} --frames {frames}", out)
+    return jobs
+
+
+def timed(run, jobs: list[Job]) -> tuple[float, list]:
+    rows = []
+    start = time.perf_counter()
+    run(jobs, rows.append)
+    seconds = time.perf_counter() - start
+    failed = [r for r in rows if r.status != "ok"]
+    if failed or len(rows) != len(jobs):
+        raise RuntimeError(f"benchmark jobs failed: {failed[:3]}")
+    return seconds, rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--json", type=Path, required=True, help="output JSON file")
+    parser.add_argument("--clips", type=int, default=24, help="skeleton jobs (default 24)")
+    parser.add_argument("--frames", type=int, default=150, help="frames per skeleton job at 30 fps (default 150)")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per engine, alternating (median kept)")
+    parser.add_argument("--mesh-clips", type=int, default=2, help="mesh jobs for the capacity estimate")
+    parser.add_argument("--mesh-frames", type=int, default=60, help="frames per mesh job")
+    parser.add_argument("--no-ray", action="store_true", help="skip Ray (ray_vs_local is recorded as null)")
+    args = parser.parse_args(argv)
+
+    clips = sorted((MOCAP / "cmu").glob("*.bvh"))
+    clips = [c for c in clips if c.stat().st_size > 0][: args.clips]
+    if len(clips) < args.clips:
+        raise SystemExit(f"only {len(clips)} clips in {MOCAP / 'cmu'}")
+    load_before = os.getloadavg()
+    record = {"config": {"clips": len(clips), "frames": args.frames, "fps": FPS, "size": 256, "style": "skeleton",
+                         "repeats": args.repeats, "cpu_count": os.cpu_count(),
+                         "python": sys.version.split()[0]}}
+    walls: dict[str, list[float]] = {"local1": [], "local2": [], "ray2": []}
+    startup = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        pools = {}
+        for workers in (1, 2):
+            start = time.perf_counter()
+            pools[workers] = LocalPool(workers)
+            pools[workers].warm()
+            startup[f"local{workers}_s"] = time.perf_counter() - start
+        if not args.no_ray:
+            start = time.perf_counter()
+            init_ray(2)
+            warm_ray(2)
+            startup["ray2_s"] = time.perf_counter() - start
+        engines = {
+            "local1": lambda jobs, cb: pools[1].run(jobs, retries=0, on_result=cb),
+            "local2": lambda jobs, cb: pools[2].run(jobs, retries=0, on_result=cb),
+        }
+        if not args.no_ray:
+            engines["ray2"] = lambda jobs, cb: run_ray(jobs, workers=2, retries=0, address=None, on_result=cb)
+        try:
+            for name, run in engines.items():  # one untimed round of real jobs per engine
+                timed(run, make_jobs(clips[:4], tmp / f"warm_{name}", style="skeleton", frames=args.frames))
+            for r in range(args.repeats):
+                for name, run in engines.items():
+                    jobs = make_jobs(clips, tmp / f"{name}_{r}", style="skeleton", frames=args.frames)
+                    seconds, _ = timed(run, jobs)
+                    walls[name].append(seconds)
+                    print(f"{name} run {r + 1}: {seconds:.1f} s for {len(jobs)} clips (load {os.getloadavg()[0]:.1f})")
+            mesh_jobs = make_jobs(clips[: args.mesh_clips], tmp / "mesh", style="mesh", frames=args.mesh_frames)
+            timed(engines["local1"], mesh_jobs[:1])  # first mesh job: Anny model and GL context
+            mesh_s, _ = timed(engines["local1"], make_jobs(clips[: args.mesh_clips], tmp / "mesh2", style="mesh",
+                                                           frames=args.mesh_frames))
+        finally:
+            for pool in pools.values():
+                pool.close()
+            if not args.no_ray:
+                import ray
+
+                ray.shutdown()
+    median = {k: statistics.median(v) for k, v in walls.items() if v}
+    skeleton_rate = len(clips) * args.frames / FPS / (median["local2"] * 2)  # video s per core-second
+    mesh_rate = args.mesh_clips * args.mesh_frames / FPS / mesh_s
+    corpus_video_s = 10_000 * 10.0
+    record.update({
+        "workers2_vs_1": median["local1"] / median["local2"],
+        "ray_vs_local": median["ray2"] / median["local2"] if "ray2" in median else None,
+        "clips_per_core_hour": len(clips) / (median["local2"] * 2 / 3600.0),
+        "capacity": {
+            "skeleton_video_s_per_core_s": skeleton_rate,
+            "mesh_video_s_per_core_s": mesh_rate,
+            "mesh_config": {"clips": args.mesh_clips, "frames": args.mesh_frames, "workers": 1, "wall_s": mesh_s},
+            "core_hours_10000_clips_10s_skeleton_256": corpus_video_s / skeleton_rate / 3600.0,
+            "core_hours_10000_clips_10s_mesh_256": corpus_video_s / mesh_rate / 3600.0,
+        },
+        "wall_s": walls, "median_wall_s": median, "startup_s": startup,
+        "load_average": {"before": list(load_before), "after": list(os.getloadavg())},
+        "note": "wall times exclude engine start-up (startup_s); ratios measured on a machine shared with other "
+                "jobs are depressed by their load (load_average)",
+    })
+    write_json(args.json, record)
+    print(f"workers2_vs_1 {record['workers2_vs_1']:.2f}, ray_vs_local "
+          f"{record['ray_vs_local'] if record['ray_vs_local'] is None else round(record['ray_vs_local'], 2)}, "
+          f"{record['clips_per_core_hour']:.0f} clips/core-hour; load {load_before[0]:.1f} -> {os.getloadavg()[0]:.1f}")
+    print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
