@@ -115,3 +115,20 @@ def test_bad_dlow_requests_exit_2(trained, tmp_path, capsys):
     assert main(["evaluate", "--model", str(base), "--model", str(base), "--data", str(data)]) == 2
     assert "share the name" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_maps_live_in_a_learned_conditional_prior():
+    """Over LCP-VAE, z_k = mu_c + sigma_c * (a_k eps + b_k): the maps are standardised by the base's prior."""
+    model = build_model("dlow", {"base_model": "lcpvae", "num_samples": 4, "hidden_dim": 8,
+                                 "base_config": {"hidden_dim": 8, "latent_dim": 3, "mlp_dim": 8}}).eval()
+    obs = torch.randn(2, 16, 51, generator=torch.Generator().manual_seed(0))
+    with torch.no_grad():
+        a, b = model.maps(obs)
+        eps = torch.randn(2, 1, 3)
+        cond, _ = model.base.condition_posterior(obs)
+        z = model.latents(obs, a, b, eps)
+    expected = cond.mu[:, None] + torch.exp(0.5 * cond.logvar)[:, None] * (a * eps + b)
+    torch.testing.assert_close(z, expected)
+    plain = build_model("dlow", {"num_samples": 4, "hidden_dim": 8,
+                                 "base_config": {"hidden_dim": 8, "latent_dim": 3, "mlp_dim": 8}})
+    assert plain.base_prior(obs) is None

@@ -20,6 +20,11 @@ Initialisation: the maps start as a stratified copy of the base prior: b_k are f
 points and a_k = 0.6, so z_k = 0.6 eps + b_k has the prior's unit marginal variance and the K samples start
 distinct (identical maps would have zero diversity gradient).
 
+Base models with a learned conditional prior (LCP-VAE's ``condition_posterior(obs)``: N(mu_c, sigma_c^2),
+what that model samples from) get the maps in the prior's standardised coordinates,
+z_k = mu_c + sigma_c * (a_k * eps + b_k), so the KL term and the initialisation keep z_k a plausible sample of
+*that* prior; other bases use N(0, I).
+
 The base model is rebuilt from ``base_model`` / ``base_config`` and its weights live in this model's state dict
 under ``base.``, so a DLow checkpoint is self-contained. ``num_samples`` is K; sampling more than K futures
 draws another shared noise per K.
@@ -112,6 +117,25 @@ class DLow(nn.Module):
         out = self.head(self.obs_encoder(obs)).view(B, K, 2, Z)
         return torch.exp(out[:, :, 0].clamp(-8.0, 4.0)), out[:, :, 1]
 
+    def base_prior(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor] | None:
+        """(mean, std) (B, Z) of the base model's conditional prior, or None for a N(0, I) prior."""
+        if not hasattr(self.base, "condition_posterior"):
+            return None
+        with torch.no_grad():
+            cond, _ = self.base.condition_posterior(obs)
+        return cond.mu, torch.exp(0.5 * cond.logvar)
+
+    def latents(self, obs: torch.Tensor, a: torch.Tensor, b: torch.Tensor, eps: torch.Tensor) -> torch.Tensor:
+        """z (B, K, Z) from the maps a, b (B, K, Z) and shared noise eps (B, 1, Z) (or (B, R, 1, Z) with a and b
+        given as (B, 1, K, Z)), in the base prior's coordinates."""
+        z = a * eps + b
+        prior = self.base_prior(obs)
+        if prior is None:
+            return z
+        mean, std = prior
+        shape = (obs.shape[0],) + (1,) * (z.dim() - 2) + (mean.shape[-1],)
+        return mean.view(shape) + std.view(shape) * z
+
     def _decode_all(self, obs: torch.Tensor, z: torch.Tensor, horizon: int) -> torch.Tensor:
         """Decode z (B, K, Z) for contexts obs (B, To, F) -> (B, K, horizon, F) in one base pass."""
         B, K = z.shape[:2]
@@ -123,7 +147,7 @@ class DLow(nn.Module):
         check_sequences(obs, future, feature_dim=c.feature_dim)
         a, b = self.maps(obs)  # (B, K, Z)
         eps = torch.randn(obs.shape[0], 1, self.latent_dim, dtype=obs.dtype, device=obs.device)
-        z = a * eps + b  # (B, K, Z)
+        z = self.latents(obs, a, b, eps)  # (B, K, Z)
         futures = self._decode_all(obs, z, future.shape[1])  # (B, K, Tf, F)
         recon = best_of_k_sse(futures, future)
         kl = 0.5 * (a.pow(2) + b.pow(2) - 1.0 - 2.0 * torch.log(a)).sum(-1).mean()
@@ -143,5 +167,5 @@ class DLow(nn.Module):
         a, b = self.maps(obs)
         rounds = math.ceil(num_samples / K)
         eps = randn((B, rounds, 1, self.latent_dim), like=obs, generator=generator)  # (B, R, 1, Z)
-        z = (a[:, None] * eps + b[:, None]).reshape(B, rounds * K, -1)[:, :num_samples]
+        z = self.latents(obs, a[:, None], b[:, None], eps).reshape(B, rounds * K, -1)[:, :num_samples]
         return self._decode_all(obs, z, horizon)
