@@ -2,16 +2,17 @@
 # Train the shipped motion checkpoints into motion2video/weights/, each with a model card
 # (weights/<name>.md: command, data, steps, wall time, held-out metrics).
 #
-#   scripts/train_shipped.sh                 # all five, two at a time (one torch thread each)
+#   scripts/train_shipped.sh                 # all six, two lanes (one torch thread each)
 #   STEPS_SCALE=0.1 scripts/train_shipped.sh # a quick smoke run (10% of the steps)
 #   ONLY="mtvae-add lcpvae" scripts/train_shipped.sh
 #
 # These step counts are the ones the shipped checkpoints were trained with (their model cards record the
-# exact commands). Budget: lane A 4,000 steps, lane B 4,400, side by side, one torch thread each; the
-# shipping run took 39 minutes on the shared 2-core machine while other jobs were running. Measured per
-# step (hidden 128, batch 64, one thread, moderately loaded): mtvae-add 0.15 s, behavior 0.11 s, lcpvae
-# 0.09 s, i.e. ~10 minutes per lane on otherwise idle cores. Logs and evaluation JSON go to
+# exact commands). Two lanes side by side, one torch thread each. Measured on the shared 2-core machine while
+# other jobs ran (wall time per model, training + held-out evaluation): lane A mtvae-add 4000 steps 23 min,
+# mtvae-add-dlow 600 steps 10 min, behavior 3000 steps 9 min; lane B lcpvae 3000 steps 11 min, mtvae-add-2d
+# 2500 steps 14 min, mtvae-add-face 1200 steps. About 45 minutes in all. Logs and evaluation JSON go to
 # out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
+# Afterwards: python scripts/make_results_corpus.py (docs/results.md, issue 8).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
