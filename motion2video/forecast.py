@@ -134,7 +134,7 @@ def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -
 
 
 def _shared_camera(fc: Forecast, size: int):
-    from renderers.camera import fit_camera
+    from motion2video.core.camera import fit_camera
 
     points = np.concatenate([fc.observed.reshape(-1, 3), fc.futures.reshape(-1, 3)])
     return fit_camera(points, size, size, margin=0.1)
@@ -149,7 +149,7 @@ def _render_skeleton_3d(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.nd
 
 
 def _render_skeleton_2d(fc: Forecast, size: int) -> tuple[np.ndarray, list[np.ndarray]]:
-    from renderers.camera import fit_image_framing
+    from motion2video.core.camera import fit_image_framing
     from renderers.skeleton import SkeletonRenderer, SkeletonStyle
 
     points = np.concatenate([fc.observed.reshape(-1, 2), fc.futures.reshape(-1, 2)])

@@ -202,7 +202,7 @@ def place_body(observed: np.ndarray, futures: np.ndarray, *, size: int,
     Returns:
         A :class:`BodyPlacement`.
     """
-    from renderers.camera import fit_camera, fit_image_framing, project
+    from motion2video.core.camera import fit_camera, fit_image_framing, project
 
     obs = np.asarray(observed, np.float64)
     fut = np.asarray(futures, np.float64)

@@ -98,7 +98,7 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
     total = motion.num_frames
     with _progress_bar(total, progress, f"render {style}") as bar:
         if style in ("skeleton", "heatmap"):
-            from renderers.camera import fit_camera, fit_image_framing
+            from motion2video.core.camera import fit_camera, fit_image_framing
             from renderers.skeleton import HeatmapRenderer, HeatmapStyle, SkeletonRenderer, SkeletonStyle
 
             joints = motion.joints

@@ -47,9 +47,9 @@ import torch
 
 from motion2video import metrics as M
 from motion2video.checkpoint import ModelBundle
+from motion2video.core.rotations import heading_of
 from motion2video.data import windows as W
 from motion2video.data.dataset import WindowSet, decode_samples
-from motion2video.data.procedural import heading_of
 from motion2video.errors import InputError
 from motion2video.models.behavior import BehaviorModel
 from motion2video.motion import FaceMotion, Motion
@@ -336,7 +336,7 @@ def render_sequence(seq: np.ndarray, *, layout: str, style: str, size: int, fps:
             return r.render(Motion(seq, fps))
     if style != "skeleton":
         raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
-    from renderers.camera import fit_camera
+    from motion2video.core.camera import fit_camera
     from renderers.skeleton import SkeletonRenderer, SkeletonStyle
 
     camera = fit_camera(seq.reshape(-1, 3), size, size, azimuth_deg=azimuth) if layout == "body3d" else None
@@ -453,7 +453,7 @@ def rendered_reference(fc, size: int):
     from motion2video.pipeline import BODY_ELEVATION_DEG, BODY_MARGIN, BODY_YFOV_DEG, place_body
     from motion2video.reference import Reference, ReferencePose
     from renderers.body import BodyRenderer
-    from renderers.camera import fit_camera
+    from motion2video.core.camera import fit_camera
 
     placement = place_body(fc.observed, fc.futures, size=size)
     start = placement.world_observed[0]  # (17, 3) front-facing start posture

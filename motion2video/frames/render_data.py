@@ -126,7 +126,7 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
     """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, clip index, start)."""
     from motion2video.motion import Motion
     from renderers.body import BodyRenderer, BodyStyle
-    from renderers.camera import project
+    from motion2video.core.camera import project
 
     spec = source.spec
     size = spec.image_size
@@ -210,7 +210,7 @@ def face_control_vertices(vertices: np.ndarray, *, count: int = FACE_CONTROL_POI
 
 def yawed_camera(camera, azimuth_deg: float):
     """The camera turned about the vertical axis through its target by ``azimuth_deg``."""
-    from renderers.camera import PinholeCamera
+    from motion2video.core.camera import PinholeCamera
 
     a = np.radians(azimuth_deg)
     rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
