@@ -95,35 +95,29 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
     if style == "mesh" and (motion.dim != 3 or motion.skeleton != "h36m-17"):
         raise InputError(f"style 'mesh' needs 3D h36m-17 joints, got {motion.skeleton} with D={motion.dim}",
                          motion.source)
+    from motion2video.stages.structure import layout_of, renderer_for
+
     total = motion.num_frames
+    layout = layout_of(motion)
     with _progress_bar(total, progress, f"render {style}") as bar:
         if style in ("skeleton", "heatmap"):
             from motion2video.core.camera import fit_camera, fit_image_framing
-            from renderers.skeleton import HeatmapRenderer, HeatmapStyle, SkeletonRenderer, SkeletonStyle
 
             joints = motion.joints
             if motion.dim == 3:
                 placement = {"camera": fit_camera(joints, size, size)}
             else:
                 placement = {"framing": fit_image_framing(joints, size, size)}
-            renderer = (SkeletonRenderer(style=SkeletonStyle(size=(size, size), palette=palette))
-                        if style == "skeleton" else HeatmapRenderer(style=HeatmapStyle(size=(size, size))))
+            options = {"palette": palette} if style == "skeleton" else {}
             chunks = []
-            with renderer:
+            with renderer_for(layout, style, size=size, **options) as renderer:
                 for start in range(0, total, CHUNK):
                     chunk = joints[start:start + CHUNK]
-                    chunks.append(renderer.render(chunk, skeleton=motion.skeleton, **placement))
+                    chunks.append(renderer.draw(chunk, skeleton=motion.skeleton, **placement))
                     bar.update(len(chunk))
             return np.concatenate(chunks)
-        if style == "mesh":
-            from renderers.body import BodyRenderer, BodyStyle
-
-            with BodyRenderer(BodyStyle(size=(size, size))) as renderer:
-                return renderer.render(motion, progress=bar.update)
-        from renderers.face import FaceRenderer, FaceStyle
-
-        with FaceRenderer(FaceStyle(size=(size, size))) as renderer:
-            return renderer.render(motion, progress=bar.update)
+        with renderer_for(layout, style, size=size) as renderer:  # mesh (body) or face
+            return renderer.draw(motion, progress=bar.update)
 
 
 def render_file(request: RenderRequest) -> RenderResult:

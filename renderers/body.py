@@ -43,7 +43,7 @@ from motion2video.core.rotations import (  # noqa: F401 (the rotation helpers' o
     slerp_rotations, swing_rotation,
 )
 from motion2video.core.skeletons import (
-    PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE, SPINE, THORAX, NECK, HEAD,
+    PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE, SPINE, NECK, HEAD,
     L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST,
 )
 from renderers import anny_model

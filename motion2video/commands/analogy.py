@@ -56,11 +56,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
-    from motion2video.analogy import analogy, analogy_model, render_analogy
+    from motion2video.apps.analogy import analogy, render_analogy
+    from motion2video.stages.latents import analogy_model
     from motion2video.checkpoint import load_model
     from motion2video.atomic import save_npz
     from motion2video.models.baselines import BASELINES
-    from motion2video.transfer import load_clip
+    from motion2video.stages.clips import load_clip
     from motion2video.video import write_video
 
     set_threads(args.threads)

@@ -50,7 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from motion2video.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import DatasetConfig
-    from motion2video.forecast import forecast, load_clip_for, render_forecast, save_forecast_npz
+    from motion2video.apps.sample import forecast, load_clip_for, render_forecast, save_forecast_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.video import write_video
 

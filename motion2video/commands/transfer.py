@@ -69,7 +69,9 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.checkpoint import load_model
     from motion2video.models.baselines import BASELINES
-    from motion2video.transfer import behavior_model, load_clip, render_transfer, sample_behaviors, transfer_behavior
+    from motion2video.apps.transfer import render_transfer, sample_behaviors, transfer_behavior
+    from motion2video.stages.clips import load_clip
+    from motion2video.stages.latents import behavior_model
     from motion2video.video import write_video
 
     set_threads(args.threads)
@@ -90,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     frame_model = reference = None
     if style == "frames":
         from motion2video.frames.checkpoint import load_frame_model
-        from motion2video.pipeline import DOMAIN_OF_LAYOUT
+        from motion2video.stages.structure import DOMAIN_OF_LAYOUT
         from motion2video.reference import load_reference
 
         frame_name = args.frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
