@@ -13,7 +13,7 @@ import numpy as np
 
 from motion2video.atomic import check_output_path
 from motion2video.errors import InputError
-from motion2video.io import load_motion, resample_motion
+from motion2video.formats.io import load_motion, resample_motion
 from motion2video.motion import FaceMotion, Motion
 from motion2video.video import VIDEO_SUFFIXES
 
@@ -95,7 +95,7 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
     if style == "mesh" and (motion.dim != 3 or motion.skeleton != "h36m-17"):
         raise InputError(f"style 'mesh' needs 3D h36m-17 joints, got {motion.skeleton} with D={motion.dim}",
                          motion.source)
-    from motion2video.stages.structure import layout_of, renderer_for
+    from renderers.registry import layout_of, renderer_for
 
     total = motion.num_frames
     layout = layout_of(motion)

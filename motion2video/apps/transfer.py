@@ -157,6 +157,64 @@ def sample_behaviors(bundle: ModelBundle, target: LoadedClip, *, num_samples: in
                           target_identity=target.identity)
 
 
+# --- the video's style (what the command asks; Python callers get the same defaults and checks) ----------------
+
+
+def requested_style(style: str | None, reference: str | Path | None) -> str | None:
+    """The style asked for, before the model is known: ``frames`` when only a reference image is given.
+
+    Raises:
+        InputError: a reference image with another style.
+    """
+    style = style or ("frames" if reference else None)
+    if reference and style != "frames":
+        raise InputError(f"--reference is only used with --style frames (got --style {style})", reference)
+    return style
+
+
+def style_for(layout: str, style: str | None) -> str:
+    """The style for a model's layout: ``style``, by default ``mesh`` (``skeleton`` for 2D body models).
+
+    Raises:
+        InputError: ``mesh`` for a 2D body model.
+    """
+    style = style or ("skeleton" if layout == "body2d" else "mesh")
+    if style == "mesh" and layout == "body2d":
+        raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+    return style
+
+
+def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, reference: str | Path | None = None,
+                       reference_pose: str | Path | None = None):
+    """The frame generator (default ``frames-<domain>-128`` for the model's domain) and the reference for
+    ``style="frames"``.
+
+    Returns:
+        (loaded frame model, :class:`~motion2video.reference.Reference` or None: the start posture rendered
+        as an Anny body becomes the reference of a 3D body model).
+    Raises:
+        InputError: a frame generator of the other domain, or no reference for a model that cannot render one.
+    """
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.reference import load_reference
+    from motion2video.stages.structure import DOMAIN_OF_LAYOUT
+
+    layout = bundle.data_config.layout
+    frame_name = frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
+    loaded = load_frame_model(frame_name)
+    domain = loaded.config.domain
+    if domain != DOMAIN_OF_LAYOUT[layout]:
+        raise InputError(f"this frame generator makes {domain} frames, but {bundle.name} moves a "
+                         f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
+    if reference:
+        return loaded, load_reference(reference, size=loaded.config.image_size, domain=domain,
+                                      pose_path=reference_pose)
+    if layout != "body3d":
+        raise InputError("--style frames needs --reference for this model (only 3D body models can render "
+                         "their own reference)")
+    return loaded, None
+
+
 # --- rendering ------------------------------------------------------------------------------------------
 
 

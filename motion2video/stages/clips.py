@@ -79,7 +79,7 @@ def load_clip(bundle, path: str | Path) -> LoadedClip:
         InputError: a folder, a missing or malformed file, body motion for a face model or the reverse, a body
         clip of another skeleton or 2D joints.
     """
-    from motion2video.io import load_motion
+    from motion2video.formats.io import load_motion
 
     path = Path(path)
     if path.is_dir():

@@ -6,7 +6,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from motion2video.core.errors import InputError
 from motion2video.video import add_border, label
+
+CELL_SIZES = (32, 2048)  # the smallest and largest grid cell the applications draw, pixels
+
+
+def check_cell_size(size: int) -> int:
+    """A grid cell's width and height in pixels, within :data:`CELL_SIZES` (InputError otherwise)."""
+    if not CELL_SIZES[0] <= size <= CELL_SIZES[1]:
+        raise InputError(f"--size must be in {CELL_SIZES[0]}..{CELL_SIZES[1]}, got {size}")
+    return int(size)
 
 
 def mark_segments(frames: np.ndarray, segments: list[tuple[int, tuple[int, int, int], str]], *,
