@@ -112,6 +112,15 @@ class ModelBundle:
         return self.meta.model
 
     @property
+    def label(self) -> str:
+        """What tables call it: the checkpoint's file name (``mtvae-add-dlow``), or the model name for a
+        baseline built on the fly."""
+        if self.path is None:
+            return self.meta.model
+        name = Path(self.path).name
+        return name[: -len(".safetensors")] if name.endswith(".safetensors") else name
+
+    @property
     def kind(self) -> str:
         return self.meta.kind
 

@@ -70,6 +70,14 @@ def fde_per_window(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return displacement(pred, gt)[:, :, -1].min(axis=1)
 
 
+def ade_per_frame(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """(T,) the displacement at each future frame of each window's best-of-K sample (the sample with the
+    lowest ADE), averaged over windows; its mean over T is :func:`ade`."""
+    d = displacement(pred, gt)  # (N, K, T)
+    best = d.mean(axis=2).argmin(axis=1)  # (N,)
+    return d[np.arange(d.shape[0]), best].mean(axis=0)
+
+
 def ade(pred: np.ndarray, gt: np.ndarray) -> float:
     """Best-of-K ADE averaged over windows (units of the frame vector)."""
     return float(ade_per_window(pred, gt).mean())

@@ -212,6 +212,7 @@ def train_model(
     resume: bool = False,
     progress: bool = True,
     device: str | torch.device = "cpu",
+    init_state: dict[str, torch.Tensor] | None = None,
 ) -> TrainResult:
     """Train ``model_name`` on ``dataset`` and write the final checkpoint to ``out``.
 
@@ -223,6 +224,8 @@ def train_model(
         out: final checkpoint path (``.safetensors``).
         resume: continue from ``out.last.safetensors`` + ``out.last.optim.safetensors``.
         progress: show a tqdm progress bar.
+        init_state: weights loaded before training (e.g. the frozen ``base.`` model of ``dlow``); every
+            key must exist in the model.
     Returns:
         A :class:`TrainResult`.
     """
@@ -239,6 +242,10 @@ def train_model(
         model = build_model(model_name, full_config)
     except (KeyError, TypeError, ValueError) as err:
         raise InputError(f"bad config for model {model_name!r}: {err}") from None
+    if init_state is not None:
+        unexpected = model.load_state_dict(init_state, strict=False).unexpected_keys
+        if unexpected:
+            raise InputError(f"initial weights do not fit model {model_name!r}: unexpected {unexpected[:3]}")
     model.to(device)
     optimizers = make_optimizers(model, config)
     start_step, history, wall_before = 0, [], 0.0

@@ -59,7 +59,7 @@ def test_evaluate_writes_the_json_table(trained, small_data, tmp_path, capsys):
                  "--stride", "32", "--json", str(out)])
     assert code == 0
     result = json.loads(out.read_text())
-    assert set(result) == {"protocol", "results"}
+    assert set(result) == {"protocol", "results", "ade_per_frame"}
     assert list(result["results"]) == ["cvae", "zero-velocity", "last-step", "sequence-motion"]
     for row in result["results"].values():
         assert {"ade", "fde", "mmade", "mmfde", "apd"} <= set(row)

@@ -12,6 +12,8 @@ from motion2video.errors import InputError
 EXAMPLES = """\
 examples:
   motion2video evaluate --model mtvae-add --data ../shared/data/mocap --samples 50 --json out/eval.json
+  motion2video evaluate --model mtvae-add --model mtvae-add-dlow --model lcpvae --data ../shared/data/mocap \
+      --plot out/ade_per_frame.png
   motion2video evaluate --model runs/cvae.safetensors --data ../shared/data/mocap/cmu/13_10.bvh
   motion2video evaluate --model mtvae-add-face --data ../shared/data/face/livelinkface/S07-001.csv
 
@@ -32,10 +34,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         epilog=EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--model", required=True, help="checkpoint path or shipped model name")
+    p.add_argument("--model", required=True, action="append",
+                   help="checkpoint path or shipped model name; repeat to compare models on the same windows "
+                   "(they must share the layout and data settings; the first one's split picks the windows)")
     p.add_argument("--data", required=True, help="BVH folder or motion file (face models: .csv / .npz captures)")
     p.add_argument("--samples", type=int, default=50, help="K futures per window (default 50)")
     p.add_argument("--json", default=None, help="write the results as JSON here")
+    p.add_argument("--plot", default=None, help="draw ADE per future frame of every model and baseline into this PNG")
     p.add_argument("--stride", type=int, default=16, help="frames between evaluated windows (default 16)")
     p.add_argument("--split", choices=("test", "val", "train", "all"), default="test",
                    help="which clips (default test: held-out clips and clips the checkpoint never saw)")
@@ -60,9 +65,21 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--samples must be >= 1, got {args.samples}")
     if args.stride < 1:
         raise InputError(f"--stride must be >= 1, got {args.stride}")
-    if args.json is not None and not Path(args.json).parent.exists():
-        raise InputError("the folder for --json does not exist", args.json)
-    bundle = load_model(args.model)
+    for option in ("json", "plot"):
+        target = getattr(args, option)
+        if target is not None:
+            Path(target).parent.mkdir(parents=True, exist_ok=True)
+    if args.plot is not None and not args.plot.lower().endswith(".png"):
+        raise InputError("--plot writes a .png file", args.plot)
+    models = [load_model(name) for name in args.model]
+    bundle = models[0]
+    for other in models[1:]:
+        if other.data_config != bundle.data_config:
+            raise InputError(f"{other.label} was trained with other data settings than {bundle.label}: "
+                             "compare models of one layout and window length", other.path)
+    names = [m.label for m in models]
+    if len(set(names)) != len(names):
+        raise InputError(f"two models share the name {names!r}: give checkpoints with distinct file names")
     cfg = bundle.data_config
     dataset = build_dataset(args.data, cfg, split=bundle.meta.split, stats=bundle.stats,
                             recorded_only=args.recorded_only)
@@ -72,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"no clip of the {args.split} split is long enough: a window needs {cfg.length} frames "
                          f"at {cfg.fps:g} fps ({cfg.observed} observed + {cfg.future} future), the longest has "
                          f"{longest}", args.data)
-    bundles = [bundle] + [baseline_bundle(name, cfg, stats=bundle.stats) for name in BASELINES]
+    bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in BASELINES]
     protocol = EvalProtocol(samples=args.samples, stride=args.stride, split=args.split, seed=args.seed)
     val = dataset.windows("val", stride=args.stride) if args.extended else None
     result = evaluate_bundles(bundles, windows, protocol=protocol, extended=args.extended, val_windows=val)
@@ -84,5 +101,12 @@ def run(args: argparse.Namespace) -> int:
     print(result.table(columns))
     if args.json is not None:
         out = write_json(args.json, result.to_json())
+        print(f"wrote {out}")
+    if args.plot is not None:
+        from motion2video.plots import plot_ade_per_frame
+
+        out = plot_ade_per_frame(result.ade_per_frame, args.plot, fps=cfg.fps, units=result.protocol["units"].split(" (")[0],
+                                 best_of=args.samples,
+                                 title=f"{len(windows)} {args.split} windows from {len(result.protocol['clips'])} clips")
         print(f"wrote {out}")
     return 0

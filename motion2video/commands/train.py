@@ -39,6 +39,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model", required=True, help="registered model name, e.g. mtvae-add")
     p.add_argument("--data", required=True, help="folder of BVH files (with manifest.csv), or face captures")
     p.add_argument("-o", "--output", required=True, help="final checkpoint (.safetensors)")
+    p.add_argument("--base", default=None,
+                   help="--model dlow only: the trained checkpoint (path or shipped name) DLow samples from; its "
+                   "data settings, statistics and split are reused")
     p.add_argument("--config", default=None, help="JSON object or JSON file: {\"model\": .., \"data\": .., \"train\": ..}")
     p.add_argument("--steps", type=int, default=None, help="optimisation steps (default 3000)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
@@ -97,6 +100,30 @@ def _dataclass(cls, values: dict, section: str):
         raise InputError(f"--config {section!r}: {err}") from None
 
 
+def _dlow_base(base: str | None, cfg: dict) -> tuple[dict, dict]:
+    """--model dlow: the config completed from the base checkpoint, and the base weights under ``base.``."""
+    import dataclasses
+
+    from safetensors import safe_open
+
+    from motion2video.checkpoint import read_meta, resolve_checkpoint
+
+    if base is None:
+        raise InputError("--model dlow needs --base CHECKPOINT (the trained model to sample from)")
+    path = resolve_checkpoint(base)
+    meta = read_meta(path)
+    if meta.kind != "stochastic" or meta.model == "dlow":
+        raise InputError(f"--base must be a trained latent-variable model, not {meta.model!r}", path)
+    if cfg["data"]:
+        raise InputError("--model dlow reuses the base model's data settings; drop the 'data' section of --config")
+    model = {**cfg["model"], "base_model": meta.model,
+             "base_config": {k: v for k, v in meta.config.items() if k != "feature_dim"}}
+    with safe_open(str(path), framework="pt") as f:
+        state = {"base." + k: f.get_tensor(k) for k in f.keys()}
+    data = {f.name: getattr(meta.data_config, f.name) for f in dataclasses.fields(meta.data_config)}
+    return {**cfg, "model": model, "data": data, "base_meta": meta}, state
+
+
 def run(args: argparse.Namespace) -> int:
     import motion2video.checkpoint  # noqa: F401  (registers every model)
     from motion2video.data.dataset import DatasetConfig, build_dataset
@@ -113,6 +140,11 @@ def run(args: argparse.Namespace) -> int:
     if args.steps is not None and args.steps < 1:
         raise InputError(f"--steps must be >= 1, got {args.steps}")
     cfg = parse_config(args.config)
+    init_state = None
+    if args.model == "dlow":
+        cfg, init_state = _dlow_base(args.base, cfg)
+    elif args.base is not None:
+        raise InputError("--base is only for --model dlow")
     _dataclass(MODEL_REGISTRY[args.model].config_cls, cfg["model"], "model")  # check before loading data
     data_values = dict(cfg["data"])
     if args.layout != "auto":
@@ -125,12 +157,16 @@ def run(args: argparse.Namespace) -> int:
     if args.seed is not None:
         train_values["seed"] = args.seed
     train_config = _dataclass(TrainConfig, train_values, "train")
-    dataset = build_dataset(args.data, data_config)
+    base_meta = cfg.get("base_meta")
+    if base_meta is not None:  # DLow: the base model's split and statistics, so its decoder sees its own units
+        dataset = build_dataset(args.data, data_config, split=base_meta.split, stats=base_meta.stats)
+    else:
+        dataset = build_dataset(args.data, data_config)
     print(f"data: {dataset.summary['clips']} clips, {dataset.summary['frames']} frames at {data_config.fps:g} fps; "
           f"train/val/test clips {len(dataset.split.train)}/{len(dataset.split.val)}/{len(dataset.split.test)}; "
           f"layout {data_config.layout} ({dataset.num_features} features)")
     result = train_model(model_name=args.model, model_config=cfg["model"], dataset=dataset, config=train_config,
-                         out=args.output, resume=args.resume, progress=not args.no_progress)
+                         out=args.output, resume=args.resume, progress=not args.no_progress, init_state=init_state)
     val = "n/a" if result.val_loss is None else f"{result.val_loss:.4g}"
     print(f"wrote {result.path} ({result.steps} steps, {result.wall_time_s:.1f} s, "
           f"train loss {result.train_loss:.4g}, val loss {val})")

@@ -59,13 +59,16 @@ class EvalResult:
     Attributes:
         protocol: a JSON-able description of what was measured.
         results: method name -> metric name -> value.
+        ade_per_frame: method name -> best-of-K displacement at each future frame (see
+            :func:`motion2video.metrics.ade_per_frame`), the curve ``evaluate --plot`` draws.
     """
 
     protocol: dict
     results: dict[str, dict[str, float]] = field(default_factory=dict)
+    ade_per_frame: dict[str, list[float]] = field(default_factory=dict)
 
     def to_json(self) -> dict:
-        return {"protocol": self.protocol, "results": self.results}
+        return {"protocol": self.protocol, "results": self.results, "ade_per_frame": self.ade_per_frame}
 
     def table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """A fixed-width text table, one row per method."""
@@ -115,8 +118,8 @@ def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
 
 def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol: EvalProtocol,
                      extended: bool = False, val_windows: WindowSet | None = None) -> EvalResult:
-    """Score every bundle on ``windows`` (all bundles must share the layout and normalisation stats the
-    windows were built with).
+    """Score every bundle on ``windows`` (all bundles must share the layout; a bundle whose normalisation
+    statistics differ from the first one's, which the windows were built with, gets its own normalisation).
 
     Args:
         bundles: models and baselines; their names key the results.
@@ -147,27 +150,36 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
         "metric_space": "root-relative non-root joints" if layout.is_body else "face parameters",
     })
 
-    def to_metric(samples_norm: np.ndarray) -> np.ndarray:
-        return metric_vectors(stats.denormalize(samples_norm), layout)
-
     for bundle in bundles:
-        samples = sample_futures(bundle.model, windows.obs, num_samples=protocol.samples, horizon=horizon,
-                                 seed=protocol.seed, batch_size=protocol.batch_size)
+        if bundle.layout.kind != layout.kind:
+            raise ValueError(f"{bundle.label} works on {bundle.layout.kind}, not {layout.kind}")
+        own = bundle.stats
+
+        def to_metric(samples_norm: np.ndarray, own=own) -> np.ndarray:
+            return metric_vectors(own.denormalize(samples_norm), layout)
+
+        def renorm(x: np.ndarray, own=own) -> np.ndarray:
+            same = own is stats or (np.array_equal(own.mean, stats.mean) and np.array_equal(own.std, stats.std))
+            return x if same else own.normalize(stats.denormalize(x))
+
+        samples = sample_futures(bundle.model, renorm(windows.obs), num_samples=protocol.samples,
+                                 horizon=horizon, seed=protocol.seed, batch_size=protocol.batch_size)
         pred = to_metric(samples)
         row = dlow_metrics(pred, gt, last, threshold=threshold)
+        result.ade_per_frame[bundle.label] = [float(v) for v in M.ade_per_frame(pred, gt)]
         if extended:
             row["s_mse"] = M.best_of_k_mse(pred, gt)
-            rec = posterior_futures(bundle.model, windows.obs, windows.future, num_samples=protocol.samples,
+            rec = posterior_futures(bundle.model, renorm(windows.obs), renorm(windows.future), num_samples=protocol.samples,
                                     seed=protocol.seed, batch_size=protocol.batch_size)
             if rec is not None:
                 row["r_mse"] = M.best_of_k_mse(to_metric(rec), gt)
             if val_windows is not None and len(val_windows) > 0:
-                val_pred = to_metric(sample_futures(bundle.model, val_windows.obs, num_samples=protocol.samples,
+                val_pred = to_metric(sample_futures(bundle.model, renorm(val_windows.obs), num_samples=protocol.samples,
                                                     horizon=horizon, seed=protocol.seed + 1,
                                                     batch_size=protocol.batch_size))
                 val_gt = metric_vectors(val_windows.raw[:, obs_len:], layout)
                 h = M.select_parzen_bandwidth(val_pred, val_gt)
                 row["cll"] = float(M.parzen_log_likelihood(pred, gt, bandwidth=h).mean())
                 row["parzen_bandwidth"] = h
-        result.results[bundle.name] = {k: float(v) for k, v in row.items()}
+        result.results[bundle.label] = {k: float(v) for k, v in row.items()}
     return result

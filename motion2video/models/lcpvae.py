@@ -68,6 +68,11 @@ class LCPVAEConfig:
     kl_midpoint: int = 500  # logistic annealing: lambda = kl_weight / (1 + exp(-(step - midpoint) / width))
     kl_width: float = 100.0
     teacher_forcing_steps: int = 1000  # P_tf: 1 -> 0 linearly over these steps
+    # Weight of KL(q(z_c | obs) || N(0, I)) relative to the other terms (1 = Eq. 9). The learned prior is
+    # what inference samples from; with weight 1 the CS-VAE's observation reconstruction (summed MSE over
+    # 16 frames x 51 features) outweighs it and q(z_c | obs) shrinks to sigma_c ~ 0.3: a collapsed sampler
+    # (docs/results.md, "Why LCP-VAE collapsed"). A larger weight keeps the prior wide.
+    cs_kl_weight: float = 1.0
 
 
 def _mlp(in_dim: int, hidden_dim: int, out_dim: int) -> nn.Sequential:
@@ -144,7 +149,7 @@ class LCPVAE(LatentSampler, nn.Module):
         rec_future = reconstruction_mse(fut_rec, future)
         kl_cs, kl_lcp = self.prior_kl(cond, data)
         lam = c.kl_weight * logistic_ramp(step, midpoint=c.kl_midpoint, width=c.kl_width)
-        total = lam * (kl_cs + kl_lcp) + rec_obs + rec_future  # Eq. 9
+        total = lam * (c.cs_kl_weight * kl_cs + kl_lcp) + rec_obs + rec_future  # Eq. 9 (cs_kl_weight 1)
         terms = {
             "recon": float(rec_future.detach()),
             "recon_obs": float(rec_obs.detach()),
