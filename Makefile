@@ -24,9 +24,11 @@ demo: setup
 	$(PY) scripts/demo.py --out out
 
 test: setup
+	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -q
 
 test-fast: setup
+	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -q -m "not slow"
 
 golden: setup

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Callable, Iterable
 
 from motion2video.errors import InputError
+from motion2video.video import ENCODER_THREADS_ENV
 
 ENGINES = ("local", "ray")
 COMMANDS = ("render", "sample", "synthesize", "transfer", "analogy")
@@ -321,6 +322,7 @@ def init_worker() -> None:
     command modules) imported once, so every job after the first pays no import cost."""
     global _PARSER
     os.environ.setdefault("TQDM_DISABLE", "1")
+    os.environ.setdefault(ENCODER_THREADS_ENV, "1")  # one encoder thread per worker: the workers fill the cores
     if _PARSER is None:
         from motion2video.cli import build_parser
         import motion2video.render  # noqa: F401  (the renderers most jobs use)

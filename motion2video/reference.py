@@ -87,7 +87,7 @@ def save_reference_pose(path: str | Path, pose: ReferencePose) -> Path:
 
 def load_reference_pose(path: str | Path) -> ReferencePose:
     """Read a reference pose file; InputError (naming it) when it is missing or malformed."""
-    from renderers.camera import PinholeCamera
+    from motion2video.core.camera import PinholeCamera
 
     path = Path(path)
     if not path.is_file():
@@ -209,7 +209,7 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
         return ReferencePose("body", size, size, points=pts * fit.scale + np.asarray(fit.offset))
     # The padding is centred, so the principal point stays centred: only the vertical field of view of
     # the square changes when the width was the longer side.
-    from renderers.camera import PinholeCamera
+    from motion2video.core.camera import PinholeCamera
 
     cam = pose.camera
     yfov = cam.yfov if h >= w else 2.0 * np.arctan(np.tan(0.5 * cam.yfov) * w / h)

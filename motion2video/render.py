@@ -15,7 +15,7 @@ import numpy as np
 
 from motion2video.atomic import check_output_path
 from motion2video.errors import InputError
-from motion2video.io import load_motion, resample_motion
+from motion2video.formats.io import load_motion, resample_motion
 from motion2video.motion import FaceMotion, Motion
 from motion2video.video import VIDEO_SUFFIXES
 
@@ -105,35 +105,28 @@ def iter_frames(motion: Motion | FaceMotion, *, style: str, size: int, palette: 
 
 
 def _iter_frames(motion, style: str, size: int, palette: str, progress: bool) -> Iterator[np.ndarray]:
+    from renderers.registry import layout_of, renderer_for
+
     total = motion.num_frames
+    layout = layout_of(motion)
     with _progress_bar(total, progress, f"render {style}") as bar:
         if style in ("skeleton", "heatmap"):
-            from renderers.camera import fit_camera, fit_image_framing
-            from renderers.skeleton import HeatmapRenderer, HeatmapStyle, SkeletonRenderer, SkeletonStyle
+            from motion2video.core.camera import fit_camera, fit_image_framing
 
             joints = motion.joints
             if motion.dim == 3:
                 placement = {"camera": fit_camera(joints, size, size)}
             else:
                 placement = {"framing": fit_image_framing(joints, size, size)}
-            renderer = (SkeletonRenderer(style=SkeletonStyle(size=(size, size), palette=palette))
-                        if style == "skeleton" else HeatmapRenderer(style=HeatmapStyle(size=(size, size))))
-            with renderer:
+            options = {"palette": palette} if style == "skeleton" else {}
+            with renderer_for(layout, style, size=size, **options) as renderer:
                 for start in range(0, total, CHUNK):
-                    chunk = renderer.render(joints[start:start + CHUNK], skeleton=motion.skeleton, **placement)
+                    chunk = renderer.draw(joints[start:start + CHUNK], skeleton=motion.skeleton, **placement)
                     bar.update(len(chunk))
                     yield chunk
             return
-        if style == "mesh":
-            from renderers.body import BodyRenderer, BodyStyle
-
-            renderer = BodyRenderer(BodyStyle(size=(size, size)))
-        else:
-            from renderers.face import FaceRenderer, FaceStyle
-
-            renderer = FaceRenderer(FaceStyle(size=(size, size)))
-        with renderer:
-            for chunk in renderer.iter_frames(motion):
+        with renderer_for(layout, style, size=size) as renderer:  # mesh (body) or face
+            for chunk in renderer.iter_draw(motion):
                 bar.update(len(chunk))
                 yield chunk
 

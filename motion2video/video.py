@@ -38,6 +38,9 @@ from motion2video.errors import InputError
 VIDEO_SUFFIXES = (".mp4", ".gif")
 IMAGE_SUFFIXES = (".png",)
 X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow")
+# Encoder threads of libx264 (default: ffmpeg's own choice, about one per core). `motion2video batch` sets 1
+# in its workers: the workers already fill the cores, and x264's extra threads only contend with them.
+ENCODER_THREADS_ENV = "MOTION2VIDEO_ENCODER_THREADS"
 GREEN = (0, 200, 0)  # observed frames
 RED = (220, 0, 0)  # predicted frames
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
@@ -210,8 +213,10 @@ class VideoWriter:
         if self.gif:
             return head + ["-vf", "split[a][b];[a]palettegen=stats_mode=single:reserve_transparent=0[p];"
                            "[b][p]paletteuse=new=1:dither=none", "-loop", "0", "-f", "gif", str(self._tmp)]
-        return head + ["-c:v", "libx264", "-preset", self.preset, "-crf", str(self.crf), "-pix_fmt", "yuv420p",
-                       "-movflags", "+faststart", "-f", "mp4", str(self._tmp)]
+        threads = os.environ.get(ENCODER_THREADS_ENV, "").strip()
+        threading = ["-threads", threads] if threads.isdigit() and int(threads) > 0 else []
+        return head + ["-c:v", "libx264", *threading, "-preset", self.preset, "-crf", str(self.crf),
+                       "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", str(self._tmp)]
 
     def write(self, frames: np.ndarray) -> None:
         """Encode one (H, W, 3) frame or a (t, H, W, 3) chunk of uint8 RGB frames (all the same size)."""

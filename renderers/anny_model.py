@@ -83,7 +83,7 @@ def get_anny() -> "_anny_t.Anny":
 
 
 def _check_facial_actions(model) -> None:
-    from motion2video.motion import ARKIT_NAMES
+    from motion2video.core.motion import ARKIT_NAMES
 
     if tuple(model.facial_action_labels) != ARKIT_NAMES:
         raise RuntimeError("Anny's facial_action_labels differ from motion2video.motion.ARKIT_NAMES")

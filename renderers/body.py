@@ -35,142 +35,28 @@ from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import Motion
+from motion2video.core.camera import PinholeCamera, fit_camera
+from motion2video.core.errors import InputError
+from motion2video.core.motion import Motion
+from motion2video.core.rotations import (  # noqa: F401 (the rotation helpers' old import path)
+    _normalize, axis_angle_to_matrix, frame_from_axes, matrix_from_quaternion, quaternion_from_matrix,
+    slerp_rotations, swing_rotation,
+)
+from motion2video.core.skeletons import (
+    PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE, SPINE, NECK, HEAD,
+    L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST,
+)
 from renderers import anny_model
 from renderers.anny_model import AnnyRest
 from renderers.base import RendererBase
-from renderers.camera import PinholeCamera, fit_camera
 from renderers.mesh import MeshRenderer
 
-# Canonical H36M-17 indices used below.
-PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE = 0, 1, 2, 3, 4, 5, 6
-SPINE, THORAX, NECK, HEAD = 7, 8, 9, 10
-L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST = 11, 12, 13, 14, 15, 16
 
 SPINE_BONES = ("spine05", "spine04", "spine03", "spine02", "spine01")
 SPINE_BLEND = (0.1, 0.3, 0.55, 0.8, 1.0)  # pelvis -> chest orientation weight per spine bone
 NECK_TILT_RANGE = (6.0, 24.0)  # plausible clip-median forward tilt of neck -> head, degrees (Anny: 14)
 KEEP_VERTICES_FRAMES = 300  # clips up to this long keep their posed vertices between camera fit and render
 FLAT_FOOT_RANGE = 0.12  # metres above the clip's floor level over which a foot turns from flat to free
-
-
-# --- rotations (pure, batched) -----------------------------------------------------------------------
-
-
-def _normalize(v: np.ndarray, eps: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
-    """Unit vectors along the last axis and a mask of which inputs were long enough."""
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    ok = n[..., 0] > eps
-    return v / np.maximum(n, eps), ok
-
-
-def swing_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Smallest rotation taking direction ``a`` to direction ``b``.
-
-    Args:
-        a, b: (..., 3) directions (any length; a zero-length one gives the identity).
-    Returns:
-        (..., 3, 3) rotation matrices R with R @ a_hat = b_hat.
-    """
-    a_hat, ok_a = _normalize(np.asarray(a, np.float64))
-    b_hat, ok_b = _normalize(np.asarray(b, np.float64))
-    v = np.cross(a_hat, b_hat)  # (..., 3) axis * sin
-    c = np.sum(a_hat * b_hat, axis=-1)  # (...,) cos
-    shape = c.shape
-    eye = np.broadcast_to(np.eye(3), shape + (3, 3))
-    vx = np.zeros(shape + (3, 3))
-    vx[..., 0, 1], vx[..., 0, 2] = -v[..., 2], v[..., 1]
-    vx[..., 1, 0], vx[..., 1, 2] = v[..., 2], -v[..., 0]
-    vx[..., 2, 0], vx[..., 2, 1] = -v[..., 1], v[..., 0]
-    k = 1.0 / np.maximum(1.0 + c, 1e-12)
-    rot = eye + vx + (vx @ vx) * k[..., None, None]
-    # Opposite directions: half a turn about any axis perpendicular to a.
-    opposite = c < -1.0 + 1e-9
-    if np.any(opposite):
-        helper = np.where(np.abs(a_hat[..., :1]) < 0.9, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
-        axis, _ = _normalize(np.cross(a_hat, helper))
-        half_turn = 2.0 * axis[..., :, None] * axis[..., None, :] - eye
-        rot = np.where(opposite[..., None, None], half_turn, rot)
-    return np.where((ok_a & ok_b)[..., None, None], rot, eye)
-
-
-def frame_from_axes(x: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Right-handed orthonormal frame with first axis along ``x`` and third axis as close to ``up`` as
-    possible (Gram-Schmidt).
-
-    Args:
-        x, up: (..., 3) vectors.
-    Returns:
-        (..., 3, 3) rotation whose columns are the frame's x, y = z cross x, z axes.
-    """
-    x_hat, _ = _normalize(np.asarray(x, np.float64))
-    up = np.asarray(up, np.float64)
-    z = up - np.sum(up * x_hat, axis=-1, keepdims=True) * x_hat
-    z_hat, ok = _normalize(z)
-    # Degenerate (up parallel to x): any z perpendicular to x.
-    fallback, _ = _normalize(np.cross(x_hat, np.array([0.0, 1.0, 0.0])) + 1e-6 * np.array([0.0, 0.0, 1.0]))
-    z_hat = np.where(ok[..., None], z_hat, fallback)
-    y_hat = np.cross(z_hat, x_hat)
-    return np.stack([x_hat, y_hat, z_hat], axis=-1)
-
-
-def quaternion_from_matrix(rot: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotations -> (..., 4) unit quaternions (w, x, y, z) with w >= 0."""
-    m = np.asarray(rot, np.float64)
-    trace = m[..., 0, 0] + m[..., 1, 1] + m[..., 2, 2]
-    candidates = np.stack([
-        np.stack([1.0 + trace, m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0],
-                  m[..., 1, 0] - m[..., 0, 1]], -1),
-        np.stack([m[..., 2, 1] - m[..., 1, 2], 1.0 + m[..., 0, 0] - m[..., 1, 1] - m[..., 2, 2],
-                  m[..., 0, 1] + m[..., 1, 0], m[..., 0, 2] + m[..., 2, 0]], -1),
-        np.stack([m[..., 0, 2] - m[..., 2, 0], m[..., 0, 1] + m[..., 1, 0],
-                  1.0 - m[..., 0, 0] + m[..., 1, 1] - m[..., 2, 2], m[..., 1, 2] + m[..., 2, 1]], -1),
-        np.stack([m[..., 1, 0] - m[..., 0, 1], m[..., 0, 2] + m[..., 2, 0], m[..., 1, 2] + m[..., 2, 1],
-                  1.0 - m[..., 0, 0] - m[..., 1, 1] + m[..., 2, 2]], -1),
-    ], axis=-2)  # (..., 4 candidates, 4); candidate i is 4 q_i q, best conditioned for the largest q_i
-    diag = np.stack([trace, m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]], -1)  # (..., 4)
-    best = np.argmax(diag, axis=-1)
-    q = np.take_along_axis(candidates, best[..., None, None], axis=-2)[..., 0, :]  # (..., 4)
-    q, _ = _normalize(q)
-    return np.where(q[..., :1] < 0, -q, q)
-
-
-def matrix_from_quaternion(q: np.ndarray) -> np.ndarray:
-    """(..., 4) quaternions (w, x, y, z) -> (..., 3, 3) rotations."""
-    q, _ = _normalize(np.asarray(q, np.float64))
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], -2)
-
-
-def slerp_rotations(a: np.ndarray, b: np.ndarray, weight: np.ndarray | float) -> np.ndarray:
-    """Rotation a fraction ``weight`` of the way from ``a`` to ``b`` (along the shortest path).
-
-    Args:
-        a, b: (..., 3, 3) rotations.
-        weight: (...) or scalar in [0, 1].
-    Returns:
-        (..., 3, 3) rotations: ``a`` at weight 0, ``b`` at weight 1.
-    """
-    rel = quaternion_from_matrix(b @ np.swapaxes(a, -1, -2))  # (..., 4), w >= 0
-    half = np.arctan2(np.linalg.norm(rel[..., 1:], axis=-1), rel[..., 0])  # (...) half angle
-    axis, _ = _normalize(rel[..., 1:])
-    new_half = np.asarray(weight, np.float64) * half
-    q = np.concatenate([np.cos(new_half)[..., None], np.sin(new_half)[..., None] * axis], axis=-1)
-    return matrix_from_quaternion(q) @ a
-
-
-def axis_angle_to_matrix(rotvec: np.ndarray) -> np.ndarray:
-    """(..., 3) axis-angle vectors (radians) -> (..., 3, 3) rotations."""
-    rotvec = np.asarray(rotvec, np.float64)
-    angle = np.linalg.norm(rotvec, axis=-1)
-    axis, _ = _normalize(rotvec)
-    q = np.concatenate([np.cos(angle / 2)[..., None], np.sin(angle / 2)[..., None] * axis], axis=-1)
-    return matrix_from_quaternion(q)
 
 
 # --- inverse kinematics ------------------------------------------------------------------------------

@@ -25,13 +25,13 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import FaceMotion
+from motion2video.core.camera import PinholeCamera
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion
+from motion2video.core.rotations import axis_angle_to_matrix
 from renderers import anny_model
 from renderers.anny_model import AnnyRest
 from renderers.base import RendererBase
-from renderers.body import axis_angle_to_matrix
-from renderers.camera import PinholeCamera
 from renderers.mesh import MeshRenderer
 
 STYLES = ("appearance", "structure")

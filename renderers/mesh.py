@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from renderers.camera import PinholeCamera, project
+from motion2video.core.camera import PinholeCamera, project
 
 PLATFORMS = ("osmesa", "egl")
 _PLATFORM_CLASSES = {"osmesa": "OSMesaPlatform", "egl": "EGLPlatform"}

@@ -35,11 +35,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import Motion
-from motion2video.skeletons import H36M_17, OPENPOSE_18, Skeleton, get_skeleton
+from motion2video.core.camera import ImageFraming, PinholeCamera, fit_camera, fit_image_framing, project
+from motion2video.core.errors import InputError
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import H36M_17, OPENPOSE_18, Skeleton, get_skeleton
 from renderers.base import RendererBase
-from renderers.camera import ImageFraming, PinholeCamera, fit_camera, fit_image_framing, project
 
 SHIFT = 4  # sub-pixel bits for OpenCV drawing
 _ONE = 1 << SHIFT

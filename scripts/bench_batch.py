@@ -1,6 +1,6 @@
 """Batch throughput, measured side by side in one run and written as JSON.
 
-    python scripts/bench_batch.py --json out/bench_batch.json [--clips 24] [--frames 150] [--repeats 3]
+    python scripts/bench_batch.py --json out/bench_batch.json [--clips 24] [--frames 300] [--repeats 3]
 
 The same jobs (``render CLIP --style skeleton --size 256 --fps 30 --frames F`` for the first ``--clips``
 BVH clips of ``../shared/data/mocap/cmu``, every output written, ``--force``) run on:
@@ -64,7 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", type=Path, required=True, help="output JSON file")
     parser.add_argument("--clips", type=int, default=24, help="skeleton jobs (default 24)")
-    parser.add_argument("--frames", type=int, default=150, help="frames per skeleton job at 30 fps (default 150)")
+    parser.add_argument("--frames", type=int, default=300, help="frames per skeleton job at 30 fps (default 300: the 10-s clips of the capacity plan)")
     parser.add_argument("--repeats", type=int, default=3, help="runs per engine, alternating (median kept)")
     parser.add_argument("--mesh-clips", type=int, default=2, help="mesh jobs for the capacity estimate")
     parser.add_argument("--mesh-frames", type=int, default=60, help="frames per mesh job")

@@ -9,29 +9,17 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from motion2video import __version__
+from motion2video.benchtools import median_seconds as _median_time
 from motion2video.frames.data import structure_channels
 from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate,
                                        reconstruction_loss)
-
-
-def _median_time(fn, *, repeats: int, warmup: int = 1) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def bench(*, size: int, domain: str, batches: tuple[int, ...], train_batch: int, repeats: int) -> dict:

@@ -44,6 +44,7 @@ sys.path.insert(0, str(REPO / "scripts"))
 import demo  # noqa: E402  (scripts/demo.py: the demo's inputs and checkpoint names)
 
 from motion2video import __version__  # noqa: E402
+from motion2video.benchtools import median_seconds  # noqa: E402
 from motion2video import pipeline as P  # noqa: E402
 
 SAMPLES, OBSERVED, HORIZON = 5, 16, 48
@@ -66,17 +67,6 @@ def machine() -> dict:
         "torch_default_threads": torch.get_num_threads(),
         "pipeline_generator_threads": P.default_generator_threads(),
     }
-
-
-def median_seconds(fn, *, repeats: int, warmup: int = 1) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def bench_generator(frame_model, *, repeats: int, frames: int = 16) -> dict:

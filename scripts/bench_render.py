@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import sys
 import tempfile
 import time
@@ -40,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motion2video.benchtools import median_seconds
 from motion2video.motion import Motion
 from motion2video.skeletons import H36M_17
 from motion2video.atomic import write_json
@@ -51,18 +51,6 @@ from renderers.skeleton import SkeletonRenderer, SkeletonStyle, draw_skeleton, g
 SIZE = 256
 DISTRIBUTIONS = ("numpy", "opencv-contrib-python-headless", "matplotlib", "imageio", "imageio-ffmpeg",
                  "pyrender-maintained", "PyOpenGL", "trimesh", "anny", "torch", "motion2video")
-
-
-def median_seconds(fn, *, repeats: int, warmup: int) -> float:
-    """Median wall time of ``fn()`` over ``repeats`` calls after ``warmup`` untimed calls."""
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def machine_info() -> dict:

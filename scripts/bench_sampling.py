@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -25,18 +24,10 @@ import numpy as np
 import torch
 
 
-def _median_ms(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1000.0)
-    return float(statistics.median(times))
-
-
 def run_benchmark(*, samples: int = 50, horizon: int = 48, repeats: int = 7, threads: int = 1,
                   data: str | None = None, seed: int = 0) -> dict:
     """Time batched and one-at-a-time sampling; returns the JSON record."""
+    from motion2video.benchtools import median_ms
     from motion2video.checkpoint import WEIGHTS_DIR, load_model
     from motion2video.data.dataset import DEFAULT_MOCAP, DatasetConfig, build_dataset
     from motion2video.models.base import build_model
@@ -66,8 +57,8 @@ def run_benchmark(*, samples: int = 50, horizon: int = 48, repeats: int = 7, thr
                 model.sample(obs, num_samples=1, horizon=horizon, generator=gen)
 
     batched(), loop()  # warm-up
-    batched_ms = _median_ms(batched, repeats)
-    loop_ms = _median_ms(loop, max(3, repeats // 2))
+    batched_ms = median_ms(batched, repeats=repeats)
+    loop_ms = median_ms(loop, repeats=max(3, repeats // 2))
     return {
         "batched_ms": round(batched_ms, 3),
         "loop_ms": round(loop_ms, 3),

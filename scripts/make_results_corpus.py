@@ -330,7 +330,7 @@ def known_answer_section(weights: Path, runs: Path, record: dict, *, steps: int,
 def sheet_section(new: dict, images: Path, *, samples: int = 5) -> str:
     """Observed, recorded and K sampled futures of three held-out clips (skeletons, one camera per clip)."""
     from motion2video.atomic import atomic_output
-    from motion2video.forecast import forecast, load_clip_for
+    from motion2video.apps.sample import forecast, load_clip_for
     from motion2video.video import GREEN, RED, add_border, grid
     from renderers.camera import fit_camera
     from renderers.skeleton import SkeletonRenderer, SkeletonStyle

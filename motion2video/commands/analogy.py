@@ -56,24 +56,25 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
-    from motion2video.analogy import analogy, analogy_model, iter_analogy
+    from motion2video.apps.analogy import analogy, iter_analogy
+    from motion2video.stages.latents import analogy_model
+    from motion2video.stages.structure import check_style
     from motion2video.checkpoint import load_model
     from motion2video.atomic import save_npz
     from motion2video.models.baselines import BASELINES
-    from motion2video.transfer import load_clip
+    from motion2video.stages.clips import load_clip
+    from motion2video.stages.video import check_cell_size
     from motion2video.video import VideoWriter
 
     set_threads(args.threads)
-    if not 32 <= args.size <= 2048:
-        raise InputError(f"--size must be in 32..2048, got {args.size}")
+    check_cell_size(args.size)
     out = check_video_and_npz(args.output, args.npz)
     if args.model in BASELINES:
         raise InputError(f"analogy needs a latent-variable model (mtvae-add, ...); {args.model!r} is a baseline "
                          "without a latent space")
     bundle = load_model(args.model)
     analogy_model(bundle)  # the wrong kind of model fails before any clip is read
-    if args.style == "mesh" and bundle.data_config.layout == "body2d":
-        raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+    check_style(bundle.data_config.layout, args.style)  # mesh needs a 3D body model
     a = load_clip(bundle, args.a)
     b = a if args.b == args.a else load_clip(bundle, args.b)
     c = load_clip(bundle, args.c)

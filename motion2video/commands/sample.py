@@ -50,15 +50,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from motion2video.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import DatasetConfig
-    from motion2video.forecast import forecast, iter_forecast, load_clip_for, save_forecast_npz
+    from motion2video.apps.sample import forecast, iter_forecast, load_clip_for, save_forecast_npz
     from motion2video.models.baselines import BASELINES
+    from motion2video.stages.video import check_cell_size
     from motion2video.video import VideoWriter
 
     set_threads(args.threads)
     if args.samples < 1:
         raise InputError(f"--samples must be >= 1, got {args.samples}")
-    if not 32 <= args.size <= 2048:
-        raise InputError(f"--size must be in 32..2048, got {args.size}")
+    check_cell_size(args.size)
     out = check_video_and_npz(args.output, args.npz)
     if args.model in BASELINES:
         bundle = baseline_bundle(args.model, DatasetConfig())

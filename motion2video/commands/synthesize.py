@@ -56,7 +56,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.pipeline import SynthesisConfig, synthesize
+    from motion2video.apps.synthesize import SynthesisConfig, synthesize
 
     if args.samples < 1:
         raise InputError(f"--samples must be >= 1, got {args.samples}")

@@ -69,42 +69,26 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.checkpoint import load_model
     from motion2video.models.baselines import BASELINES
-    from motion2video.transfer import behavior_model, iter_transfer, load_clip, sample_behaviors, transfer_behavior
+    from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
+                                            style_for, transfer_behavior)
+    from motion2video.stages.clips import load_clip
+    from motion2video.stages.latents import behavior_model
+    from motion2video.stages.video import check_cell_size
     from motion2video.video import VideoWriter
 
     set_threads(args.threads)
-    if not 32 <= args.size <= 2048:
-        raise InputError(f"--size must be in 32..2048, got {args.size}")
+    check_cell_size(args.size)
     out = check_video_and_npz(args.output, args.npz)
-    style = args.style or ("frames" if args.reference else None)
-    if args.reference and style != "frames":
-        raise InputError(f"--reference is only used with --style frames (got --style {style})", args.reference)
+    style = requested_style(args.style, args.reference)
     if args.model in BASELINES:
         raise InputError(f"behaviour transfer needs a 'behavior' model; {args.model!r} is a baseline")
     bundle = load_model(args.model)
     behavior_model(bundle)  # the wrong kind of model fails before any clip is read
-    layout = bundle.data_config.layout
-    style = style or ("skeleton" if layout == "body2d" else "mesh")
-    if style == "mesh" and layout == "body2d":
-        raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+    style = style_for(bundle.data_config.layout, style)
     frame_model = reference = None
     if style == "frames":
-        from motion2video.frames.checkpoint import load_frame_model
-        from motion2video.pipeline import DOMAIN_OF_LAYOUT
-        from motion2video.reference import load_reference
-
-        frame_name = args.frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
-        frame_model = load_frame_model(frame_name)
-        domain = frame_model.config.domain
-        if domain != DOMAIN_OF_LAYOUT[layout]:
-            raise InputError(f"this frame generator makes {domain} frames, but {bundle.name} moves a "
-                             f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
-        if args.reference:
-            reference = load_reference(args.reference, size=frame_model.config.image_size, domain=domain,
-                                       pose_path=args.reference_pose)
-        elif layout != "body3d":
-            raise InputError("--style frames needs --reference for this model (only 3D body models can render "
-                             "their own reference)")
+        frame_model, reference = frame_style_inputs(bundle, frame_model=args.frame_model, reference=args.reference,
+                                                    reference_pose=args.reference_pose)
     elif args.reference_pose or args.frame_model:
         raise InputError("--frame-model and --reference-pose are only used with --style frames")
     target = load_clip(bundle, args.target)

@@ -486,7 +486,7 @@ def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
                                        fps=fps, group=row.group) for row in index.rows]
     if path.suffix.lower() in (".csv",):
         raise InputError("this is a face capture, but the model is a body model", path)
-    from motion2video.io import load_motion
+    from motion2video.formats.io import load_motion
 
     motion = load_motion(path)
     if isinstance(motion, FaceMotion):

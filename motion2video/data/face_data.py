@@ -61,7 +61,7 @@ def face_files(path: str | Path) -> list[Path]:
 
 def load_face_clip(path: str | Path) -> FaceMotion:
     """One face capture as a :class:`FaceMotion` (Live Link Face CSV or FaceMotion npz)."""
-    from motion2video.io import load_motion
+    from motion2video.formats.io import load_motion
 
     motion = load_motion(path)
     if not isinstance(motion, FaceMotion):

@@ -28,6 +28,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from motion2video.core.rotations import (  # noqa: F401 (the rotation helpers' old import path)
+    axis_angle_to_matrix, head_euler_to_axis_angle, head_euler_to_matrix, matrix_to_axis_angle,
+)
 from motion2video.data.procedural import segment_weights, smootherstep
 from motion2video.errors import InputError
 from motion2video.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
@@ -61,72 +64,6 @@ class FaceModeSpec:
                              f"got {self.seconds}")
         if not (self.amplitude > 0 and self.speed > 0):
             raise InputError(f"face mode {self.mode!r}: amplitude and speed must be positive")
-
-
-# --- rotations (pure functions) -------------------------------------------------------------------------
-
-def head_euler_to_matrix(euler: np.ndarray) -> np.ndarray:
-    """Head rotation matrices ``Rz(yaw) @ Rx(pitch) @ Ry(roll)``.
-
-    Args:
-        euler: (..., 3) yaw, pitch, roll in radians (see the module docstring for signs).
-    Returns:
-        (..., 3, 3) rotation matrices.
-    """
-    e = np.asarray(euler, dtype=np.float64)
-    cy, sy = np.cos(e[..., YAW]), np.sin(e[..., YAW])
-    cp, sp = np.cos(e[..., PITCH]), np.sin(e[..., PITCH])
-    cr, sr = np.cos(e[..., ROLL]), np.sin(e[..., ROLL])
-    zeros, ones = np.zeros_like(cy), np.ones_like(cy)
-    rz = np.stack([cy, -sy, zeros, sy, cy, zeros, zeros, zeros, ones], axis=-1).reshape(e.shape[:-1] + (3, 3))
-    rx = np.stack([ones, zeros, zeros, zeros, cp, -sp, zeros, sp, cp], axis=-1).reshape(e.shape[:-1] + (3, 3))
-    ry = np.stack([cr, zeros, sr, zeros, ones, zeros, -sr, zeros, cr], axis=-1).reshape(e.shape[:-1] + (3, 3))
-    return rz @ rx @ ry
-
-
-def matrix_to_axis_angle(rot: np.ndarray) -> np.ndarray:
-    """Axis-angle vectors (axis * angle, angle in [0, pi]) of rotation matrices.
-
-    Args:
-        rot: (..., 3, 3) rotation matrices.
-    Returns:
-        (..., 3) axis-angle vectors.
-    """
-    r = np.asarray(rot, dtype=np.float64)
-    cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arccos(cos)  # (...,)
-    skew = np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], axis=-1)
-    sin = np.sin(angle)
-    # Away from 0 and pi: axis = skew / (2 sin). Near 0: axis * angle ~ skew / 2.
-    small = sin < 1e-6
-    scale = np.where(small, 0.5, angle / np.where(small, 1.0, 2.0 * sin))
-    out = skew * scale[..., None]
-    # Near pi the skew part vanishes: take the axis from the diagonal of (R + I) / 2 = a a^T.
-    near_pi = (angle > np.pi - 1e-3)
-    if np.any(near_pi):
-        rp = r[near_pi]
-        aat = (rp + np.eye(3)) / 2.0
-        col = np.argmax(np.diagonal(aat, axis1=-2, axis2=-1), axis=-1)
-        axis = aat[np.arange(rp.shape[0]), :, col]
-        axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
-        out[near_pi] = axis * angle[near_pi][..., None]
-    return out
-
-
-def axis_angle_to_matrix(aa: np.ndarray) -> np.ndarray:
-    """(..., 3) axis-angle -> (..., 3, 3) rotation matrices (Rodrigues)."""
-    angle = np.linalg.norm(aa, axis=-1, keepdims=True)  # (..., 1)
-    axis = aa / np.where(angle < 1e-12, 1.0, angle)
-    x, y, z = axis[..., 0], axis[..., 1], axis[..., 2]
-    zeros = np.zeros_like(x)
-    k = np.stack([zeros, -z, y, z, zeros, -x, -y, x, zeros], axis=-1).reshape(aa.shape[:-1] + (3, 3))
-    a = angle[..., None]  # (..., 1, 1)
-    return np.eye(3) + np.sin(a) * k + (1.0 - np.cos(a)) * (k @ k)
-
-
-def head_euler_to_axis_angle(euler: np.ndarray) -> np.ndarray:
-    """(..., 3) yaw, pitch, roll -> (..., 3) axis-angle of ``Rz(yaw) @ Rx(pitch) @ Ry(roll)``."""
-    return matrix_to_axis_angle(head_euler_to_matrix(euler))
 
 
 # --- building blocks --------------------------------------------------------------------------------------

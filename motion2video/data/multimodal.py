@@ -22,7 +22,8 @@ from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 
-from motion2video.data.procedural import MODES, BodyParams, ModeSpec, generate, heading_of
+from motion2video.core.rotations import heading_of
+from motion2video.data.procedural import MODES, BodyParams, ModeSpec, generate
 from motion2video.errors import InputError
 from motion2video.skeletons import H36M_17
 

@@ -26,6 +26,11 @@ import numpy as np
 
 from motion2video.errors import InputError
 from motion2video.motion import Motion
+from motion2video.core.rotations import euler_to_matrix, heading_of  # noqa: F401 (heading_of: old import path)
+from motion2video.core.skeletons import (  # noqa: F401 (H36M-17 joint indices, also imported from here)
+    PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE, SPINE, THORAX, NECK, HEAD,
+    L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST,
+)
 from motion2video.skeletons import H36M_17
 
 MODES: tuple[str, ...] = ("stand", "idle", "walk", "run", "jump", "wave", "squat", "punch", "turn")
@@ -39,10 +44,6 @@ MODE_FREQUENCY: dict[str, float] = {
 TURN_RATE = 1.6  # rad/s at speed 1 and amplitude 1 (about 90 degrees per second)
 GRAVITY = 9.81  # m/s^2, for the jump's flight arc
 
-# Joint indices of H36M-17.
-PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE = 0, 1, 2, 3, 4, 5, 6
-SPINE, THORAX, NECK, HEAD = 7, 8, 9, 10
-L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST = 11, 12, 13, 14, 15, 16
 PITCH, ROLL, YAW = 0, 1, 2
 NUM_JOINTS = 17
 
@@ -135,30 +136,6 @@ def rest_offsets(params: BodyParams = BodyParams()) -> np.ndarray:
     off[L_ELBOW] = off[R_ELBOW] = (0.0, 0.0, -0.17 * arm)
     off[L_WRIST] = off[R_WRIST] = (0.0, 0.0, -0.15 * arm)
     return off
-
-
-def euler_to_matrix(euler: np.ndarray) -> np.ndarray:
-    """Rotation matrices from (pitch, roll, yaw) Euler angles: ``Rz(yaw) @ Ry(roll) @ Rx(pitch)``.
-
-    Args:
-        euler: (..., 3) radians, rotations about x, y, z.
-    Returns:
-        (..., 3, 3) rotation matrices.
-    """
-    e = np.asarray(euler, dtype=np.float64)
-    cx, cy, cz = np.cos(e[..., 0]), np.cos(e[..., 1]), np.cos(e[..., 2])
-    sx, sy, sz = np.sin(e[..., 0]), np.sin(e[..., 1]), np.sin(e[..., 2])
-    r = np.empty(e.shape[:-1] + (3, 3))
-    r[..., 0, 0] = cz * cy
-    r[..., 0, 1] = cz * sy * sx - sz * cx
-    r[..., 0, 2] = cz * sy * cx + sz * sx
-    r[..., 1, 0] = sz * cy
-    r[..., 1, 1] = sz * sy * sx + cz * cx
-    r[..., 1, 2] = sz * sy * cx - cz * sx
-    r[..., 2, 0] = -sy
-    r[..., 2, 1] = cy * sx
-    r[..., 2, 2] = cy * cx
-    return r
 
 
 def forward_kinematics(local_rot: np.ndarray, offsets: np.ndarray, root: np.ndarray) -> np.ndarray:
@@ -574,15 +551,3 @@ def generate(
     joints = rel + root[:, None, :]
     label = ">".join(sp.mode for sp in specs)
     return Motion(joints.astype(np.float32), float(fps), "h36m-17", label=label)
-
-
-def heading_of(joints: np.ndarray) -> np.ndarray:
-    """Facing angle about +z from the hip line: 0 when facing -y, positive when turned to the body's left.
-
-    Args:
-        joints: (..., 17, 3) H36M-17 joints.
-    Returns:
-        (...,) radians in (-pi, pi].
-    """
-    hips = joints[..., L_HIP, :2] - joints[..., R_HIP, :2]  # (..., 2) points to the body's left
-    return np.arctan2(hips[..., 1], hips[..., 0])

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motion2video.core.camera import PinholeCamera, project
+from motion2video.core.rotations import rotation_z
 from motion2video.formats.resample import resample_linear
-from renderers.camera import PinholeCamera, project
 
 LAYOUTS = ("body3d", "body2d", "face")
 NUM_BODY_JOINTS = 17
@@ -119,14 +120,6 @@ class WindowFrame:
 
     origin: np.ndarray
     angle: np.ndarray
-
-
-def rotation_z(angle: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotation matrices about +z for angles (...,) in radians."""
-    angle = np.asarray(angle, np.float64)
-    c, s = np.cos(angle), np.sin(angle)
-    zero, one = np.zeros_like(angle), np.ones_like(angle)
-    return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)], -2)
 
 
 def canonical_frame(joints: np.ndarray, *, anchor: int, right_hip: int = 1, left_hip: int = 4) -> WindowFrame:

@@ -34,8 +34,7 @@ from motion2video.formats.canonical import (  # noqa: F401 (ANKLE_HEIGHT, Y_UP_T
     floor_height,
     to_project_frame,
 )
-from motion2video.formats.manifest import ManifestEntry, resolve_manifest
-from motion2video.formats.mocap import default_trim  # noqa: F401 (re-exported)
+from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_manifest  # noqa: F401 (default_trim re-exported)
 from motion2video.formats.numbers import parse_number_rows
 from motion2video.formats.resample import round_fps
 from motion2video.motion import Motion

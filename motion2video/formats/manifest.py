@@ -140,3 +140,9 @@ def resolve_manifest(clip_path: str | Path, manifest: str | Path | ManifestEntry
     if entry is None:
         raise InputError(f"not listed in {manifest}", clip_path)
     return entry
+
+
+def default_trim(rig: str) -> int:
+    """Frames to drop at the start of a clip of this rig (cgspeed's DAZ files, ``cmu/`` and ``acrnn/``,
+    begin with an added T-pose and transition)."""
+    return 5 if rig == "cmu-daz" else 0

@@ -21,7 +21,12 @@ from pathlib import Path
 
 from motion2video.errors import InputError
 from motion2video.formats.canonical import CanonicalClip, canonical_motion
-from motion2video.formats.manifest import ManifestEntry, read_manifest, resolve_manifest
+from motion2video.formats.manifest import (  # noqa: F401 (default_trim: also imported from here)
+    ManifestEntry,
+    default_trim,
+    read_manifest,
+    resolve_manifest,
+)
 from motion2video.motion import Motion
 
 KINDS = ("bvh", "deepmimic", "expmap")
@@ -85,12 +90,6 @@ def mocap_canonical(path: str | Path, *, entry: ManifestEntry | None = None) -> 
 
     layout = read_expmap_layout(find_layout(path))
     return expmap_canonical(read_expmap_values(path, layout), layout)
-
-
-def default_trim(rig: str) -> int:
-    """Frames to drop at the start of a clip of this rig (cgspeed's DAZ files, ``cmu/`` and ``acrnn/``,
-    begin with an added T-pose and transition)."""
-    return 5 if rig == "cmu-daz" else 0
 
 
 def load_mocap(

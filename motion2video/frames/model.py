@@ -161,6 +161,28 @@ class FrameGenerator(nn.Module):
             return torch.sigmoid(out)
         return ref_image + out
 
+    def encode_reference(self, ref_image: torch.Tensor, ref_structure: torch.Tensor) -> list[torch.Tensor]:
+        """What the target frames share: ``enc_img(x_ref) - enc_pose(p_ref)`` per encoder level.
+
+        Args:
+            ref_image: (B, 3, H, W) in [0, 1]. ref_structure: (B, S, H, W).
+        Returns:
+            Per level (B, C_l, H_l, W_l) features; a reference used for many targets is encoded once.
+        """
+        img_feats = self.image_encoder(ref_image * 2.0 - 1.0)
+        ref_feats = self.pose_encoder(ref_structure)
+        return [fi - fp for fi, fp in zip(img_feats, ref_feats)]
+
+    def decode(self, reference: list[torch.Tensor], ref_image: torch.Tensor,
+               tgt_structure: torch.Tensor) -> torch.Tensor:
+        """Target frames from :meth:`encode_reference`'s features: (B, 3, H, W), about [0, 1].
+
+        ``reference`` and ``ref_image`` have batch B or 1 (one reference for every target).
+        """
+        tgt_feats = self.pose_encoder(tgt_structure)
+        y = self.decoder([b + t for b, t in zip(reference, tgt_feats)])  # (B, 3, H, W)
+        return torch.sigmoid(y) if self.config.output == "direct" else ref_image + y
+
 
 class PatchDiscriminator(nn.Module):
     """A small conditional patch discriminator (pix2pix style, no normalisation).
@@ -279,7 +301,7 @@ def generate(model: FrameGenerator, ref_images: np.ndarray, ref_structures: np.n
             x = images_to_tensor(ref_images[sl]).contiguous(memory_format=torch.channels_last)
             ps = torch.from_numpy(np.ascontiguousarray(ref_structures[sl], np.float32))
             pt = torch.from_numpy(np.ascontiguousarray(tgt_structures[sl], np.float32))
-            y = model(x, ps.contiguous(memory_format=torch.channels_last),
-                      pt.contiguous(memory_format=torch.channels_last))
+            base = model.encode_reference(x, ps.contiguous(memory_format=torch.channels_last))
+            y = model.decode(base, x, pt.contiguous(memory_format=torch.channels_last))
             out[sl] = tensor_to_images(y)
     return out

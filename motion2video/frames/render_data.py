@@ -22,8 +22,8 @@ from typing import Callable
 import numpy as np
 
 from motion2video.errors import InputError
-from motion2video.frames.data import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
-                                      default_data_root, identities, is_test_clip)
+from motion2video.frames.specs import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
+                                       default_data_root, identities, is_test_clip)
 
 # Camera and light variation per sequence.
 BODY_AZIMUTH_DEG = (-40.0, 40.0)
@@ -124,9 +124,9 @@ def _rgb255(colour: tuple[float, float, float]) -> tuple[int, int, int]:
 
 def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
     """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, clip index, start)."""
+    from motion2video.core.camera import project
     from motion2video.motion import Motion
-    from renderers.body import BodyRenderer, BodyStyle
-    from renderers.camera import project
+    from renderers.registry import renderer_for
 
     spec = source.spec
     size = spec.image_size
@@ -135,8 +135,7 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
     times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
                          seconds=spec.window_seconds)
     motion = Motion(clip.joints[times], clip.fps, source=clip.source)
-    style = BodyStyle(
-        size=(size, size),
+    look = dict(
         phenotype=dict(identity.phenotype),
         skin=_rgb255(identity.skin), top=_rgb255(identity.top), trousers=_rgb255(identity.trousers),
         shoes=_rgb255(identity.shoes), hair=_rgb255(identity.hair),
@@ -145,8 +144,8 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
         elevation_deg=float(rng.uniform(*BODY_ELEVATION_DEG)),
     )
     gain = light_jitter(rng)
-    with BodyRenderer(style) as renderer:
-        out = renderer.render_with_masks(motion)
+    with renderer_for("body3d", "mesh", size=size, **look) as renderer:
+        out = renderer.renderer.render_with_masks(motion)
     images = relight(out.frames, out.masks, gain)
     points = project(motion.joints, out.camera)[..., :2].astype(np.float32)  # (T, 17, 2)
     return images, points, ci, int(times[0])
@@ -210,7 +209,7 @@ def face_control_vertices(vertices: np.ndarray, *, count: int = FACE_CONTROL_POI
 
 def yawed_camera(camera, azimuth_deg: float):
     """The camera turned about the vertical axis through its target by ``azimuth_deg``."""
-    from renderers.camera import PinholeCamera
+    from motion2video.core.camera import PinholeCamera
 
     a = np.radians(azimuth_deg)
     rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
@@ -229,7 +228,7 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
     """
     from motion2video.data.face_dynamics import head_pose_track
     from motion2video.motion import NUM_EXPRESSIONS, FaceMotion
-    from renderers.face import FaceRenderer, FaceStyle
+    from renderers.registry import renderer_for
 
     spec = source.spec
     size = spec.image_size
@@ -243,19 +242,19 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
         params[:, NUM_EXPRESSIONS:] = track[times]
     face = FaceMotion(params, clip.fps, identity=dict(identity.phenotype), source=clip.source)
     background = background_crop(rng, source.backgrounds, size)
-    appearance = FaceStyle(size=(size, size), style="appearance", skin=_rgb255(identity.skin),
-                           hair=_rgb255(identity.hair), iris=_rgb255(identity.iris),
-                           lips=_rgb255(tuple(c * f for c, f in zip(identity.skin, (0.85, 0.6, 0.6)))),
-                           top=_rgb255(identity.top), background=background)
-    structure = FaceStyle(size=(size, size), style="structure", background=(0, 0, 0))
+    appearance = dict(skin=_rgb255(identity.skin),  # FaceStyle's default "appearance" style
+                      hair=_rgb255(identity.hair), iris=_rgb255(identity.iris),
+                      lips=_rgb255(tuple(c * f for c, f in zip(identity.skin, (0.85, 0.6, 0.6)))),
+                      top=_rgb255(identity.top), background=background)
     azimuth = float(rng.uniform(*FACE_AZIMUTH_DEG))
     gain = light_jitter(rng)
-    with FaceRenderer(appearance) as renderer:
+    with renderer_for("face", "face", size=size, **appearance) as drawer:
+        renderer = drawer.renderer
         camera = yawed_camera(renderer.camera_for(face), azimuth)
         out = renderer.render_with_masks(face, camera=camera)
         verts = np.concatenate([v for _, v in renderer.vertices(face)])  # (T, K, 3)
-    with FaceRenderer(structure) as renderer:
-        grey = renderer.render(face, camera=camera)  # (T, S, S, 3)
+    with renderer_for("face", "structure", size=size) as drawer:
+        grey = drawer.draw(face, camera=camera)  # (T, S, S, 3)
     images = relight(out.frames, out.masks, gain)
     control = face_control_vertices(verts[0])
     points = np.concatenate([out.landmarks, camera.project(verts[:, control])[..., :2]], axis=1)  # (T, 8+K, 2)

@@ -43,6 +43,58 @@ class LatentPosterior:
     logvar: torch.Tensor
 
 
+def check_sequences(obs: torch.Tensor, future: torch.Tensor | None, *, feature_dim: int) -> None:
+    """Raise ValueError unless obs is (B, To, F) (and future (B, Tf, F)) with F == feature_dim."""
+    if obs.ndim != 3 or obs.shape[-1] != feature_dim or obs.shape[1] < 1:
+        raise ValueError(f"obs must have shape (B, To>=1, {feature_dim}), got {tuple(obs.shape)}")
+    if future is not None:
+        if future.ndim != 3 or future.shape[-1] != feature_dim or future.shape[1] < 1:
+            raise ValueError(f"future must have shape (B, Tf>=1, {feature_dim}), got {tuple(future.shape)}")
+        if future.shape[0] != obs.shape[0]:
+            raise ValueError(f"obs and future batch sizes differ: {obs.shape[0]} vs {future.shape[0]}")
+
+
+def check_sample_args(num_samples: int, horizon: int) -> None:
+    if num_samples < 1:
+        raise ValueError(f"num_samples must be >= 1, got {num_samples}")
+    if horizon < 1:
+        raise ValueError(f"horizon must be >= 1, got {horizon}")
+
+
+class LatentSampler:
+    """The one ``sample()`` of the latent models: checks, then ``sample_rows`` draws all B*K futures in one
+    batched pass (a model supplies ``sample_rows`` and, when its context check differs, ``check_context``)."""
+
+    @torch.no_grad()
+    def sample(self, obs: torch.Tensor, *, num_samples: int, horizon: int,
+               generator: torch.Generator | None = None, **options) -> torch.Tensor:
+        """obs (B, To, F) -> (B, K, horizon, F): K futures per context."""
+        check_sample_args(num_samples, horizon)
+        self.check_context(obs, **options)
+        out = self.sample_rows(obs, num_samples, horizon=horizon, generator=generator, **options)  # (B*K, ...)
+        return out.view(obs.shape[0], num_samples, horizon, -1)
+
+    def check_context(self, obs: torch.Tensor, **options) -> None:
+        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+
+    def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
+                    generator: torch.Generator | None, **options) -> torch.Tensor:
+        """(B, To, F) -> (B*K, horizon, F), rows ordered context-major (row b*K + k)."""
+        raise NotImplementedError
+
+
+class DeterministicSampler:
+    """``sample()`` of a deterministic model: K identical copies of ``predict(obs, horizon=...)``."""
+
+    @torch.no_grad()
+    def sample(self, obs: torch.Tensor, *, num_samples: int, horizon: int,
+               generator: torch.Generator | None = None) -> torch.Tensor:
+        """(B, To, F) -> (B, K, horizon, F): K identical copies of the one prediction (generator unused)."""
+        check_sample_args(num_samples, horizon)
+        pred = self.predict(obs, horizon=horizon)  # (B, horizon, F)
+        return pred[:, None].expand(-1, num_samples, -1, -1).contiguous()
+
+
 @dataclass(frozen=True)
 class ModelEntry:
     name: str

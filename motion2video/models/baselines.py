@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from motion2video.models.base import LossOutput, register_model
+from motion2video.models.base import DeterministicSampler, LossOutput, register_model
 
 BASELINES = ("zero-velocity", "last-step", "sequence-motion")
 
@@ -33,7 +33,7 @@ def extrapolate(obs: torch.Tensor, velocity: torch.Tensor, horizon: int) -> torc
     return obs[:, -1:, :] + steps[None, :, None] * velocity[:, None, :]
 
 
-class _Baseline(nn.Module):
+class _Baseline(DeterministicSampler, nn.Module):
     """Shared plumbing: ``predict`` is the only thing a baseline defines."""
 
     def __init__(self, config: BaselineConfig) -> None:
@@ -55,14 +55,6 @@ class _Baseline(nn.Module):
             mse = (self.predict(obs, horizon=future.shape[1]) - future).pow(2).mean()
         return LossOutput(total=mse, terms={"mse": float(mse)})
 
-    @torch.no_grad()
-    def sample(self, obs: torch.Tensor, *, num_samples: int, horizon: int,
-               generator: torch.Generator | None = None) -> torch.Tensor:
-        """(B, To, F) -> (B, K, horizon, F): K identical copies (a baseline is deterministic)."""
-        if num_samples < 1 or horizon < 1:
-            raise ValueError(f"num_samples and horizon must be >= 1, got {num_samples}, {horizon}")
-        pred = self.predict(obs, horizon=horizon)
-        return pred[:, None].expand(-1, num_samples, -1, -1).contiguous()
 
 
 @register_model("zero-velocity", BaselineConfig, kind="baseline")

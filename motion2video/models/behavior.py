@@ -39,12 +39,11 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from motion2video.models.base import LatentPosterior, LossOutput, register_model
+from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     GaussianHead,
     LSTMDecoder,
     LSTMEncoder,
-    check_sample_args,
     check_sequences,
     kl_std_normal,
     randn,
@@ -80,7 +79,7 @@ class BehaviorConfig:
 
 
 @register_model("behavior", BehaviorConfig, kind="stochastic")
-class BehaviorModel(nn.Module):
+class BehaviorModel(LatentSampler, nn.Module):
     def __init__(self, config: BehaviorConfig) -> None:
         super().__init__()
         self.config = config
@@ -188,27 +187,19 @@ class BehaviorModel(nn.Module):
         self.flow_fitted.fill_(True)
         return result
 
-    @torch.no_grad()
-    def sample(
-        self,
-        obs: torch.Tensor,
-        *,
-        num_samples: int,
-        horizon: int,
-        generator: torch.Generator | None = None,
-        use_flow: bool = True,
-    ) -> torch.Tensor:
-        """New behaviours from the last observed posture: obs (B, To, F) -> (B, K, horizon, F).
-
-        u ~ N(0, I); z = T^-1(u) with ``use_flow`` (requires :meth:`fit_flow`), else z = u.
-        """
-        check_sample_args(num_samples, horizon)
+    def check_context(self, obs: torch.Tensor, *, use_flow: bool = True) -> None:
         check_sequences(obs, None, feature_dim=self.config.feature_dim)
         if use_flow and not bool(self.flow_fitted):
             raise RuntimeError("the behaviour flow is not fitted: call fit_flow() first or pass use_flow=False")
+
+    def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
+                    generator: torch.Generator | None, use_flow: bool = True) -> torch.Tensor:
+        """New behaviours from the last observed posture: (B*K, horizon, F), ``sample(obs, ..., use_flow=True)``.
+
+        u ~ N(0, I); z = T^-1(u) with ``use_flow`` (requires :meth:`fit_flow`), else z = u.
+        """
         B, K = obs.shape[0], num_samples
         z = randn((B * K, self.config.latent_dim), like=obs, generator=generator)  # (B*K, Z)
         if use_flow:
             z = self.flow.inverse(z)
-        out = self.decoder(z, repeat_batch(obs[:, -1], K), horizon=horizon)  # (B*K, horizon, F)
-        return out.view(B, K, horizon, -1)
+        return self.decoder(z, repeat_batch(obs[:, -1], K), horizon=horizon)  # (B*K, horizon, F)

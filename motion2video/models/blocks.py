@@ -20,28 +20,10 @@ import math
 import torch
 from torch import nn
 
-from motion2video.models.base import LatentPosterior
+from motion2video.models.base import LatentPosterior, check_sample_args, check_sequences  # noqa: F401
 
 # --------------------------------------------------------------------------------------------------
 # Shape checks and random numbers
-
-
-def check_sequences(obs: torch.Tensor, future: torch.Tensor | None, *, feature_dim: int) -> None:
-    """Raise ValueError unless obs is (B, To, F) (and future (B, Tf, F)) with F == feature_dim."""
-    if obs.ndim != 3 or obs.shape[-1] != feature_dim or obs.shape[1] < 1:
-        raise ValueError(f"obs must have shape (B, To>=1, {feature_dim}), got {tuple(obs.shape)}")
-    if future is not None:
-        if future.ndim != 3 or future.shape[-1] != feature_dim or future.shape[1] < 1:
-            raise ValueError(f"future must have shape (B, Tf>=1, {feature_dim}), got {tuple(future.shape)}")
-        if future.shape[0] != obs.shape[0]:
-            raise ValueError(f"obs and future batch sizes differ: {obs.shape[0]} vs {future.shape[0]}")
-
-
-def check_sample_args(num_samples: int, horizon: int) -> None:
-    if num_samples < 1:
-        raise ValueError(f"num_samples must be >= 1, got {num_samples}")
-    if horizon < 1:
-        raise ValueError(f"horizon must be >= 1, got {horizon}")
 
 
 def randn(shape: tuple[int, ...], *, like: torch.Tensor, generator: torch.Generator | None) -> torch.Tensor:

@@ -16,12 +16,11 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from motion2video.models.base import LatentPosterior, LossOutput, register_model
+from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     GaussianHead,
     LSTMDecoder,
     LSTMEncoder,
-    check_sample_args,
     check_sequences,
     kl_std_normal,
     linear_ramp,
@@ -43,7 +42,7 @@ class CVAEConfig:
 
 
 @register_model("cvae", CVAEConfig, kind="stochastic")
-class CVAE(nn.Module):
+class CVAE(LatentSampler, nn.Module):
     def __init__(self, config: CVAEConfig) -> None:
         super().__init__()
         self.config = config
@@ -88,21 +87,11 @@ class CVAE(nn.Module):
             total=total, terms={"recon": float(recon.detach()), "kl": float(kl.detach()), "kl_weight": w}
         )
 
-    @torch.no_grad()
-    def sample(
-        self,
-        obs: torch.Tensor,
-        *,
-        num_samples: int,
-        horizon: int,
-        generator: torch.Generator | None = None,
-    ) -> torch.Tensor:
-        """obs (B, To, F) -> (B, K, horizon, F) with z ~ N(0, I), one decoder pass over B*K rows."""
-        check_sample_args(num_samples, horizon)
-        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+    def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
+                    generator: torch.Generator | None) -> torch.Tensor:
+        """z ~ N(0, I): (B*K, horizon, F) (see :class:`~motion2video.models.base.LatentSampler`)."""
         B, K = obs.shape[0], num_samples
         e_a = repeat_batch(self.obs_encoder(obs)[:, -1], K)  # (B*K, H)
         last = repeat_batch(obs[:, -1], K)  # (B*K, F)
         z = randn((B * K, self.config.latent_dim), like=obs, generator=generator)  # (B*K, Z)
-        out = self._decode_from_feature(e_a, z, last=last, horizon=horizon)  # (B*K, horizon, F)
-        return out.view(B, K, horizon, -1)
+        return self._decode_from_feature(e_a, z, last=last, horizon=horizon)  # (B*K, horizon, F)

@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 import torch
 from torch import nn
 
-from motion2video.models.base import LossOutput, build_model, register_model
-from motion2video.models.blocks import GRUEncoder, check_sample_args, check_sequences, randn
+from motion2video.models.base import LatentSampler, LossOutput, build_model, register_model
+from motion2video.models.blocks import GRUEncoder, check_sequences, randn
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ def best_of_k_sse(futures: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
 
 
 @register_model("dlow", DLowConfig, kind="stochastic")
-class DLow(nn.Module):
+class DLow(LatentSampler, nn.Module):
     def __init__(self, config: DLowConfig) -> None:
         super().__init__()
         if config.num_samples < 2:
@@ -156,13 +156,10 @@ class DLow(nn.Module):
         return LossOutput(total=total, terms={"recon": float(recon.detach()), "kl": float(kl.detach()),
                                               "diversity": float(div.detach())})
 
-    @torch.no_grad()
-    def sample(self, obs: torch.Tensor, *, num_samples: int, horizon: int,
-               generator: torch.Generator | None = None) -> torch.Tensor:
-        """obs (B, To, F) -> (B, num_samples, horizon, F): the first ``num_samples`` maps of one shared noise
-        (another noise per further K)."""
-        check_sample_args(num_samples, horizon)
-        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+    def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
+                    generator: torch.Generator | None) -> torch.Tensor:
+        """The first ``num_samples`` maps of one shared noise (another noise per further K): (B, num_samples,
+        horizon, F), context-major like the B*K rows of :class:`~motion2video.models.base.LatentSampler`."""
         B, K = obs.shape[0], self.config.num_samples
         a, b = self.maps(obs)
         rounds = math.ceil(num_samples / K)

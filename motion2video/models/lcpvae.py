@@ -26,12 +26,11 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from motion2video.models.base import LatentPosterior, LossOutput, register_model
+from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     GaussianHead,
     GRUDecoder,
     GRUEncoder,
-    check_sample_args,
     check_sequences,
     kl_diag_gaussians,
     kl_std_normal,
@@ -81,7 +80,7 @@ def _mlp(in_dim: int, hidden_dim: int, out_dim: int) -> nn.Sequential:
 
 
 @register_model("lcpvae", LCPVAEConfig, kind="stochastic")
-class LCPVAE(nn.Module):
+class LCPVAE(LatentSampler, nn.Module):
     def __init__(self, config: LCPVAEConfig) -> None:
         super().__init__()
         self.config = config
@@ -161,20 +160,14 @@ class LCPVAE(nn.Module):
         }
         return LossOutput(total=total, terms=terms)
 
-    @torch.no_grad()
-    def sample(
-        self,
-        obs: torch.Tensor,
-        *,
-        num_samples: int,
-        horizon: int,
-        generator: torch.Generator | None = None,
-    ) -> torch.Tensor:
-        """obs (B, To, F) -> (B, K, horizon, F) with z = z_c ~ q(z_c | obs); one decoder pass over B*K rows."""
-        check_sample_args(num_samples, horizon)
+    def check_context(self, obs: torch.Tensor) -> None:
+        """Checked by :meth:`condition_posterior`."""
+
+    def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
+                    generator: torch.Generator | None) -> torch.Tensor:
+        """z = z_c ~ q(z_c | obs): (B*K, horizon, F) (see :class:`~motion2video.models.base.LatentSampler`)."""
         cond, _ = self.condition_posterior(obs)
-        B, K = obs.shape[0], num_samples
+        K = num_samples
         cond_k = LatentPosterior(mu=repeat_batch(cond.mu, K), logvar=repeat_batch(cond.logvar, K))  # (B*K, Z)
         z = reparameterize(cond_k, randn(tuple(cond_k.mu.shape), like=obs, generator=generator))
-        out = self.future_decoder(torch.tanh(self.lcp_decoder(z)), repeat_batch(obs[:, -1], K), horizon=horizon)
-        return out.view(B, K, horizon, -1)
+        return self.future_decoder(torch.tanh(self.lcp_decoder(z)), repeat_batch(obs[:, -1], K), horizon=horizon)

@@ -25,12 +25,11 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from motion2video.models.base import LatentPosterior, LossOutput, register_model
+from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     LSTMDecoder,
     LSTMEncoder,
     SkipMLP,
-    check_sample_args,
     check_sequences,
     kl_std_normal,
     linear_ramp,
@@ -84,7 +83,7 @@ class MTVAEConcatConfig(MTVAEConfig):
     lambda_motion: float = 20.0
 
 
-class MTVAE(nn.Module):
+class MTVAE(LatentSampler, nn.Module):
     """Shared implementation; registered as ``mtvae-add`` (:class:`MTVAEAdd`) and ``mtvae-concat``."""
 
     def __init__(self, config: MTVAEConfig) -> None:
@@ -170,24 +169,14 @@ class MTVAE(nn.Module):
         }
         return LossOutput(total=total, terms=terms)
 
-    @torch.no_grad()
-    def sample(
-        self,
-        obs: torch.Tensor,
-        *,
-        num_samples: int,
-        horizon: int,
-        generator: torch.Generator | None = None,
-    ) -> torch.Tensor:
-        """obs (B, To, F) -> (B, K, horizon, F), z ~ N(0, I), one decoder pass over B*K rows."""
-        check_sample_args(num_samples, horizon)
-        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+    def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
+                    generator: torch.Generator | None) -> torch.Tensor:
+        """z ~ N(0, I): (B*K, horizon, F) (see :class:`~motion2video.models.base.LatentSampler`)."""
         B, K = obs.shape[0], num_samples
         e_a = repeat_batch(self.encoder(obs)[:, -1], K)  # (B*K, H)
         last = repeat_batch(obs[:, -1], K)  # (B*K, F)
         z = randn((B * K, self.config.latent_dim), like=obs, generator=generator)  # (B*K, Z)
-        out = self.decoder(self._future_feature(e_a, z), last, horizon=horizon)  # (B*K, horizon, F)
-        return out.view(B, K, horizon, -1)
+        return self.decoder(self._future_feature(e_a, z), last, horizon=horizon)  # (B*K, horizon, F)
 
 
 @register_model("mtvae-add", MTVAEConfig, kind="stochastic")

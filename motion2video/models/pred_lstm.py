@@ -12,11 +12,10 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from motion2video.models.base import LossOutput, register_model
+from motion2video.models.base import DeterministicSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     LSTMDecoder,
     LSTMEncoder,
-    check_sample_args,
     check_sequences,
     reconstruction_l1,
 )
@@ -30,7 +29,7 @@ class PredLSTMConfig:
 
 
 @register_model("pred-lstm", PredLSTMConfig, kind="deterministic")
-class PredLSTM(nn.Module):
+class PredLSTM(DeterministicSampler, nn.Module):
     """Deterministic forecaster: obs (B, To, F) -> future (B, horizon, F)."""
 
     def __init__(self, config: PredLSTMConfig) -> None:
@@ -54,16 +53,3 @@ class PredLSTM(nn.Module):
         recon = reconstruction_l1(pred, future)
         return LossOutput(total=recon, terms={"recon": float(recon.detach())})
 
-    @torch.no_grad()
-    def sample(
-        self,
-        obs: torch.Tensor,
-        *,
-        num_samples: int,
-        horizon: int,
-        generator: torch.Generator | None = None,
-    ) -> torch.Tensor:
-        """(B, To, F) -> (B, K, horizon, F): K identical copies of the one prediction (generator unused)."""
-        check_sample_args(num_samples, horizon)
-        pred = self.predict(obs, horizon=horizon)  # (B, horizon, F)
-        return pred[:, None].expand(-1, num_samples, -1, -1).contiguous()

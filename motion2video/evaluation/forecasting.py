@@ -18,6 +18,8 @@ from motion2video import metrics as M
 from motion2video.checkpoint import ModelBundle
 from motion2video.data.dataset import WindowSet
 from motion2video.data.windows import FeatureLayout, metric_vectors
+from motion2video.stages.sampling import as_model_input
+from motion2video.stages.sampling import sample_futures  # noqa: F401 (public name of this module)
 
 # DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
 MM_THRESHOLDS = {"body3d": 0.5, "body2d": 0.1, "face": 0.25}
@@ -80,26 +82,6 @@ class EvalResult:
         return "\n".join(rows)
 
 
-def _tensor(x: np.ndarray, model: torch.nn.Module) -> torch.Tensor:
-    params = list(model.parameters())
-    device = params[0].device if params else torch.device("cpu")
-    return torch.from_numpy(np.ascontiguousarray(x, np.float32)).to(device)
-
-
-@torch.no_grad()
-def sample_futures(model: torch.nn.Module, obs: np.ndarray, *, num_samples: int, horizon: int, seed: int,
-                   batch_size: int = 32) -> np.ndarray:
-    """K futures per observation: obs (N, To, F) normalised -> (N, K, horizon, F) normalised (float32)."""
-    model.eval()
-    gen = torch.Generator().manual_seed(seed)
-    out = []
-    for i in range(0, len(obs), batch_size):
-        s = model.sample(_tensor(obs[i:i + batch_size], model), num_samples=num_samples, horizon=horizon,
-                         generator=gen)
-        out.append(s.float().cpu().numpy())
-    return np.concatenate(out) if out else np.zeros((0, num_samples, horizon, obs.shape[-1]), np.float32)
-
-
 @torch.no_grad()
 def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarray, *, num_samples: int, seed: int,
                       batch_size: int = 32) -> np.ndarray | None:
@@ -112,7 +94,7 @@ def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarra
     out = []
     horizon = future.shape[1]
     for i in range(0, len(obs), batch_size):
-        o, f = _tensor(obs[i:i + batch_size], model), _tensor(future[i:i + batch_size], model)
+        o, f = as_model_input(obs[i:i + batch_size], model), as_model_input(future[i:i + batch_size], model)
         post = model.encode(o, f)
         b, z_dim = post.mu.shape
         eps = torch.randn((b, num_samples, z_dim), generator=gen).to(post.mu.device)

@@ -1,0 +1,90 @@
+"""K sampled futures of one observed clip, as motion and as a grid video (the ``sample`` command's work).
+
+:func:`forecast` encodes the observed frames of a clip exactly as training windows are encoded
+(canonical frame from the last observed frame, the checkpoint's normalisation), draws K futures from the
+model in one batched call and decodes them back to the clip's own coordinates: world metres for body3d
+models, pixels of the layout's virtual camera for body2d models, face parameters for face models.
+:func:`render_forecast` draws the papers' layout (observed frames framed green, each future framed red).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from motion2video.atomic import save_npz
+from motion2video.checkpoint import ModelBundle
+from motion2video.errors import InputError
+from motion2video.motion import FaceMotion
+from motion2video.stages.clips import load_clip
+from motion2video.stages.sampling import Forecast, forecast  # noqa: F401 (public names of this module)
+from motion2video.stages.structure import check_style, renderer_for
+
+STYLES = ("skeleton", "mesh")
+
+
+def load_clip_for(bundle: ModelBundle, path: str | Path) -> np.ndarray:
+    """The clip at ``path`` as the model's data at its frame rate (:func:`motion2video.stages.clips.load_clip`):
+    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models."""
+    return load_clip(bundle, path).data
+
+
+def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> np.ndarray:
+    """The grid video: every cell plays the observed frames framed green, then one future framed red.
+
+    Body motion is drawn with one camera (or 2D framing) fitted to the observed frames and all futures,
+    so the cells are comparable; ``style="mesh"`` poses the Anny body (3D body models only). Face models
+    are drawn with the Anny face renderer. All frames in memory: :func:`iter_forecast` streams them.
+
+    Returns:
+        (To + horizon, H, W, 3) uint8.
+    """
+    return np.concatenate(list(iter_forecast(fc, style=style, size=size)))
+
+
+def iter_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> Iterator[np.ndarray]:
+    """:func:`render_forecast` as a stream of (t, H, W, 3) uint8 chunks.
+
+    The style is checked at once (InputError); the observed frames are drawn once, each future is drawn
+    lazily chunk by chunk as the grid (:func:`motion2video.video.iter_observed_future`) consumes it.
+    """
+    if style not in STYLES:
+        raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
+    check_style(fc.layout, style)
+    return _iter_forecast(fc, style, size)
+
+
+def _iter_forecast(fc: Forecast, style: str, size: int) -> Iterator[np.ndarray]:
+    from motion2video.video import iter_observed_future
+
+    labels = [f"sample {k + 1}" for k in range(len(fc.futures))]
+    with renderer_for(fc.layout, style, size=size) as r:
+        placement = _shared_placement(fc, r, size)
+        cells = [r.iter_draw(f, fc.fps, **placement) for f in fc.futures]
+        yield from iter_observed_future(r.draw(fc.observed, fc.fps, **placement), cells, labels)
+
+
+def _shared_placement(fc: Forecast, r, size: int) -> dict:
+    """One camera (3D bodies), 2D framing (2D bodies) or close-up face camera for every cell, fitted to the
+    observed frames and all futures (faces: to the observed frames)."""
+    from motion2video.core.camera import fit_camera, fit_image_framing
+
+    if fc.layout == "face":
+        return {"camera": r.renderer.camera_for(FaceMotion(fc.observed, fc.fps))}
+    if fc.layout == "body2d":
+        points = np.concatenate([fc.observed.reshape(-1, 2), fc.futures.reshape(-1, 2)])
+        return {"framing": fit_image_framing(points, size, size)}
+    points = np.concatenate([fc.observed.reshape(-1, 3), fc.futures.reshape(-1, 3)])
+    return {"camera": fit_camera(points, size, size, margin=0.1)}
+
+
+def save_forecast_npz(fc: Forecast, path: str | Path) -> Path:
+    """Write ``observed``, ``futures``, ``fps``, ``layout``, ``model``, ``seed`` (and ``skeleton`` for body
+    layouts) to an .npz, atomically."""
+    arrays = {"observed": fc.observed, "futures": fc.futures, "fps": np.float64(fc.fps),
+              "layout": np.str_(fc.layout), "model": np.str_(fc.model), "seed": np.int64(fc.seed)}
+    if fc.layout != "face":
+        arrays["skeleton"] = np.str_("h36m-17")
+    return save_npz(path, arrays)

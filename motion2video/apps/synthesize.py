@@ -1,0 +1,406 @@
+"""Observed motion -> K sampled futures -> structure -> RGB frames -> videos (what ``synthesize`` does).
+
+The stages are plain functions with typed results, so each can be called (and timed) alone:
+
+1. :func:`motion2video.reference.load_reference`: the reference appearance image at the frame generator's size, and its pose.
+2. :func:`sample_futures`: K futures of the observed clip from a motion model (:mod:`motion2video.forecast`).
+3. :func:`render_structures`: where the person is in every frame, in the generator's structure conventions
+   (the same functions that made its training pairs, :mod:`motion2video.frames.data`):
+
+   - body: 2D joints in generator pixels; :func:`structure_maps` turns them into 17 Gaussian heatmaps + 16
+     limb maps (:func:`motion2video.frames.data.body_structures`).
+   - face: the Anny face rendered in the shaded grey ``"structure"`` style on black, in each frame's head
+     pose and expression (:func:`motion2video.frames.data.face_structures`).
+4. :func:`generate_frames`: the frame generator turns (reference image, reference structure, target
+   structure) into the target frame, for the observed frames and every future, so the whole video is
+   one consistent person.
+5. :func:`compose_video`, :func:`structure_previews`, :func:`contact_sheet`: the grid video (every cell
+   plays the observed frames framed green, then one future framed red, labelled), the same grid of
+   structures, and a contact-sheet PNG.
+
+:func:`synthesize` runs them all and writes ``OUT.mp4``, ``OUT-structure.mp4`` and ``OUT-sheet.png``, all
+three or none.
+
+The reference image and its pose (the reference structure) are loaded by :mod:`motion2video.reference`.
+
+Placement
+---------
+- Body (3D models): the clip is turned about z so the person faces the camera (-y) at the first observed
+  frame, and the camera *follows* the person on the ground: each frame's pelvis is moved to the same
+  ground position (height, turning and limbs are kept). The generator's training sequences were short
+  (1.2 s) with a fixed camera, so a person who walks several metres would leave its comfort zone (and the
+  frame); following keeps the person at the reference's place and size. One camera (azimuth 0, elevation
+  8 degrees, as the body renderer's default) is fitted to the observed frames (so the observed part does
+  not depend on the samples), then one 2D similarity (scale + shift) maps the first observed frame's legs,
+  spine and head onto the reference pose's; the futures share both.
+- Body (2D models): the same, in the model's virtual-camera pixels (the pelvis keeps its first x).
+- Face: one camera for the whole video, the camera of the reference image (from the pose file), else the
+  Anny close-up camera of the first observed frame. The structure mesh uses the reference's identity.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motion2video.atomic import check_output_path
+from motion2video.errors import InputError
+from motion2video.reference import load_reference
+from motion2video.stages.frames import (  # noqa: F401 (the generation stage; old import paths)
+    GENERATE_CHUNK,
+    GeneratedFrames,
+    default_generator_threads,
+    generate_frames,
+    generate_video_frames,
+    iter_generated,
+)
+from motion2video.stages.sampling import MAX_SAMPLES, torch_threads  # noqa: F401 (old import path)
+from motion2video.stages.sampling import sample_forecast as sample_futures  # old name
+from motion2video.stages.structure import (  # noqa: F401 (the structure stage; old import paths)
+    ALIGN_JOINTS,
+    BODY_ELEVATION_DEG,
+    BODY_MARGIN,
+    BODY_YFOV_DEG,
+    DOMAIN_OF_LAYOUT,
+    BodyPlacement,
+    Structures,
+    face_camera_front,
+    follow_on_ground,
+    place_body,
+    render_structures,
+    renderer_for,
+    similarity_fit,
+    split_rows,
+    structure_maps,
+    structure_previews,
+    timeline_rows,
+)
+
+STRUCTURE_SUFFIX = "-structure"
+SHEET_SUFFIX = "-sheet"
+BORDER = 4  # pixels of the green / red frame around each cell
+SHEET_COLUMNS = 8
+
+
+# --- small helpers ---------------------------------------------------------------------------------------
+
+def output_paths(video: str | Path) -> tuple[Path, Path, Path]:
+    """``OUT.mp4`` -> (``OUT.mp4``, ``OUT-structure.mp4``, ``OUT-sheet.png``)."""
+    video = Path(video)
+    return (video, video.with_name(video.stem + STRUCTURE_SUFFIX + video.suffix),
+            video.with_name(video.stem + SHEET_SUFFIX + ".png"))
+
+
+# --- sampling ----------------------------------------------------------------------------------------------
+
+# --- layouts -----------------------------------------------------------------------------------------------
+
+def compose_video(observed: np.ndarray, futures: np.ndarray, *, border: int = BORDER) -> np.ndarray:
+    """The grid video: every cell plays the observed frames framed green (labelled ``observed``), then one
+    future framed red (labelled ``sample k``).
+
+    Args:
+        observed: (To, H, W, 3) uint8. futures: (K, Tf, H, W, 3) uint8.
+    Returns:
+        (To + Tf, H', W', 3) uint8.
+    """
+    from motion2video.video import label, observed_future_video
+
+    obs = label(observed, "observed", inset=border)
+    futs = [label(f, f"sample {k + 1}", inset=border) for k, f in enumerate(futures)]
+    return observed_future_video(obs, futs, None, border=border)
+
+
+def contact_sheet(observed: np.ndarray, futures: np.ndarray, *, header: tuple = (),
+                  columns: int = SHEET_COLUMNS, border: int = BORDER) -> np.ndarray:
+    """One picture of the result.
+
+    Row 0: the ``header`` pictures (e.g. the reference image and its structure), then evenly spaced
+    observed frames (green); one row per sample: evenly spaced future frames (red). Cells are labelled.
+
+    Args:
+        observed: (To, H, W, 3) uint8. futures: (K, Tf, H, W, 3) uint8.
+        header: (image (H, W, 3) uint8, label) pairs shown first, unframed.
+    Returns:
+        (H', W', 3) uint8.
+    """
+    to, tf = observed.shape[0], futures.shape[1]
+    return contact_sheet_of(lambda t: observed[t], lambda k, t: futures[k, t], to, tf, len(futures),
+                            header=header, columns=columns, border=border)
+
+
+def sheet_steps(observed: int, horizon: int, *, header: int = 0, columns: int = SHEET_COLUMNS) -> tuple[list, list]:
+    """The observed and future indices :func:`contact_sheet` shows (so a stream can keep just those)."""
+    return _spread(observed, columns - header), _spread(horizon, columns)
+
+
+def contact_sheet_of(observed_frame, future_frame, to: int, tf: int, k: int, *, header: tuple = (),
+                     columns: int = SHEET_COLUMNS, border: int = BORDER) -> np.ndarray:
+    """:func:`contact_sheet` from frame getters: ``observed_frame(t)`` and ``future_frame(k, t)`` return
+    (H, W, 3) uint8 and are only asked for the indices of :func:`sheet_steps`."""
+    from motion2video.video import GREEN, RED, add_border, grid
+
+    cells = [image for image, _ in header]
+    labels = [text for _, text in header]
+    for t in _spread(to, columns - len(cells)):
+        cells.append(add_border(observed_frame(t), GREEN, border))
+        labels.append(f"observed {t}")
+    blank = np.zeros_like(observed_frame(0))
+    cells += [blank] * (columns - len(cells))
+    labels += [""] * (columns - len(labels))
+    for j in range(k):
+        index = _spread(tf, columns)
+        for t in index:
+            cells.append(add_border(future_frame(j, t), RED, border))
+            labels.append(f"s{j + 1} +{t + 1}")
+        cells += [blank] * (columns - len(index))
+        labels += [""] * (columns - len(index))
+    return grid([c[None] for c in cells], labels, columns)[0]
+
+
+def compose_chunk(frames: np.ndarray, start: int, observed: int, *, border: int = BORDER) -> np.ndarray:
+    """:func:`compose_video` for steps ``start..start+t-1`` of the timeline.
+
+    Args:
+        frames: (t, K, H, W, 3) uint8, cell k's frame of each step (observed steps: the observed frame).
+        start: the first step; steps < ``observed`` are observed (green, ``observed``), later ones cell k's
+            future (red, ``sample k``).
+    Returns:
+        (t, H', W', 3) uint8, equal to the same rows of :func:`compose_video`.
+    """
+    from motion2video.video import GREEN, RED, add_border, grid, label
+
+    t, k = frames.shape[:2]
+    cells = []
+    for j in range(k):
+        parts = []
+        for step in range(t):
+            is_obs = start + step < observed
+            text = "observed" if is_obs else f"sample {j + 1}"
+            parts.append(add_border(label(frames[step, j], text, inset=border), GREEN if is_obs else RED, border))
+        cells.append(np.stack(parts))
+    return grid(cells, None, None)
+
+
+def _spread(length: int, count: int) -> list[int]:
+    """Up to ``count`` distinct, evenly spaced indices into ``range(length)`` (first and last included)."""
+    if length <= count:
+        return list(range(length))
+    return sorted({int(round(i)) for i in np.linspace(0, length - 1, count)})
+
+
+# --- the whole pipeline ------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class SynthesisConfig:
+    """Options of :func:`synthesize`.
+
+    Attributes:
+        samples: K futures (1..64).
+        observed: observed frames (None: the motion model's training value).
+        horizon: future frames (None: the motion model's training value).
+        start: first observed frame of the clip.
+        seed: sampling seed (the same seed gives the same frames).
+        batch_size: generator frames per forward pass (4 was fastest at 128 px on 2 cores, with channels_last).
+        motion_threads: torch threads while sampling (1: the small recurrent models are fastest so).
+        generator_threads: torch threads while generating (None: :func:`default_generator_threads`).
+        crf, preset: x264 settings of the two videos.
+    """
+
+    samples: int = 5
+    observed: int | None = None
+    horizon: int | None = None
+    start: int = 0
+    seed: int = 0
+    batch_size: int = 4
+    motion_threads: int | None = 1
+    generator_threads: int | None = None
+    crf: int = 18
+    preset: str = "medium"
+
+
+@dataclass
+class SynthesisResult:
+    """What :func:`synthesize` wrote and how long each stage took.
+
+    Attributes:
+        video, structure_video, sheet: the written files.
+        frames: (T, H, W, 3) shape of the grid video.
+        samples, observed, horizon: K, To, Tf.
+        fps: frame rate of the videos.
+        domain: ``"body"`` or ``"face"``.
+        notes: conversions and assumptions (one line each).
+        timings: seconds per stage: load, sampling, structures, generation, compose, encoding, total.
+        forecast: the sampled motion (:class:`motion2video.forecast.Forecast`).
+        structures: the :class:`Structures` used.
+    """
+
+    video: Path
+    structure_video: Path
+    sheet: Path
+    frames: tuple[int, ...]
+    samples: int
+    observed: int
+    horizon: int
+    fps: float
+    domain: str
+    notes: tuple[str, ...]
+    timings: dict[str, float]
+    forecast: object = field(repr=False)
+    structures: Structures = field(repr=False)
+
+
+def check_output(path: str | Path) -> tuple[Path, Path, Path]:
+    """Validate ``OUT.mp4`` before any work: extension and an existing, writable folder.
+
+    Returns:
+        :func:`output_paths` of it.
+    """
+    path = check_output_path(path, (".mp4",))
+    for p in output_paths(path):
+        if p.is_dir():
+            raise InputError("the output path is a directory", p)
+    return output_paths(path)
+
+
+def write_outputs(paths: tuple[Path, Path, Path], video: np.ndarray, structure_video: np.ndarray,
+                  sheet: np.ndarray, *, fps: float, crf: int = 18, preset: str = "medium") -> None:
+    """Write the video, the structure video and the sheet, all three or none: each is written to a
+    temporary name beside its destination and the three are renamed only when all succeeded."""
+    from motion2video.video import write_image, write_video
+
+    temps = [p.with_name(f".{p.stem}.{os.getpid()}.partial{p.suffix}") for p in paths]
+    try:
+        write_video(temps[0], video, fps, crf=crf, preset=preset)
+        write_video(temps[1], structure_video, fps, crf=crf, preset=preset)
+        write_image(temps[2], sheet)
+        for tmp, final in zip(temps, paths):
+            os.replace(tmp, final)
+    finally:
+        for tmp in temps:
+            tmp.unlink(missing_ok=True)
+
+
+def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: str | Path,
+               output: str | Path, config: SynthesisConfig = SynthesisConfig(),
+               reference_pose: str | Path | None = None) -> SynthesisResult:
+    """Observed clip + reference image -> K futures as RGB videos: ``OUT.mp4``, ``OUT-structure.mp4`` and
+    ``OUT-sheet.png`` (see the module docstring).
+
+    Args:
+        motion_model: a checkpoint path / shipped name, or a loaded ModelBundle.
+        frame_model: a checkpoint path / shipped name, or a loaded frame model (LoadedFrameModel).
+        input_path: the observed clip (.bvh / body .npz for body models; FaceMotion .npz / .csv for face).
+        reference: the reference appearance image.
+        output: ``OUT.mp4``.
+        config: the options.
+        reference_pose: the reference pose file (default: ``IMAGE.pose.npz`` when it exists).
+    Returns:
+        A :class:`SynthesisResult`.
+    Raises:
+        InputError: any user-fixable problem, before anything is written.
+    """
+    from motion2video.checkpoint import load_model
+    from motion2video.stages.clips import load_clip
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.video import VideoWriter, write_image
+
+    timings: dict[str, float] = {}
+    t_all = t0 = time.perf_counter()
+    paths = check_output(output)
+    bundle = load_model(motion_model) if isinstance(motion_model, (str, Path)) else motion_model
+    frames_model = load_frame_model(frame_model) if isinstance(frame_model, (str, Path)) else frame_model
+    gen_config = frames_model.model.config
+    domain = gen_config.domain
+    layout_domain = DOMAIN_OF_LAYOUT[bundle.data_config.layout]
+    if layout_domain != domain:
+        raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.name} predicts "
+                         f"{layout_domain} motion: give a {layout_domain} frame model (frames-{layout_domain}-128)")
+    clip = load_clip(bundle, input_path).data
+    ref = load_reference(reference, size=gen_config.image_size, domain=domain, pose_path=reference_pose)
+    timings["load"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    fc = sample_futures(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
+                        start=config.start, seed=config.seed, threads=config.motion_threads, source=str(input_path))
+    timings["sampling"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    structures = render_structures(fc, domain=domain, size=gen_config.image_size, reference=ref)
+    timings["structures"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    threads = config.generator_threads or default_generator_threads()
+    clock: dict[str, float] = {}
+    to, tf = structures.observed, structures.horizon
+    ref_preview = structure_previews(structures, slice(0, 1))[0]
+    header = ((ref.image, "reference"), (ref_preview, "ref. structure"))
+    obs_steps, fut_steps = sheet_steps(to, tf, header=len(header))
+    picked: dict[tuple[int, int], np.ndarray] = {}  # (cell, step) -> frame, for the contact sheet
+    compose_s = 0.0
+    chunks = iter_generated(frames_model, ref, structures, batch_size=config.batch_size, threads=threads,
+                            clock=clock)
+    temps = [p.with_name(f".{p.stem}.{os.getpid()}.partial{p.suffix}") for p in paths]
+    try:
+        with VideoWriter(temps[0], fc.fps, crf=config.crf, preset=config.preset) as video, \
+                VideoWriter(temps[1], fc.fps, crf=config.crf, preset=config.preset) as structure_video:
+            for start, frames, previews in chunks:
+                c0 = time.perf_counter()
+                video.write(compose_chunk(frames, start, to))
+                structure_video.write(compose_chunk(previews, start, to))
+                for i in range(len(frames)):
+                    step = start + i
+                    if step < to and step in obs_steps:
+                        picked[0, step] = frames[i, 0]
+                    elif step >= to and step - to in fut_steps:
+                        for j in range(frames.shape[1]):
+                            picked[j, step] = frames[i, j]
+                compose_s += time.perf_counter() - c0
+        c0 = time.perf_counter()
+        sheet = contact_sheet_of(lambda t: picked[0, t], lambda j, t: picked[j, to + t], to, tf,
+                                 structures.samples, header=header)
+        write_image(temps[2], sheet)
+        compose_s += time.perf_counter() - c0
+        for tmp, final in zip(temps, paths):
+            os.replace(tmp, final)
+    finally:
+        for tmp in temps:
+            tmp.unlink(missing_ok=True)
+    loop_s = time.perf_counter() - t0
+    timings["generation"] = clock.get("generation", 0.0)
+    timings["compose"] = compose_s
+    timings["encoding"] = max(0.0, loop_s - timings["generation"] - compose_s)
+    timings["total"] = time.perf_counter() - t_all
+    return SynthesisResult(video=paths[0], structure_video=paths[1], sheet=paths[2],
+                           frames=(video.num_frames, video.height, video.width, 3),
+                           samples=structures.samples, observed=structures.observed, horizon=structures.horizon,
+                           fps=float(fc.fps), domain=domain, notes=ref.notes, timings=timings, forecast=fc,
+                           structures=structures)
+
+
+# --- the Anny mesh path of the same futures ---------------------------------------------------------------
+
+def render_mesh_frames(structures: Structures, *, size: int = 256, fps: float = 25.0) -> GeneratedFrames:
+    """The Anny body in the same placed poses as the structures (the followed, front-facing 3D joints and
+    the camera they were placed with), one body fit for all frames so every cell shows the same body.
+
+    Args:
+        structures: body structures from a 3D body model (:func:`render_structures`).
+        size: frame size in pixels.
+    Returns:
+        :class:`GeneratedFrames`: observed (To, size, size, 3) and futures (K, Tf, size, size, 3) uint8.
+    """
+    placement = structures.placement
+    if placement is None or placement.world_observed is None:
+        raise InputError("the mesh video needs a 3D body model (this forecast has no 3D joints)")
+    k, tf = placement.world_futures.shape[:2]
+    to = placement.world_observed.shape[0]
+    every = np.concatenate([placement.world_observed, placement.world_futures.reshape(k * tf, 17, 3)])
+    camera = placement.camera.with_size(size, size)
+    with renderer_for("body3d", "mesh", size=size) as renderer:
+        frames = renderer.draw(every.astype(np.float32), fps, camera=camera)
+    return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))

@@ -1,0 +1,334 @@
+"""Behaviour transfer (Blattmann et al., CVPR 2021): the behaviour of one clip re-enacted from another
+clip's posture, flow-sampled new behaviours, the side-by-side videos, and the paper's Table 1 / Table 3
+protocol.
+
+Pipeline (``motion2video transfer``):
+
+1. ``SOURCE[s : s + 1 + H]`` (its first frame is the source's own start posture x_t) is encoded exactly
+   like a training behaviour sequence: the window's canonical frame is taken at its FIRST frame (the same
+   anchor the training windows use, whose behaviour sequence starts at the last observed frame), then the
+   checkpoint's normalisation. The behaviour encoder's posterior mean is z_beta (:func:`behavior_latents`).
+2. ``TARGET[F]`` is encoded the same way (a one-frame sequence, anchored at itself); the decoder enacts
+   z_beta from it for H frames (:meth:`BehaviorModel.transfer`).
+3. The H generated frames are decoded back with the TARGET's window frame.
+
+Root trajectory: the body layouts carry the root as features (x, y relative to the start posture in its
+heading-aligned canonical frame; z = height above the floor), so the model generates the root motion along
+with the pose. Decoding with the target's frame puts the re-enactment's first frame exactly at the target's
+start position and heading, and the root then moves as the behaviour dictates *relative to the target's
+heading*: a source that walks two metres forward makes the target walk two metres in the direction it
+faces, wherever the source walked in its own world. Root height is absolute (above the floor). Face models
+have no root: head pose is part of the 58 parameters and is generated like the expression.
+
+Frame indices given by the user (``--target-frame``, ``--behavior-start``) count frames of the FILE at its
+own rate; clips are resampled to the model's rate (25 fps by default) and indices converted
+(:func:`model_frame`).
+
+The Table 1 / Table 3 protocol is :mod:`motion2video.evaluation.transfer`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+import torch
+
+from motion2video.checkpoint import ModelBundle
+from motion2video.core.errors import InputError
+from motion2video.data import windows as W
+from motion2video.stages.clips import LoadedClip, model_frame
+from motion2video.stages.latents import behavior_latents, behavior_model, decode_sequences, encode_sequences, reenact
+from motion2video.stages.sampling import as_model_input
+from motion2video.stages.structure import (
+    ALT_FACE_COLOURS,
+    ALT_FACE_IDENTITY,
+    SOURCE_LOOK,
+    TARGET_LOOK,
+    iter_sequence,
+)
+from motion2video.stages.video import iter_mark_segments
+from motion2video.video import GREEN, RED, iter_chunks, iter_grid
+
+STYLES = ("mesh", "frames", "skeleton")
+
+# --- transfer and sampling ----------------------------------------------------------------------------------
+
+
+@dataclass
+class TransferResult:
+    """A behaviour transfer (or flow samples) in display coordinates.
+
+    Attributes:
+        source: (1 + H, ...) the behaviour source x_beta (its start posture, then H frames), or None for
+            flow samples.
+        reenacted: (K, 1 + H, ...) the target's start posture followed by H generated frames, per
+            behaviour (K = 1 for a source clip, N for flow samples).
+        z: (K, Z) the behaviour representations used.
+        fps: frame rate of both.
+        layout: the model's feature layout (``body3d``, ``body2d`` or ``face``).
+        source_name, target_name: the files (for labels).
+        target_frame: the start frame in the target file's own frame numbering.
+        source_identity, target_identity: face identities (faces only).
+    """
+
+    source: np.ndarray | None
+    reenacted: np.ndarray
+    z: np.ndarray
+    fps: float
+    layout: str
+    source_name: str | None
+    target_name: str
+    target_frame: int
+    source_identity: dict = field(default_factory=dict)
+    target_identity: dict = field(default_factory=dict)
+
+
+def _check_horizon(bundle: ModelBundle, horizon: int | None) -> int:
+    horizon = bundle.data_config.future if horizon is None else int(horizon)
+    if horizon < 1:
+        raise InputError(f"the horizon must be >= 1 frame, got {horizon}")
+    return horizon
+
+
+def _target_start(bundle: ModelBundle, target: LoadedClip, target_frame: int
+                  ) -> tuple[np.ndarray, W.WindowFrame | None]:
+    start = model_frame(target, target_frame, what="--target-frame")
+    return encode_sequences(bundle, target.data[None, start:start + 1])  # (1, 1, F)
+
+
+def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedClip, *, source_start: int = 0,
+                      target_frame: int = 0, horizon: int | None = None) -> TransferResult:
+    """Re-enact the behaviour of ``source`` (from its file frame ``source_start``, 1 + horizon frames) from
+    the posture of ``target`` at file frame ``target_frame``.
+
+    Raises:
+        InputError: not a behaviour model, a frame outside a clip, or a source too short for the horizon.
+    """
+    model = behavior_model(bundle)
+    horizon = _check_horizon(bundle, horizon)
+    s = model_frame(source, source_start, what="--behavior-start")
+    if s + 1 + horizon > source.num_frames:
+        raise InputError(f"the behaviour source needs {1 + horizon} frames from frame {source_start} at "
+                         f"{source.fps:g} fps, but only {source.num_frames - s} remain (shorten --horizon or "
+                         f"start earlier)", source.path)
+    src_feats, src_frame = encode_sequences(bundle, source.data[None, s:s + 1 + horizon])  # (1, 1+H, F)
+    tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
+    z = behavior_latents(model, src_feats)  # (1, Z)
+    gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon)  # (1, H, F)
+    seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)
+    reenacted = decode_sequences(bundle, seq[:, None], tgt_frame)[0]  # (1, 1+H, ...)
+    shown_source = decode_sequences(bundle, src_feats[:, None], src_frame)[0, 0]  # (1+H, ...)
+    return TransferResult(source=shown_source.astype(np.float32), reenacted=reenacted.astype(np.float32),
+                          z=z, fps=bundle.data_config.fps, layout=bundle.data_config.layout,
+                          source_name=source.path, target_name=target.path, target_frame=int(target_frame),
+                          source_identity=source.identity, target_identity=target.identity)
+
+
+def sample_behaviors(bundle: ModelBundle, target: LoadedClip, *, num_samples: int, target_frame: int = 0,
+                     horizon: int | None = None, seed: int = 0) -> TransferResult:
+    """``num_samples`` new behaviours z = T^-1(u), u ~ N(0, I) through the fitted normalizing flow, each
+    enacted from the target's posture at file frame ``target_frame``. The same seed gives the same samples.
+
+    Raises:
+        InputError: not a behaviour model, a flow that was never fitted, num_samples < 1, a bad frame.
+    """
+    model = behavior_model(bundle)
+    horizon = _check_horizon(bundle, horizon)
+    if num_samples < 1:
+        raise InputError(f"--sample must be >= 1, got {num_samples}")
+    if not bool(model.flow_fitted):
+        raise InputError("this behaviour checkpoint has no fitted normalizing flow to sample behaviours from "
+                         "(train it with motion2video train, which fits the flow at the end)",
+                         bundle.path or bundle.name)
+    tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
+    model.eval()
+    gen = torch.Generator().manual_seed(int(seed))
+    with torch.no_grad():
+        u = torch.randn((num_samples, model.config.latent_dim), generator=gen)
+        z = model.flow.inverse(u.to(next(model.parameters()).device))  # (K, Z)
+        out = model.transfer(z, as_model_input(np.repeat(tgt_feats[:, 0], num_samples, axis=0), model), horizon)
+    seq = np.concatenate([np.repeat(tgt_feats, num_samples, axis=0), out.cpu().numpy()], axis=1)  # (K, 1+H, F)
+    reenacted = decode_sequences(bundle, seq[None], tgt_frame)[0]  # (K, 1+H, ...)
+    return TransferResult(source=None, reenacted=reenacted.astype(np.float32), z=z.cpu().numpy(),
+                          fps=bundle.data_config.fps, layout=bundle.data_config.layout, source_name=None,
+                          target_name=target.path, target_frame=int(target_frame),
+                          target_identity=target.identity)
+
+
+# --- the video's style (what the command asks; Python callers get the same defaults and checks) ----------------
+
+
+def requested_style(style: str | None, reference: str | Path | None) -> str | None:
+    """The style asked for, before the model is known: ``frames`` when only a reference image is given.
+
+    Raises:
+        InputError: a reference image with another style.
+    """
+    style = style or ("frames" if reference else None)
+    if reference and style != "frames":
+        raise InputError(f"--reference is only used with --style frames (got --style {style})", reference)
+    return style
+
+
+def style_for(layout: str, style: str | None) -> str:
+    """The style for a model's layout: ``style``, by default ``mesh`` (``skeleton`` for 2D body models).
+
+    Raises:
+        InputError: ``mesh`` for a 2D body model.
+    """
+    style = style or ("skeleton" if layout == "body2d" else "mesh")
+    if style == "mesh" and layout == "body2d":
+        raise InputError("--style mesh needs a 3D body model; this model predicts 2D keypoints")
+    return style
+
+
+def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, reference: str | Path | None = None,
+                       reference_pose: str | Path | None = None):
+    """The frame generator (default ``frames-<domain>-128`` for the model's domain) and the reference for
+    ``style="frames"``.
+
+    Returns:
+        (loaded frame model, :class:`~motion2video.reference.Reference` or None: the start posture rendered
+        as an Anny body becomes the reference of a 3D body model).
+    Raises:
+        InputError: a frame generator of the other domain, or no reference for a model that cannot render one.
+    """
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.reference import load_reference
+    from motion2video.stages.structure import DOMAIN_OF_LAYOUT
+
+    layout = bundle.data_config.layout
+    frame_name = frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
+    loaded = load_frame_model(frame_name)
+    domain = loaded.config.domain
+    if domain != DOMAIN_OF_LAYOUT[layout]:
+        raise InputError(f"this frame generator makes {domain} frames, but {bundle.name} moves a "
+                         f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
+    if reference:
+        return loaded, load_reference(reference, size=loaded.config.image_size, domain=domain,
+                                      pose_path=reference_pose)
+    if layout != "body3d":
+        raise InputError("--style frames needs --reference for this model (only 3D body models can render "
+                         "their own reference)")
+    return loaded, None
+
+
+# --- rendering ------------------------------------------------------------------------------------------
+
+
+def _short(path: str | None) -> str:
+    return Path(path).stem if path else "?"
+
+
+def render_transfer(result: TransferResult, *, style: str = "mesh", size: int = 256,
+                    frame_model=None, reference=None) -> np.ndarray:
+    """The transfer video.
+
+    Source clip: two cells side by side, ``source`` (framed green, the source's look) | the target's start
+    posture (green) re-enacting the behaviour (red), with the target's look. Flow samples: a grid of the K
+    re-enactments. ``style="frames"`` draws the re-enactments with the keypoint-conditioned frame generator
+    ``frame_model`` from ``reference`` (see :func:`render_with_frame_model`); the source cell is then a
+    skeleton.
+
+    Returns:
+        (1 + H, H', W', 3) uint8.
+    """
+    return np.concatenate(list(iter_transfer(result, style=style, size=size, frame_model=frame_model,
+                                             reference=reference)))
+
+
+def iter_transfer(result: TransferResult, *, style: str = "mesh", size: int = 256,
+                  frame_model=None, reference=None) -> Iterator[np.ndarray]:
+    """:func:`render_transfer` as a stream of (t, H', W', 3) uint8 chunks: every cell is drawn lazily as the
+    grid consumes it (the frame generator's re-enactments, ``style="frames"``, are generated first)."""
+    if style not in STYLES:
+        raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
+    n = result.reenacted.shape[1]
+    face_alt = result.layout == "face" and result.target_identity == result.source_identity
+    target_identity = ALT_FACE_IDENTITY if face_alt else result.target_identity
+    target_colours = ALT_FACE_COLOURS if face_alt else None
+    cells = []
+    if result.source is not None:
+        src = iter_sequence(result.source, layout=result.layout, style="skeleton" if style == "frames" else style,
+                            size=size, fps=result.fps, look=SOURCE_LOOK, identity=result.source_identity)
+        cells.append(iter_mark_segments(src, [(n, GREEN, f"behaviour: {_short(result.source_name)}")]))
+    if style == "frames":
+        drawn = render_with_frame_model(result, frame_model, size=size, reference=reference)
+    else:
+        drawn = [iter_sequence(seq, layout=result.layout, style=style, size=size, fps=result.fps, look=TARGET_LOOK,
+                               identity=target_identity, face_colours=target_colours) for seq in result.reenacted]
+    for k, frames in enumerate(drawn):
+        text = (f"{_short(result.target_name)} @{result.target_frame} re-enacts" if result.source is not None
+                else f"flow behaviour {k + 1}")
+        cells.append(iter_mark_segments(iter_chunks(frames), [(1, GREEN, text), (n - 1, RED, text)]))
+    return iter_grid(cells, None, 2 if result.source is not None else None)
+
+
+def render_with_frame_model(result: TransferResult, frame_model, *, size: int, reference=None) -> list[np.ndarray]:
+    """Draw the re-enactments with the keypoint-conditioned frame generator, through the ``synthesize``
+    pipeline's conventions (:mod:`motion2video.stages.structure`, :mod:`motion2video.stages.frames`): the target's start posture plays the observed
+    frame, each re-enactment a future; bodies are turned to face the camera at the start posture, followed
+    on the ground, and aligned to the reference image's pose (its ``.pose.npz`` when there is one, else the
+    start posture as a single-frame render frames it).
+
+    Args:
+        frame_model: a loaded frame generator (:func:`motion2video.frames.checkpoint.load_frame_model`).
+        reference: a :class:`motion2video.reference.Reference` (:func:`motion2video.reference.load_reference`),
+            or None for 3D body models: the start posture rendered with the target's Anny look (and its
+            exact pose) becomes the reference.
+    Returns:
+        K arrays (1 + H, size, size, 3) uint8.
+    """
+    import cv2
+
+    from motion2video.stages.frames import generate_video_frames
+    from motion2video.stages.sampling import Forecast
+    from motion2video.stages.structure import DOMAIN_OF_LAYOUT, render_structures
+
+    if frame_model is None:
+        raise InputError("--style frames needs a frame generator (--frame-model)")
+    cfg = frame_model.model.config
+    if DOMAIN_OF_LAYOUT[result.layout] != cfg.domain:
+        raise InputError(f"the frame model makes {cfg.domain} frames, but the behaviour model moves a "
+                         f"{DOMAIN_OF_LAYOUT[result.layout]}", getattr(frame_model, "path", None))
+    s = cfg.image_size
+    fc = Forecast(observed=result.reenacted[0, :1], futures=result.reenacted[:, 1:], fps=result.fps,
+                  layout=result.layout, model="behavior", seed=0)
+    if reference is None:
+        if result.layout != "body3d":
+            raise InputError("--style frames needs --reference for this model (only 3D body models can render "
+                             "their own reference)")
+        reference = rendered_reference(fc, s)
+    structures = render_structures(fc, domain=cfg.domain, size=s, reference=reference)
+    generated = generate_video_frames(frame_model, reference, structures)
+    out = []
+    for future in generated.futures:  # (H, s, s, 3)
+        frames = np.concatenate([generated.observed, future])
+        if s != size:
+            frames = np.stack([cv2.resize(f, (size, size), interpolation=cv2.INTER_LINEAR) for f in frames])
+        out.append(frames)
+    return out
+
+
+def rendered_reference(fc, size: int):
+    """A reference for the frame generator made from the start posture (``fc.observed[0]``): the target's Anny
+    look rendered through the camera a single-frame placement uses, with that exact 2D pose."""
+    from motion2video.stages.structure import BODY_ELEVATION_DEG, BODY_MARGIN, BODY_YFOV_DEG, place_body
+    from motion2video.core.camera import fit_camera
+    from motion2video.reference import Reference, ReferencePose
+    from motion2video.stages.structure import renderer_for
+
+    placement = place_body(fc.observed, fc.futures, size=size)
+    start = placement.world_observed[0]  # (17, 3) front-facing start posture
+    camera = fit_camera(start, size, size, elevation_deg=BODY_ELEVATION_DEG, yfov_deg=BODY_YFOV_DEG,
+                        margin=BODY_MARGIN)
+    with renderer_for("body3d", "mesh", size=size, **TARGET_LOOK) as r:
+        image = r.draw(start[None].astype(np.float32), fc.fps, camera=camera)[0]
+    pose = ReferencePose("body", size, size, points=placement.reference)
+    return Reference(image=image, pose=pose, notes=("no --reference: the target's start posture rendered as an "
+                                                    "Anny body is the reference",), path=Path("(rendered)"))
+
+

@@ -1,0 +1,69 @@
+"""Atomic file writing: write to a temporary file beside the destination, then rename it into place.
+
+A failure (or an interrupt) part-way never leaves a partial file under the destination's name, and an
+existing file is only replaced by a complete one. Every writer in the package goes through here.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+
+def check_output_path(path: str | Path, extensions: tuple[str, ...]) -> Path:
+    """Validate an output path before any work is done: one of ``extensions`` (lower-case, with the dot), an
+    existing and writable folder, not itself a folder. Raises InputError naming the path."""
+    from motion2video.core.errors import InputError
+
+    out = Path(path)
+    if out.suffix.lower() not in extensions:
+        raise InputError(f"unsupported output extension {out.suffix or '(none)'!r}: the output must be an "
+                         f"{' or '.join(extensions)} file", out)
+    folder = out.parent
+    if not folder.is_dir():
+        raise InputError("the output folder does not exist", out)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError("the output folder is not writable", out)
+    if out.is_dir():
+        raise InputError("the output path is a directory", out)
+    return out
+
+
+@contextmanager
+def atomic_output(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path in ``path``'s folder (same suffix, so format-sniffing writers behave); when the
+    block succeeds it is renamed onto ``path``, otherwise it is removed. Creates missing parent folders."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def save_npz(path: str | Path, arrays: dict[str, np.ndarray], *, compressed: bool = False) -> Path:
+    """``np.savez`` (or ``savez_compressed``) ``arrays`` to ``path`` atomically; returns ``path``."""
+    path = Path(path)
+    with atomic_output(path) as tmp, open(tmp, "wb") as f:
+        (np.savez_compressed if compressed else np.savez)(f, **arrays)
+    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically; returns ``path``."""
+    path = Path(path)
+    with atomic_output(path) as tmp:
+        tmp.write_text(text)
+    return path
+
+
+def write_json(path: str | Path, record: dict, *, indent: int = 2) -> Path:
+    """Write ``record`` as JSON (trailing newline) to ``path`` atomically; returns ``path``."""
+    return write_text(path, json.dumps(record, indent=indent) + "\n")

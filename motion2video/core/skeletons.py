@@ -1,0 +1,246 @@
+"""Joint sets as data.
+
+Every skeleton is a :class:`Skeleton`: joint names, the parent of each joint (-1 for the root) and the
+left/right pairs used for mirroring. The canonical body skeleton of the project is ``h36m-17`` in the
+VideoPose3D / DLow order (index 1 is the RIGHT hip)::
+
+    0 pelvis  1 right_hip  2 right_knee  3 right_ankle  4 left_hip  5 left_knee  6 left_ankle
+    7 spine   8 thorax     9 neck (nose) 10 head
+    11 left_shoulder 12 left_elbow 13 left_wrist 14 right_shoulder 15 right_elbow 16 right_wrist
+
+World coordinates are metres, right-handed, z up. The BVH rig maps (:data:`RIG_JOINT_MAPS`) say which BVH
+joint's origin sits at each canonical joint; ``None`` entries are derived by :func:`rig_target` rules
+(a midpoint of two joints or an end site).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+# Named joint indices of the canonical H36M-17 skeleton (checked against :data:`H36M_17`'s names below).
+PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE = 0, 1, 2, 3, 4, 5, 6
+SPINE, THORAX, NECK, HEAD = 7, 8, 9, 10
+L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST = 11, 12, 13, 14, 15, 16
+
+
+@dataclass(frozen=True)
+class Skeleton:
+    """A joint topology.
+
+    Attributes:
+        name: registry name, e.g. ``"h36m-17"``.
+        joints: joint names, in array order.
+        parents: parent index per joint, -1 for the root.
+        mirror_pairs: (left, right) index pairs swapped by left/right mirroring.
+    """
+
+    name: str
+    joints: tuple[str, ...]
+    parents: tuple[int, ...]
+    mirror_pairs: tuple[tuple[int, int], ...] = ()
+
+    def __post_init__(self) -> None:
+        if len(self.joints) != len(self.parents):
+            raise ValueError(f"skeleton {self.name}: {len(self.joints)} names but {len(self.parents)} parents")
+        for j, p in enumerate(self.parents):
+            if p >= j:
+                raise ValueError(f"skeleton {self.name}: parent of joint {j} must come before it, got {p}")
+
+    @property
+    def num_joints(self) -> int:
+        return len(self.joints)
+
+    def index(self, joint: str) -> int:
+        return self.joints.index(joint)
+
+    @property
+    def bones(self) -> list[tuple[int, int]]:
+        """(parent, child) index pairs, one per non-root joint."""
+        return [(p, j) for j, p in enumerate(self.parents) if p >= 0]
+
+    def mirror_permutation(self) -> np.ndarray:
+        """Index array that swaps left and right joints: ``joints[..., perm, :]`` mirrors names."""
+        perm = np.arange(self.num_joints)
+        for a, b in self.mirror_pairs:
+            perm[a], perm[b] = b, a
+        return perm
+
+    def side(self, j: int) -> str:
+        """``"left"``, ``"right"`` or ``"center"`` for joint ``j``, from its name."""
+        name = self.joints[j].lower()
+        if name.startswith("left") or name.startswith("l_"):
+            return "left"
+        if name.startswith("right") or name.startswith("r_"):
+            return "right"
+        return "center"
+
+
+H36M_17 = Skeleton(
+    name="h36m-17",
+    joints=(
+        "pelvis", "right_hip", "right_knee", "right_ankle", "left_hip", "left_knee", "left_ankle",
+        "spine", "thorax", "neck", "head",
+        "left_shoulder", "left_elbow", "left_wrist", "right_shoulder", "right_elbow", "right_wrist",
+    ),
+    parents=(-1, 0, 1, 2, 0, 4, 5, 0, 7, 8, 9, 8, 11, 12, 8, 14, 15),
+    mirror_pairs=((1, 4), (2, 5), (3, 6), (11, 14), (12, 15), (13, 16)),
+)
+
+# Human3.6M's full 32-joint layout as stored by VideoPose3D (data_3d_h36m.npz).
+H36M_32 = Skeleton(
+    name="h36m-32",
+    joints=(
+        "pelvis", "right_hip", "right_knee", "right_ankle", "right_toe", "right_toe_end",
+        "left_hip", "left_knee", "left_ankle", "left_toe", "left_toe_end",
+        "spine0", "spine", "thorax", "neck", "head",
+        "left_collar", "left_shoulder", "left_elbow", "left_wrist", "left_thumb", "left_thumb_end",
+        "left_hand", "left_hand_end",
+        "right_collar", "right_shoulder", "right_elbow", "right_wrist", "right_thumb", "right_thumb_end",
+        "right_hand", "right_hand_end",
+    ),
+    parents=(-1, 0, 1, 2, 3, 4, 0, 6, 7, 8, 9, 0, 11, 12, 13, 14, 12, 16, 17, 18, 19, 20, 19, 22,
+             12, 24, 25, 26, 27, 28, 27, 30),
+    mirror_pairs=((1, 6), (2, 7), (3, 8), (4, 9), (5, 10), (16, 24), (17, 25), (18, 26), (19, 27),
+                  (20, 28), (21, 29), (22, 30), (23, 31)),
+)
+# The 17 joints DLow / VideoPose3D keep from the 32 (in canonical order).
+H36M_32_TO_17 = (0, 1, 2, 3, 6, 7, 8, 12, 13, 14, 15, 17, 18, 19, 25, 26, 27)
+
+COCO_17 = Skeleton(
+    name="coco-17",
+    joints=(
+        "nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder",
+        "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip", "right_hip",
+        "left_knee", "right_knee", "left_ankle", "right_ankle",
+    ),
+    # COCO has no kinematic tree; this one hangs everything off the nose for drawing and mirroring.
+    parents=(-1, 0, 0, 1, 2, 0, 0, 5, 6, 7, 8, 5, 6, 11, 12, 13, 14),
+    mirror_pairs=((1, 2), (3, 4), (5, 6), (7, 8), (9, 10), (11, 12), (13, 14), (15, 16)),
+)
+
+OPENPOSE_18 = Skeleton(
+    name="openpose-18",
+    joints=(
+        "nose", "neck", "right_shoulder", "right_elbow", "right_wrist", "left_shoulder", "left_elbow",
+        "left_wrist", "right_hip", "right_knee", "right_ankle", "left_hip", "left_knee", "left_ankle",
+        "right_eye", "left_eye", "right_ear", "left_ear",
+    ),
+    # Rooted at the nose so that every parent precedes its child; the drawn limbs are the same.
+    parents=(-1, 0, 1, 2, 3, 1, 5, 6, 1, 8, 9, 1, 11, 12, 0, 0, 14, 15),
+    mirror_pairs=((2, 5), (3, 6), (4, 7), (8, 11), (9, 12), (10, 13), (14, 15), (16, 17)),
+)
+
+BODY_25 = Skeleton(
+    name="body-25",
+    joints=(
+        "nose", "neck", "right_shoulder", "right_elbow", "right_wrist", "left_shoulder", "left_elbow",
+        "left_wrist", "mid_hip", "right_hip", "right_knee", "right_ankle", "left_hip", "left_knee",
+        "left_ankle", "right_eye", "left_eye", "right_ear", "left_ear", "left_big_toe", "left_small_toe",
+        "left_heel", "right_big_toe", "right_small_toe", "right_heel",
+    ),
+    parents=(-1, 0, 1, 2, 3, 1, 5, 6, 1, 8, 9, 10, 8, 12, 13, 0, 0, 15, 16, 14, 19, 14, 11, 22, 11),
+    mirror_pairs=((2, 5), (3, 6), (4, 7), (9, 12), (10, 13), (11, 14), (15, 16), (17, 18), (19, 22),
+                  (20, 23), (21, 24)),
+)
+
+SKELETONS: dict[str, Skeleton] = {s.name: s for s in (H36M_17, H36M_32, COCO_17, OPENPOSE_18, BODY_25)}
+
+
+def get_skeleton(name: str) -> Skeleton:
+    """Look a skeleton up by registry name; raises ``KeyError`` with the known names."""
+    try:
+        return SKELETONS[name]
+    except KeyError:
+        raise KeyError(f"unknown skeleton {name!r}; known: {', '.join(sorted(SKELETONS))}") from None
+
+
+# OpenPose 18 / BODY_25 -> canonical: canonical joint -> list of source joints averaged.
+OPENPOSE_TO_H36M: dict[str, tuple[str, ...]] = {
+    "pelvis": ("right_hip", "left_hip"),
+    "right_hip": ("right_hip",), "right_knee": ("right_knee",), "right_ankle": ("right_ankle",),
+    "left_hip": ("left_hip",), "left_knee": ("left_knee",), "left_ankle": ("left_ankle",),
+    "spine": ("right_hip", "left_hip", "neck", "neck"),
+    "thorax": ("neck",),
+    "neck": ("nose",),
+    "head": ("right_eye", "left_eye"),
+    "left_shoulder": ("left_shoulder",), "left_elbow": ("left_elbow",), "left_wrist": ("left_wrist",),
+    "right_shoulder": ("right_shoulder",), "right_elbow": ("right_elbow",), "right_wrist": ("right_wrist",),
+}
+
+
+def convert_openpose_to_h36m(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Map OpenPose-18 or BODY_25 joints to the canonical H36M-17 order.
+
+    Args:
+        joints: (..., J, D) joints in ``skeleton`` order (J = 18 or 25).
+        skeleton: ``OPENPOSE_18`` or ``BODY_25``.
+    Returns:
+        (..., 17, D) joints; each canonical joint is the mean of its sources in :data:`OPENPOSE_TO_H36M`.
+    """
+    out = []
+    for name in H36M_17.joints:
+        idx = [skeleton.index(s) for s in OPENPOSE_TO_H36M[name]]
+        out.append(joints[..., idx, :].mean(axis=-2))
+    return np.stack(out, axis=-2)
+
+
+# --- BVH rigs -----------------------------------------------------------------------------------------
+# For each rig in ../shared/data/mocap (plus cmu-amc, the raw conversions of two CMU clips): canonical joint -> BVH joint whose ORIGIN is that joint.
+# A tuple of two names means "midpoint of the two origins"; a name ending in ":end" means "the end site
+# of that joint".
+RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
+    "cmu-mb": {
+        "pelvis": "Hips", "right_hip": "RightUpLeg", "right_knee": "RightLeg", "right_ankle": "RightFoot",
+        "left_hip": "LeftUpLeg", "left_knee": "LeftLeg", "left_ankle": "LeftFoot",
+        "spine": "Spine", "thorax": "Spine1", "neck": "Neck1", "head": "Head",
+        "left_shoulder": "LeftArm", "left_elbow": "LeftForeArm", "left_wrist": "LeftHand",
+        "right_shoulder": "RightArm", "right_elbow": "RightForeArm", "right_wrist": "RightHand",
+    },
+    "cmu-daz": {
+        "pelvis": "hip", "right_hip": "rThigh", "right_knee": "rShin", "right_ankle": "rFoot",
+        "left_hip": "lThigh", "left_knee": "lShin", "left_ankle": "lFoot",
+        "spine": "abdomen", "thorax": "chest", "neck": "neck", "head": "head",
+        "left_shoulder": "lShldr", "left_elbow": "lForeArm", "left_wrist": "lHand",
+        "right_shoulder": "rShldr", "right_elbow": "rForeArm", "right_wrist": "rHand",
+    },
+    "cmu-3dsmax": {
+        "pelvis": "Hips", "right_hip": "RightHip", "right_knee": "RightKnee", "right_ankle": "RightAnkle",
+        "left_hip": "LeftHip", "left_knee": "LeftKnee", "left_ankle": "LeftAnkle",
+        "spine": "Chest", "thorax": "Chest2", "neck": "Neck", "head": "Head",
+        "left_shoulder": "LeftShoulder", "left_elbow": "LeftElbow", "left_wrist": "LeftWrist",
+        "right_shoulder": "RightShoulder", "right_elbow": "RightElbow", "right_wrist": "RightWrist",
+    },
+    "deepmimic-humanoid": {
+        "pelvis": "root", "right_hip": "right_hip", "right_knee": "right_knee", "right_ankle": "right_ankle",
+        "left_hip": "left_hip", "left_knee": "left_knee", "left_ankle": "left_ankle",
+        "spine": ("root", "chest"), "thorax": "chest", "neck": "neck", "head": "neck:end",
+        "left_shoulder": "left_shoulder", "left_elbow": "left_elbow", "left_wrist": "left_elbow:end",
+        "right_shoulder": "right_shoulder", "right_elbow": "right_elbow", "right_wrist": "right_elbow:end",
+    },
+    "mass-character1": {
+        "pelvis": "Character1_Hips", "right_hip": "Character1_RightUpLeg", "right_knee": "Character1_RightLeg",
+        "right_ankle": "Character1_RightFoot", "left_hip": "Character1_LeftUpLeg",
+        "left_knee": "Character1_LeftLeg", "left_ankle": "Character1_LeftFoot",
+        "spine": "Character1_Spine", "thorax": "Character1_Spine1", "neck": "Character1_Neck",
+        "head": "Character1_Head",
+        "left_shoulder": "Character1_LeftArm", "left_elbow": "Character1_LeftForeArm",
+        "left_wrist": "Character1_LeftHand",
+        "right_shoulder": "Character1_RightArm", "right_elbow": "Character1_RightForeArm",
+        "right_wrist": "Character1_RightHand",
+    },
+    # Raw amc2bvh conversions of CMU captures (cmu/16_01.bvh, cmu/16_02.bvh) keep the ASF bone names (the
+    # manifest calls them cmu-daz, but their joints say otherwise). The ASF bone named X starts where its parent ends, so each BVH joint's
+    # origin is the proximal end of that bone (lfemur = hip, ltibia = knee, lhumerus = shoulder, ...). The
+    # correspondence mirrors the MotionBuilder renaming used by ``cmu-mb`` (upperback = Spine, thorax =
+    # Spine1, upperneck = Neck1).
+    "cmu-amc": {
+        "pelvis": "hip", "right_hip": "rfemur", "right_knee": "rtibia", "right_ankle": "rfoot",
+        "left_hip": "lfemur", "left_knee": "ltibia", "left_ankle": "lfoot",
+        "spine": "upperback", "thorax": "thorax", "neck": "upperneck", "head": "head",
+        "left_shoulder": "lhumerus", "left_elbow": "lradius", "left_wrist": "lwrist",
+        "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
+    },
+}

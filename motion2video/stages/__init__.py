@@ -1,0 +1,10 @@
+"""The stages every application composes, each in one place.
+
+- :mod:`~motion2video.stages.clips`: load a user's clip for a model (one loader per input kind);
+- :mod:`~motion2video.stages.sampling`: sample K futures of an observed clip;
+- :mod:`~motion2video.stages.structure`: draw structure (one ``renderer_for(layout, style)`` table);
+- :mod:`~motion2video.stages.frames`: generate frames with the keypoint-conditioned frame generator;
+- writing video is :mod:`motion2video.video`.
+
+Stages import the core, the renderers, the models and the frame generator; never an application.
+"""

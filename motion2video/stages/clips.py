@@ -1,0 +1,100 @@
+"""Load a user's clip for a model: the one loader every application (sample, synthesize, transfer, analogy)
+feeds its model with.
+
+One loader per input kind, chosen by the model's layout: body models take 3D h36m-17 motion (BVH of any rig,
+DeepMimic / exp-map text, motion npz, ...), face models take face captures (Live Link Face CSV, FaceMotion
+npz). The clip is resampled to the model's rate exactly as its training data was
+(:mod:`motion2video.data.dataset`); a face capture with no head pose gets the same procedural head track the
+training captures got (``DatasetConfig.face_head_pose``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion, Motion
+
+
+@dataclass
+class LoadedClip:
+    """A user clip at the model's frame rate.
+
+    Attributes:
+        data: (T, 17, 3) world joints (body models) or (T, 58) face parameters (face models), float32.
+        fps: the model's frame rate (the rate of ``data``).
+        source_fps: the file's own rate; source_frames: its number of frames.
+        path: the file.
+        identity: the face identity recorded in the file (empty for bodies and plain captures).
+    """
+
+    data: np.ndarray
+    fps: float
+    source_fps: float
+    source_frames: int
+    path: str
+    identity: dict = field(default_factory=dict)
+
+    @property
+    def num_frames(self) -> int:
+        return int(self.data.shape[0])
+
+
+def _body_data(bundle, motion, path: Path) -> np.ndarray:
+    """(T, 17, 3) joints at the model's rate; InputError for face motion or another skeleton."""
+    from motion2video.data.dataset import _body_clip_from_motion
+
+    if isinstance(motion, FaceMotion):
+        raise InputError(f"{bundle.name} is a body model, but this file holds face motion", path)
+    if not isinstance(motion, Motion) or motion.skeleton != "h36m-17" or motion.dim != 3:
+        raise InputError(f"body models need 3D h36m-17 joints (BVH, motion npz, ...), got skeleton "
+                         f"{motion.skeleton} with D={motion.dim}", path)
+    return _body_clip_from_motion(motion, name=path.name, fps=bundle.data_config.fps).data
+
+
+def _face_data(bundle, motion, path: Path) -> np.ndarray:
+    """(T, 58) face parameters at the model's rate (expressions clipped to [0, 1]); InputError for body motion."""
+    from motion2video.data.dataset import _face_clip_from_motion
+
+    if not isinstance(motion, FaceMotion):
+        raise InputError(f"{bundle.name} is a face model, but this file holds body motion", path)
+    cfg = bundle.data_config
+    data = _face_clip_from_motion(motion, name=path.name, fps=cfg.fps, head_pose=cfg.face_head_pose).data
+    data[:, :52] = np.clip(data[:, :52], 0.0, 1.0)
+    return data
+
+
+LOADERS = {"body3d": _body_data, "body2d": _body_data, "face": _face_data}
+
+
+def load_clip(bundle, path: str | Path) -> LoadedClip:
+    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.checkpoint.ModelBundle`).
+
+    Returns:
+        A :class:`LoadedClip` at the model's rate.
+    Raises:
+        InputError: a folder, a missing or malformed file, body motion for a face model or the reverse, a body
+        clip of another skeleton or 2D joints.
+    """
+    from motion2video.formats.io import load_motion
+
+    path = Path(path)
+    if path.is_dir():
+        raise InputError("a model takes one clip file, not a folder", path)
+    motion = load_motion(path)
+    data = LOADERS[bundle.data_config.layout](bundle, motion, path)
+    identity = dict(motion.identity) if isinstance(motion, FaceMotion) else {}
+    source_frames = motion.num_frames
+    return LoadedClip(data=data.astype(np.float32), fps=bundle.data_config.fps, source_fps=float(motion.fps),
+                      source_frames=int(source_frames), path=str(path), identity=identity)
+
+
+def model_frame(clip: LoadedClip, index: int, *, what: str) -> int:
+    """Frame ``index`` of the file -> the nearest frame of the resampled clip; InputError when outside."""
+    if not 0 <= index < clip.source_frames:
+        raise InputError(f"{what} {index} is outside the clip (frames 0..{clip.source_frames - 1} at "
+                         f"{clip.source_fps:g} fps)", clip.path)
+    return min(int(np.floor(index * clip.fps / clip.source_fps + 0.5)), clip.num_frames - 1)  # half up

@@ -1,0 +1,140 @@
+"""Generate frames: the one path from structures to RGB frames with the keypoint-conditioned frame generator.
+
+:func:`generate_frames` encodes the reference once (:meth:`~motion2video.frames.model.FrameGenerator.encode_reference`)
+and decodes every target structure from it (:meth:`~motion2video.frames.model.FrameGenerator.decode`), the same
+two methods :func:`motion2video.frames.model.generate` (evaluation) runs per pair; :func:`generate_video_frames`
+runs it over the observed frames and every future of :class:`~motion2video.stages.structure.Structures`.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from typing import Iterator
+
+import numpy as np
+
+from motion2video.reference import Reference
+from motion2video.stages.sampling import torch_threads
+from motion2video.stages.structure import Structures, structure_maps, structure_previews, timeline_rows
+
+GENERATE_CHUNK = 64  # target structures materialised at once (33 x 128 x 128 float32 = 2.2 MB each)
+
+
+def default_generator_threads() -> int:
+    """Half the CPU cores, 1 to 4. On the 2-core machines this was built on, two threads were slower than
+    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench_pipeline.py``."""
+    return max(1, min(4, (os.cpu_count() or 1) // 2))
+
+
+def generate_frames(model, reference_image: np.ndarray, reference_structure: np.ndarray,
+                    target_structures: np.ndarray, *, batch_size: int = 4,
+                    channels_last: bool = True) -> np.ndarray:
+    """Frames of one reference appearance in many target structures.
+
+    ``decoder(enc_img(x_ref) - enc_pose(p_ref) + enc_pose(p_tgt))`` (+ ``x_ref`` for residual models) through
+    :meth:`~motion2video.frames.model.FrameGenerator.encode_reference` and ``decode``: the reference image and
+    structure are encoded once, not once per target (the reference is the same for the whole video), under
+    ``torch.inference_mode``.
+
+    Args:
+        model: a FrameGenerator (or a loaded frame model with ``.model``).
+        reference_image: (S, S, 3) uint8.
+        reference_structure: (C, S, S) float32.
+        target_structures: (N, C, S, S) float32.
+        batch_size: targets per forward pass.
+        channels_last: run the convolutions in channels-last memory format.
+    Returns:
+        (N, S, S, 3) uint8.
+    """
+    import torch
+
+    from motion2video.frames.model import images_to_tensor, tensor_to_images
+
+    net = getattr(model, "model", model)
+    cfg = net.config
+    size, channels = cfg.image_size, cfg.structure_channels
+    if reference_image.shape != (size, size, 3):
+        raise ValueError(f"reference_image must be ({size}, {size}, 3), got {reference_image.shape}")
+    if reference_structure.shape != (channels, size, size):
+        raise ValueError(f"reference_structure must be ({channels}, {size}, {size}), got {reference_structure.shape}")
+    if target_structures.ndim != 4 or target_structures.shape[1:] != (channels, size, size):
+        raise ValueError(f"target_structures must be (N, {channels}, {size}, {size}), got {target_structures.shape}")
+    if batch_size < 1:
+        raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+    fmt = torch.channels_last if channels_last else torch.contiguous_format
+    net.eval()
+    net.to(memory_format=fmt)
+    out = np.empty((len(target_structures), size, size, 3), np.uint8)
+    with torch.inference_mode():
+        x_ref = images_to_tensor(reference_image[None]).contiguous(memory_format=fmt)  # (1, 3, S, S)
+        p_ref = torch.from_numpy(np.ascontiguousarray(reference_structure[None], np.float32))
+        base = net.encode_reference(x_ref, p_ref.contiguous(memory_format=fmt))  # per level (1, C_l, H_l, W_l)
+        for start in range(0, len(target_structures), batch_size):
+            p_tgt = torch.from_numpy(np.ascontiguousarray(target_structures[start:start + batch_size], np.float32))
+            y = net.decode(base, x_ref, p_tgt.contiguous(memory_format=fmt))  # (B, 3, S, S)
+            out[start:start + len(p_tgt)] = tensor_to_images(y)
+    return out
+
+
+@dataclass(frozen=True)
+class GeneratedFrames:
+    """Generated frames. observed: (To, S, S, 3) uint8. futures: (K, Tf, S, S, 3) uint8."""
+
+    observed: np.ndarray
+    futures: np.ndarray
+
+
+def generate_video_frames(model, reference: Reference, structures: Structures, *, batch_size: int = 4,
+                          threads: int | None = None, channels_last: bool = True) -> GeneratedFrames:
+    """Run :func:`generate_frames` over every observed and future frame of :class:`Structures`, building
+    the structure maps a chunk at a time (so a long video never holds all of them)."""
+    net = getattr(model, "model", model)
+    size = net.config.image_size
+    if structures.size != size:
+        raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
+    ref_structure = structure_maps(structures, slice(0, 1))[0]
+    n = structures.num_targets
+    frames = np.empty((n, size, size, 3), np.uint8)
+    with torch_threads(threads):
+        for start in range(0, n, GENERATE_CHUNK):
+            stop = min(n, start + GENERATE_CHUNK)
+            maps = structure_maps(structures, slice(1 + start, 1 + stop))
+            frames[start:stop] = generate_frames(net, reference.image, ref_structure, maps, batch_size=batch_size,
+                                                 channels_last=channels_last)
+    to, k, tf = structures.observed, structures.samples, structures.horizon
+    return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
+
+
+def iter_generated(model, reference: Reference, structures: Structures, *, batch_size: int = 4,
+                   threads: int | None = None, channels_last: bool = True, chunk: int = 16,
+                   clock: dict | None = None) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """Generate the video time step by time step (all K cells of a step together), a chunk of steps at a
+    time, so the grid video can be encoded while it is generated and never held whole.
+
+    Each distinct structure row is generated once (the observed steps are shared by the K cells).
+    ``clock["generation"]`` (when given) accumulates the seconds spent generating.
+
+    Yields:
+        (start, frames, previews): frames (t, K, S, S, 3) uint8 generated for steps start..start+t-1,
+        previews the same shape, the structures drawn (:func:`~motion2video.stages.structure.structure_previews`).
+    """
+    net = getattr(model, "model", model)
+    size = net.config.image_size
+    if structures.size != size:
+        raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
+    ref_structure = structure_maps(structures, slice(0, 1))[0]
+    steps = structures.observed + structures.horizon
+    for start in range(0, steps, chunk):
+        rows = timeline_rows(structures, start, min(steps, start + chunk))  # (t, K)
+        unique, inverse = np.unique(rows, return_inverse=True)
+        t0 = time.perf_counter()
+        with torch_threads(threads):
+            frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),
+                                     batch_size=batch_size, channels_last=channels_last)
+        if clock is not None:
+            clock["generation"] = clock.get("generation", 0.0) + time.perf_counter() - t0
+        previews = structure_previews(structures, unique)
+        shape = rows.shape
+        yield start, frames[inverse.reshape(shape)], previews[inverse.reshape(shape)]

@@ -1,0 +1,128 @@
+"""Encode and decode with latent motion models: the behaviour latents and re-enactment of behaviour transfer,
+and the A : B :: C : D analogy windows. Both transfer and analogy (and their evaluation protocols) use these.
+
+Sequences are encoded exactly like training windows (:mod:`motion2video.data.windows`, the checkpoint's
+normalisation) and decoded back to display coordinates: world joints (body3d), virtual-camera pixels
+(body2d) or face parameters.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import torch
+
+from motion2video.checkpoint import ModelBundle
+from motion2video.core.errors import InputError
+from motion2video.data import windows as W
+from motion2video.data.dataset import DatasetConfig, decode_samples, encode_windows
+from motion2video.models.behavior import BehaviorModel
+from motion2video.stages.sampling import as_model_input
+
+
+def encode_sequences(bundle: ModelBundle, sequences: np.ndarray) -> tuple[np.ndarray, W.WindowFrame | None]:
+    """Behaviour sequences -> normalised features, each anchored at its FIRST frame.
+
+    Args:
+        sequences: (N, T, 17, 3) world joints or (N, T, 58) face parameters, at the model's rate.
+    Returns:
+        (N, T, F) float32 normalised features and the window frames (None for faces).
+    """
+    cfg = bundle.data_config
+    layout = cfg.feature_layout
+    if layout.kind == "face":
+        return bundle.stats.normalize(np.asarray(sequences, np.float64)), None
+    raw, frame = W.body_window_features(np.asarray(sequences), layout=layout, anchor=0,
+                                        canonical_heading=cfg.canonical_heading)
+    return bundle.stats.normalize(raw), frame
+
+
+def decode_sequences(bundle: ModelBundle, features: np.ndarray, frame: W.WindowFrame | None) -> np.ndarray:
+    """Normalised features (N, K, T, F) -> display coordinates: (N, K, T, 17, 3) world joints, (N, K, T,
+    17, 2) virtual-camera pixels (body2d) or (N, K, T, 58) face parameters."""
+    return decode_samples(features, config=bundle.data_config, stats=bundle.stats, frame=frame)
+
+
+def behavior_model(bundle: ModelBundle) -> BehaviorModel:
+    """The bundle's model when it is a behaviour model; InputError otherwise."""
+    if not isinstance(bundle.model, BehaviorModel):
+        raise InputError(f"behaviour transfer needs a 'behavior' model (behaviour encoder + posture-conditioned "
+                         f"decoder), but this checkpoint is a {bundle.name!r} model", bundle.path or bundle.name)
+    return bundle.model
+
+
+@torch.no_grad()
+def behavior_latents(model: BehaviorModel, features: np.ndarray) -> np.ndarray:
+    """Posterior means z_beta of normalised behaviour sequences (N, T, F) -> (N, Z) float32."""
+    model.eval()
+    return model.behavior_latent(as_model_input(features, model)).cpu().numpy()
+
+
+@torch.no_grad()
+def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int) -> np.ndarray:
+    """Enact behaviours z (N, Z) from normalised start postures (N, F): (N, horizon, F) float32."""
+    model.eval()
+    return model.transfer(as_model_input(z, model), as_model_input(start, model), horizon).cpu().numpy()
+
+
+def analogy_model(bundle: ModelBundle) -> torch.nn.Module:
+    """The bundle's model when it has a latent transformation space (encode + decode); InputError otherwise."""
+    model = bundle.model
+    if bundle.kind in ("deterministic", "baseline") or not (hasattr(model, "encode") and hasattr(model, "decode")):
+        raise InputError(f"analogy needs a latent-variable model with a transformation encoder (mtvae-add, "
+                         f"mtvae-concat, cvae, lcpvae, behavior), but {bundle.name!r} is a {bundle.kind} model "
+                         "without one", bundle.path or bundle.name)
+    return model
+
+
+def stitch_after(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Place body window ``b`` right after window ``a``.
+
+    Args:
+        a: (To >= 2, 17, 3) world joints; b: (Tf, 17, 3) world joints (anywhere, any heading).
+    Returns:
+        (Tf, 17, 3) float64: ``b`` rotated about z so its first frame's heading is ``a``'s last, and moved so
+        its first root continues ``a``'s last root step (heights unchanged).
+    """
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    frame_a = W.canonical_frame(a[None], anchor=a.shape[0] - 1)
+    frame_b = W.canonical_frame(b[None], anchor=0)
+    placed = W.from_canonical(W.to_canonical(b[None], frame_b), frame_a)[0]  # b[0]'s root on a[-1]'s root
+    placed[..., :2] += a[-1, 0, :2] - a[-2, 0, :2]
+    return placed
+
+
+def window_config(bundle: ModelBundle, observed: int) -> DatasetConfig:
+    if observed < 2:
+        raise InputError(f"--observed must be >= 2 frames, got {observed}")
+    return dataclasses.replace(bundle.data_config, observed=int(observed))
+
+
+@torch.no_grad()
+def analogy_windows(bundle: ModelBundle, ab: np.ndarray, c: np.ndarray, *, observed: int,
+                    horizon: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Batched analogy on raw windows.
+
+    Args:
+        ab: (N, observed + Tf, 17, 3) world joints or (N, observed + Tf, 58) face parameters: A then B.
+        c: (N, observed, ...) the C windows.
+        horizon: frames of D.
+    Returns:
+        z (N, Z) posterior means of A -> B; D (N, horizon, ...) in C's coordinates; A -> B and C -> D in
+        display coordinates, (N, observed + Tf, ...) and (N, observed + horizon, ...).
+    """
+    model = analogy_model(bundle)
+    model.eval()
+    cfg = window_config(bundle, observed)
+    raw_ab, frame_ab = encode_windows(np.asarray(ab), config=cfg)  # anchored at A's last frame
+    raw_c, frame_c = encode_windows(np.asarray(c), config=cfg)  # anchored at C's last frame
+    f_ab, f_c = bundle.stats.normalize(raw_ab), bundle.stats.normalize(raw_c)
+    device = next(model.parameters()).device
+    t_ab, t_c = torch.from_numpy(f_ab).to(device), torch.from_numpy(f_c).to(device)
+    z = model.encode(t_ab[:, :observed], t_ab[:, observed:]).mu  # (N, Z)
+    d = model.decode(t_c, z, horizon=horizon).cpu().numpy()  # (N, H, F)
+    cd = np.concatenate([f_c, d], axis=1)  # (N, To + H, F)
+    shown_ab = decode_sequences(bundle, f_ab[:, None], frame_ab)[:, 0]
+    shown_cd = decode_sequences(bundle, cd[:, None], frame_c)[:, 0]
+    return z.cpu().numpy(), shown_cd[:, observed:], shown_ab, shown_cd
