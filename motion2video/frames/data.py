@@ -39,7 +39,7 @@ from motion2video.skeletons import H36M_17
 SPLITS = ("train", "test")
 BODY_STRUCTURE_CHANNELS = H36M_17.num_joints + len(H36M_17.bones)  # 17 heatmaps + 16 limbs = 33
 FACE_STRUCTURE_CHANNELS = 1
-DATA_VERSION = 1
+DATA_VERSION = 2  # 2: person masks stored, patterned clothing, 24 backgrounds
 
 
 def structure_channels(domain: str) -> int:
@@ -117,6 +117,7 @@ class FrameSequences:
         identity: (N,) int64 identity index (unique within a split).
         clip: (N,) str, the capture each sequence comes from.
         start: (N,) int64, the first source frame of each sequence.
+        masks: (N, T, H, W) bool silhouettes of the person (rendered), or None (old caches).
     """
 
     domain: str
@@ -126,6 +127,7 @@ class FrameSequences:
     identity: np.ndarray
     clip: np.ndarray
     start: np.ndarray
+    masks: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n, t, h, w, c = self.images.shape
@@ -137,6 +139,8 @@ class FrameSequences:
             raise ValueError("face sequences need structure_images; body sequences must not have them")
         if self.structure_images is not None and self.structure_images.shape != (n, t, h, w):
             raise ValueError(f"structure_images must be {(n, t, h, w)}, got {self.structure_images.shape}")
+        if self.masks is not None and self.masks.shape != (n, t, h, w):
+            raise ValueError(f"masks must be {(n, t, h, w)}, got {self.masks.shape}")
 
     @property
     def num_sequences(self) -> int:
@@ -165,6 +169,7 @@ class FrameSequences:
         if not parts:
             raise ValueError("nothing to concatenate")
         face = parts[0].structure_images is not None
+        masked = all(p.masks is not None for p in parts)
         return FrameSequences(
             domain=parts[0].domain,
             images=np.concatenate([p.images for p in parts]),
@@ -173,6 +178,7 @@ class FrameSequences:
             identity=np.concatenate([p.identity for p in parts]),
             clip=np.concatenate([p.clip for p in parts]),
             start=np.concatenate([p.start for p in parts]),
+            masks=np.concatenate([p.masks for p in parts]) if masked else None,
         )
 
 
@@ -184,6 +190,7 @@ class FramePairs:
         ref_images, tgt_images: (B, H, W, 3) uint8.
         ref_points, tgt_points: (B, K, 2) float32 control points, pixels.
         ref_structures, tgt_structures: (B, S, H, W) float32 structure maps.
+        ref_masks, tgt_masks: (B, H, W) bool person silhouettes, or None when the sequences have none.
     """
 
     ref_images: np.ndarray
@@ -192,6 +199,8 @@ class FramePairs:
     tgt_points: np.ndarray
     ref_structures: np.ndarray
     tgt_structures: np.ndarray
+    ref_masks: np.ndarray | None = None
+    tgt_masks: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])
@@ -219,6 +228,9 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
     ref_img, tgt_img = seqs.images[s, r], seqs.images[s, t]  # (B, H, W, 3)
     ref_pts, tgt_pts = seqs.points[s, r].astype(np.float32), seqs.points[s, t].astype(np.float32)  # (B, K, 2)
     ref_face = tgt_face = None
+    ref_mask = tgt_mask = None
+    if seqs.masks is not None:
+        ref_mask, tgt_mask = seqs.masks[s, r], seqs.masks[s, t]  # (B, H, W)
     if seqs.structure_images is not None:
         ref_face, tgt_face = seqs.structure_images[s, r], seqs.structure_images[s, t]  # (B, H, W)
     if flip is not None and np.any(flip):
@@ -233,6 +245,9 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
         if ref_face is not None:
             ref_face, tgt_face = ref_face.copy(), tgt_face.copy()
             ref_face[f], tgt_face[f] = ref_face[f, :, ::-1], tgt_face[f, :, ::-1]
+        if ref_mask is not None:
+            ref_mask, tgt_mask = ref_mask.copy(), tgt_mask.copy()
+            ref_mask[f], tgt_mask[f] = ref_mask[f, :, ::-1], tgt_mask[f, :, ::-1]
     if crop:
         if rng is None:
             raise ValueError("make_pairs needs an rng to place crops")
@@ -246,13 +261,16 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
         tgt_pts = tgt_pts - origins[:, None, :].astype(np.float32)
         if ref_face is not None:
             ref_face, tgt_face = cut(ref_face), cut(tgt_face)
+        if ref_mask is not None:
+            ref_mask, tgt_mask = cut(ref_mask), cut(tgt_mask)
         size = crop
     if seqs.domain == "body":
         ref_st, tgt_st = body_structures(ref_pts, size), body_structures(tgt_pts, size)
     else:
         ref_st, tgt_st = face_structures(ref_face), face_structures(tgt_face)
+    masks = (None, None) if ref_mask is None else (np.ascontiguousarray(ref_mask), np.ascontiguousarray(tgt_mask))
     return FramePairs(np.ascontiguousarray(ref_img), np.ascontiguousarray(tgt_img), ref_pts, tgt_pts,
-                      ref_st, tgt_st)
+                      ref_st, tgt_st, *masks)
 
 
 def crop_origins(rng: np.random.Generator, ref_points: np.ndarray, tgt_points: np.ndarray, *, size: int,
@@ -319,6 +337,55 @@ class Identity:
     shoes: tuple[float, float, float]
     hair: tuple[float, float, float]
     iris: tuple[float, float, float]
+    top_pattern: "ClothingPattern | None" = None
+    trousers_pattern: "ClothingPattern | None" = None
+
+
+PATTERN_KINDS = ("stripes", "vertical-stripes", "checks")
+
+
+@dataclass(frozen=True)
+class ClothingPattern:
+    """A procedural two-colour pattern on a clothing region, defined on the rest-pose mesh (so it moves
+    with the body).
+
+    Attributes:
+        kind: one of :data:`PATTERN_KINDS` (horizontal bands, vertical bands, or a checkerboard).
+        colour: the second colour (RGB in [0, 1]); the region's own colour is the first.
+        period: pattern period in metres on the rest mesh.
+        phase: offset in periods.
+    """
+
+    kind: str
+    colour: tuple[float, float, float]
+    period: float
+    phase: float = 0.0
+
+    def weights(self, rest_vertices: np.ndarray) -> np.ndarray:
+        """(V,) weight of the second colour per vertex in [0, 1] for (V, 3) rest vertices (z up, metres);
+        band edges are softened over about a tenth of a period so the mesh does not alias them."""
+        x, y, z = (np.asarray(rest_vertices, np.float64)[:, i] / self.period + self.phase for i in range(3))
+        if self.kind == "stripes":
+            wave = np.sin(2 * np.pi * z)
+        elif self.kind == "vertical-stripes":
+            wave = np.sin(2 * np.pi * (x + 0.5 * y))
+        elif self.kind == "checks":
+            wave = np.sin(2 * np.pi * z) * np.sin(2 * np.pi * (x + 0.5 * y))
+        else:
+            raise ValueError(f"unknown pattern kind {self.kind!r}")
+        return 0.5 + 0.5 * np.tanh(3.0 * wave)
+
+
+def sample_pattern(rng: np.random.Generator, base: tuple[float, float, float]) -> ClothingPattern | None:
+    """A pattern for a garment of colour ``base``: none (flat) one time in four, else stripes or checks in
+    a contrasting colour with a period of 8 to 16 cm."""
+    if rng.random() < 0.25:
+        return None
+    kind = PATTERN_KINDS[int(rng.integers(len(PATTERN_KINDS)))]
+    lum = float(np.dot(base, (0.3, 0.59, 0.11)))
+    colour = _hsv_colour(rng, v_range=(0.05, 0.35) if lum > 0.5 else (0.7, 0.98))
+    return ClothingPattern(kind=kind, colour=colour, period=float(rng.uniform(0.08, 0.16)),
+                           phase=float(rng.uniform(0, 1)))
 
 
 PHENOTYPE_KEYS = ("gender", "age", "muscle", "weight", "height", "proportions")
@@ -356,14 +423,18 @@ def sample_identity(rng: np.random.Generator) -> Identity:
     x = rng.uniform(0, len(SKIN_TONES) - 1)
     i = min(int(x), len(SKIN_TONES) - 2)
     skin = (1 - (x - i)) * SKIN_TONES[i] + (x - i) * SKIN_TONES[i + 1]
+    top = _hsv_colour(rng)
+    trousers = _hsv_colour(rng, v_range=(0.15, 0.8))
     return Identity(
         phenotype=tuple((k, float(pheno[k])) for k in PHENOTYPE_KEYS),
         skin=tuple(float(c) for c in skin),
-        top=_hsv_colour(rng),
-        trousers=_hsv_colour(rng, v_range=(0.15, 0.8)),
+        top=top,
+        trousers=trousers,
         shoes=_hsv_colour(rng, s_range=(0.0, 0.6), v_range=(0.05, 0.6)),
         hair=tuple(float(c) for c in HAIR_COLOURS[rng.integers(len(HAIR_COLOURS))] * rng.uniform(0.8, 1.1)),
         iris=tuple(float(c) for c in IRIS_COLOURS[rng.integers(len(IRIS_COLOURS))]),
+        top_pattern=sample_pattern(rng, top),
+        trousers_pattern=sample_pattern(rng, trousers),
     )
 
 
@@ -377,7 +448,20 @@ def identities(split: str, count: int, *, seed: int = 0) -> list[Identity]:
 
 # Images shipped inside scikit-image (no download): textures and scenes without people.
 BACKGROUND_IMAGES = ("brick", "grass", "gravel", "rocket", "coffee", "chelsea", "hubble_deep_field",
-                     "immunohistochemistry", "moon", "cell")
+                     "immunohistochemistry", "moon", "cell", "clock", "coins", "page", "text", "horse", "retina",
+                     "colorwheel", "microaneurysms", "logo", "checkerboard", "binary_blobs", "cat")
+PROCEDURAL_BACKGROUNDS = 4  # plus floor-and-wall gradients and tiles drawn here (24 backgrounds in all)
+
+
+def procedural_backgrounds(size: int = 256) -> list[np.ndarray]:
+    """Drawn backgrounds: a wall/floor split, diagonal tiles, a vertical gradient and wooden-like boards,
+    (size, size, 3) uint8 each."""
+    yy, xx = np.mgrid[0:size, 0:size].astype(np.float32) / size
+    wall = np.where(yy[..., None] < 0.62, [200, 190, 170], [110, 90, 70]) * (0.8 + 0.2 * yy[..., None])
+    tiles = 150 + 70 * ((np.floor(xx * 8 + yy * 8) + np.floor(xx * 8 - yy * 8)) % 2)[..., None] * [1.0, 0.9, 0.7]
+    gradient = (60 + 160 * yy[..., None]) * np.array([0.6, 0.8, 1.0])
+    boards = (120 + 40 * np.sin(2 * np.pi * (xx * 6 + 0.3 * np.sin(12 * yy))))[..., None] * [1.0, 0.75, 0.5]
+    return [np.clip(b, 0, 255).astype(np.uint8) for b in (wall, tiles, gradient, boards)]
 
 
 def background_images() -> list[np.ndarray]:
@@ -387,10 +471,12 @@ def background_images() -> list[np.ndarray]:
     out = []
     for name in BACKGROUND_IMAGES:
         img = np.asarray(getattr(skimage.data, name)())
+        if img.dtype == bool:
+            img = img.astype(np.uint8) * 255
         if img.ndim == 2:
             img = np.repeat(img[..., None], 3, axis=2)
         out.append(np.ascontiguousarray(img[..., :3]).astype(np.uint8))
-    return out
+    return out + procedural_backgrounds()
 
 
 def background_crop(rng: np.random.Generator, pool: list[np.ndarray], size: int) -> np.ndarray:
@@ -456,11 +542,12 @@ class DatasetSpec:
 
 
 def default_spec(domain: str, split: str, image_size: int = 128, *, seed: int = 0) -> DatasetSpec:
-    """The dataset sizes used for the shipped models (train: 240 sequences x 12 frames; test: 32 x 9)."""
+    """The dataset sizes used for the shipped models (train: 320 sequences x 12 frames of 200 identities;
+    test: 32 x 9 of 8 held-out identities)."""
     window = 1.2 if domain == "body" else 4.0  # faces change more slowly than bodies
     if split == "train":
-        return DatasetSpec(domain=domain, split=split, image_size=image_size, num_sequences=240,
-                           frames_per_sequence=12, num_identities=40, window_seconds=window, seed=seed)
+        return DatasetSpec(domain=domain, split=split, image_size=image_size, num_sequences=320,
+                           frames_per_sequence=12, num_identities=200, window_seconds=window, seed=seed)
     return DatasetSpec(domain=domain, split=split, image_size=image_size, num_sequences=32,
                        frames_per_sequence=9, num_identities=8, window_seconds=window, sequences_per_shard=8,
                        seed=seed)
@@ -472,6 +559,8 @@ def save_shard(path: Path, seqs: FrameSequences) -> None:
                   clip=np.asarray(seqs.clip, dtype=str), start=seqs.start, domain=np.asarray(seqs.domain))
     if seqs.structure_images is not None:
         arrays["structure_images"] = seqs.structure_images
+    if seqs.masks is not None:
+        arrays["masks"] = seqs.masks
     save_npz(path, arrays, compressed=True)
 
 
@@ -482,6 +571,7 @@ def load_shard(path: Path) -> FrameSequences:
                 domain=str(z["domain"]), images=z["images"], points=z["points"],
                 structure_images=z["structure_images"] if "structure_images" in z.files else None,
                 identity=z["identity"], clip=z["clip"], start=z["start"],
+                masks=z["masks"] if "masks" in z.files else None,
             )
     except (OSError, KeyError, ValueError, zlib.error) as err:
         raise InputError(f"unreadable cache shard ({type(err).__name__}: {err}); delete it to regenerate",
@@ -557,6 +647,7 @@ def toy_sequences(domain: str = "body", *, num_sequences: int = 8, frames_per_se
     struct = np.zeros((n, t, s, s), np.uint8) if domain == "face" else None
     k = H36M_17.num_joints if domain == "body" else 12
     points = np.zeros((n, t, k, 2), np.float32)
+    masks = np.zeros((n, t, s, s), bool)
     width = max(1, s // 12)
     for i in range(n):
         bg = background_crop(rng, pool, s)
@@ -593,7 +684,8 @@ def toy_sequences(domain: str = "body", *, num_sequences: int = 8, frames_per_se
                 r = np.array([[np.cos(rot), -np.sin(rot)], [np.sin(rot), np.cos(rot)]])
                 pts = c + np.concatenate([ring, mouth_pts]) @ r.T
             images[i, j] = frame
+            masks[i, j] = np.any(frame != bg, axis=-1)
             points[i, j] = pts
     return FrameSequences(domain=domain, images=images, points=points, structure_images=struct,
                           identity=np.arange(n, dtype=np.int64), clip=np.array(["toy"] * n),
-                          start=np.zeros(n, np.int64))
+                          start=np.zeros(n, np.int64), masks=masks)
