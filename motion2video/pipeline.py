@@ -395,8 +395,14 @@ class GeneratedFrames:
 def generate_video_frames(model, reference: Reference, structures: Structures, *, batch_size: int = 4,
                           threads: int | None = None, channels_last: bool = True) -> GeneratedFrames:
     """Run :func:`generate_frames` over every observed and future frame of :class:`Structures`, building
-    the structure maps a chunk at a time (so a long video never holds all of them)."""
+    the structure maps a chunk at a time (so a long video never holds all of them). A warp generator
+    (:class:`~motion2video.frames.warp.WarpGenerator`) goes through its ``encode_reference`` / ``decode``
+    at the structures' size instead (the person generated at the model's size, pasted into the reference)."""
+    from motion2video.frames.warp import WarpGenerator
+
     net = getattr(model, "model", model)
+    if isinstance(net, WarpGenerator):
+        return _generate_warp_frames(net, reference, structures, batch_size=batch_size, threads=threads)
     size = net.config.image_size
     if structures.size != size:
         raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
@@ -409,6 +415,19 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
             maps = structure_maps(structures, slice(1 + start, 1 + stop))
             frames[start:stop] = generate_frames(net, reference.image, ref_structure, maps, batch_size=batch_size,
                                                  channels_last=channels_last)
+    to, k, tf = structures.observed, structures.samples, structures.horizon
+    return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
+
+
+def _generate_warp_frames(net, reference: Reference, structures: Structures, *, batch_size: int,
+                          threads: int | None) -> GeneratedFrames:
+    """Every target of :class:`Structures` from one reference state, one person crop for the whole video."""
+    size = structures.size
+    if reference.image.shape[:2] != (size, size):
+        raise ValueError(f"the reference is {reference.image.shape[:2]} px but the structures are {size} px")
+    with torch_threads(threads):
+        state = net.encode_reference(reference.image, structures.points[0])
+        frames = net.decode(state, structures.points[1:], batch_size=batch_size)
     to, k, tf = structures.observed, structures.samples, structures.horizon
     return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
 
@@ -510,6 +529,8 @@ class SynthesisConfig:
         motion_threads: torch threads while sampling (1: the small recurrent models are fastest so).
         generator_threads: torch threads while generating (None: :func:`default_generator_threads`).
         crf, preset: x264 settings of the two videos.
+        size: output frame size (None: the generator's size); another size needs a warp generator, which
+            keeps the reference's background at this size and generates the person at its own size.
     """
 
     samples: int = 5
@@ -522,6 +543,7 @@ class SynthesisConfig:
     generator_threads: int | None = None
     crf: int = 18
     preset: str = "medium"
+    size: int | None = None
 
 
 @dataclass
@@ -620,8 +642,18 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     if layout_domain != domain:
         raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.name} predicts "
                          f"{layout_domain} motion: give a {layout_domain} frame model (frames-{layout_domain}-128)")
+    size = gen_config.image_size if config.size is None else int(config.size)
+    if size != gen_config.image_size and getattr(frames_model, "kind", "analogy") != "warp":
+        raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
+                         f"{gen_config.image_size} px frames only)")
     clip = load_clip_for(bundle, input_path)
-    ref = load_reference(reference, size=gen_config.image_size, domain=domain, pose_path=reference_pose)
+    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
+    if domain == "body" and ref.pose is not None:
+        from motion2video.frames.warp import check_reference_points
+        from motion2video.reference import reference_pose_path
+
+        check_reference_points(ref.pose.points, width=size, height=size,
+                               path=reference_pose if reference_pose is not None else reference_pose_path(reference))
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -630,7 +662,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     timings["sampling"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    structures = render_structures(fc, domain=domain, size=gen_config.image_size, reference=ref)
+    structures = render_structures(fc, domain=domain, size=size, reference=ref)
     timings["structures"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

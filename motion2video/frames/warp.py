@@ -489,17 +489,19 @@ def paste_mask(person: np.ndarray, size: int) -> np.ndarray:
     return np.clip(np.stack(out), 0.0, 1.0)
 
 
-def check_reference_points(points: np.ndarray, *, width: int, height: int) -> None:
-    """Raise InputError when reference joints (17, 2) leave the image or show no person."""
+def check_reference_points(points: np.ndarray, *, width: int, height: int, path=None) -> None:
+    """Raise InputError (naming ``path`` when given) when reference joints (17, 2) leave the image or show
+    no person."""
     points = np.asarray(points, np.float64)
     if not np.all(np.isfinite(points)):
-        raise InputError("the reference pose has joints that are not finite (no visible person)")
+        raise InputError("the reference pose has joints that are not finite (no visible person)", path)
     outside = (points[:, 0] < 0) | (points[:, 0] > width) | (points[:, 1] < 0) | (points[:, 1] > height)
     if np.any(outside):
-        raise InputError(f"the reference pose has {int(outside.sum())} joint(s) outside the {width}x{height} image")
+        raise InputError(f"the reference pose has {int(outside.sum())} joint(s) outside the {width}x{height} "
+                         "image", path)
     extent = points.max(0) - points.min(0)
     if float(extent.max()) < 2.0:
-        raise InputError("the reference pose shows no visible person (all joints within 2 pixels)")
+        raise InputError("the reference pose shows no visible person (all joints within 2 pixels)", path)
 
 
 def person_crop(ref_points: np.ndarray, tgt_points: np.ndarray, *, width: int, height: int,
