@@ -174,3 +174,21 @@ def test_evaluation_scores_a_named_baseline_generator():
                                                                     nan_ok=True)
     assert "person_psnr_vs_frames-body-128-v1_2db" in ev.targets_met()
     assert body_structures(seqs.points[0], 32).shape == (3, 33, 32, 32)
+
+
+def test_init_from_carries_weights_across_net_scales(tmp_path):
+    seqs = toy_sequences("body", num_sequences=3, frames_per_sequence=3, image_size=32)
+    cfg = TrainFramesConfig(steps=1, batch_size=2, checkpoint_every=1, log_every=1, model_kind="warp")
+    first = train_frames(seqs, output=tmp_path / "a.safetensors", config=cfg, progress=False,
+                         model_config=WarpGeneratorConfig(image_size=32, net_scale=4))
+    second = train_frames(seqs, output=tmp_path / "b.safetensors", config=TrainFramesConfig(
+        steps=1, batch_size=2, checkpoint_every=1, log_every=1, model_kind="warp", lr=1e-12), progress=False,
+        model_config=WarpGeneratorConfig(image_size=32, net_scale=2), init_from=first.path)
+    a, b = load_frame_model(first.path), load_frame_model(second.path)
+    assert b.config.net_scale == 2 and b.train["init_from"] == str(first.path)
+    for key, value in a.model.state_dict().items():  # a step at lr 1e-12 keeps the carried weights
+        torch.testing.assert_close(b.model.state_dict()[key], value, atol=1e-6, rtol=0)
+    old = save_frame_model(FrameGenerator(FrameGeneratorConfig(image_size=32, channels=(4, 8))),
+                           tmp_path / "old.safetensors", step=0)
+    with pytest.raises(InputError, match="cannot start from a analogy model"):
+        train_frames(seqs, output=tmp_path / "c.safetensors", config=cfg, progress=False, init_from=old)

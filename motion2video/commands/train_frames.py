@@ -44,6 +44,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model-kind", choices=("analogy", "warp"), default="analogy",
                    help="analogy: the feature-analogy generator; warp: the generator that warps the reference "
                    "person along per-limb transforms (body only)")
+    p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
+                   help="warp model: its network works at 1/NET_SCALE of the resolution (default 4)")
+    p.add_argument("--init-from", default=None,
+                   help="start from this checkpoint's weights (same kind), with a fresh optimiser and schedule")
     p.add_argument("--edge-weight", type=float, default=None,
                    help="weight of the gradient (Sobel) L1 inside the target silhouette (default 1 for warp, 0 else)")
     p.add_argument("--person-weight", type=float, default=None,
@@ -97,8 +101,17 @@ def run(args: argparse.Namespace) -> int:
     config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
                                adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
                                seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person)
-    result = train_frames(seqs, output=output, config=config, resume=args.resume,
-                          progress=not args.no_progress,
+    model_config = None
+    if warp:
+        from motion2video.frames.data import structure_channels
+        from motion2video.frames.warp import WarpGeneratorConfig
+
+        model_config = WarpGeneratorConfig(image_size=args.size, structure_channels=structure_channels("body"),
+                                           net_scale=args.net_scale or 4)
+    elif args.net_scale is not None:
+        raise InputError("--net-scale is a setting of --model-kind warp")
+    result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
+                          progress=not args.no_progress, init_from=args.init_from,
                           extra_metadata={"dataset_spec": spec.key()})
     last = result.history[-1] if result.history else {}
     print(json.dumps({"checkpoint": str(result.path), "steps": result.steps,

@@ -140,6 +140,7 @@ def train_frames(
     resume: bool = False,
     progress: bool = True,
     extra_metadata: dict | None = None,
+    init_from: str | Path | None = None,
 ) -> TrainFramesResult:
     """Train a frame generator on ``seqs`` and write ``output`` (+ its ``.state`` resume file).
 
@@ -152,6 +153,9 @@ def train_frames(
             the checkpoint's); without them training starts from scratch (a note is printed).
         progress: show a tqdm progress bar.
         extra_metadata: merged into the checkpoint's ``train`` summary.
+        init_from: start from the weights of this checkpoint (same kind, same parameter shapes; its
+            config may differ in settings without weights, e.g. the warp network's ``net_scale``), with a
+            fresh optimiser and schedule. Ignored when resuming.
     """
     output = Path(output)
     warp = config.model_kind == "warp"
@@ -184,6 +188,16 @@ def train_frames(
         model = loaded.model
     elif resume:
         print(f"train-frames: nothing to resume at {output} (no checkpoint + .state file); starting from step 0")
+    if init_from is not None and not (resume and have_state):
+        source = load_frame_model(init_from)
+        if source.kind != config.model_kind:
+            raise InputError(f"cannot start from a {source.kind} model when training a {config.model_kind} model",
+                             init_from)
+        try:
+            model.load_state_dict(source.model.state_dict())
+        except RuntimeError as err:
+            raise InputError(f"its weights do not fit the model being trained ({str(err).splitlines()[0]})",
+                             init_from) from None
     model.train()
     optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, betas=(0.9, 0.99))
     disc = disc_opt = None
@@ -202,6 +216,7 @@ def train_frames(
         "data": seqs.summary(),
         "parameters": count_parameters(model),
         "model_kind": model_kind(model),
+        "init_from": None if init_from is None else str(init_from),
         **(extra_metadata or {}),
     }
     history: list[dict] = []

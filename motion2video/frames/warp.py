@@ -74,9 +74,10 @@ class WarpGeneratorConfig:
         image_size: the model's square size (crops are resized to it); a multiple of 2**(levels - 1).
         structure_channels: channels of the target structure map (17 heatmaps + 16 limb maps).
         channels: unused (kept for configs written before the quarter-resolution design).
-        motion_channels: channels per level of the network (level 0 at a quarter of the resolution): it
-            corrects the part masks and predicts visibility and an inpainting; the warped reference is
+        motion_channels: channels per level of the network (level 0 at 1 / net_scale of the resolution):
+            it corrects the part masks and predicts visibility and an inpainting; the warped reference is
             composited at full resolution.
+        net_scale: the network's level 0 works at 1 / net_scale of the image size (2 or 4).
     """
 
     domain: str = "body"
@@ -84,6 +85,7 @@ class WarpGeneratorConfig:
     structure_channels: int = 33
     channels: tuple[int, ...] = (16, 32, 64)
     motion_channels: tuple[int, ...] = (16, 32, 64)
+    net_scale: int = 4
 
     def __post_init__(self) -> None:
         if self.domain != "body":
@@ -91,7 +93,9 @@ class WarpGeneratorConfig:
         for name, ch in (("channels", self.channels), ("motion_channels", self.motion_channels)):
             if len(ch) < 2:
                 raise ValueError(f"{name} needs at least two levels")
-        factor = 4 * 2 ** (len(self.motion_channels) - 1)
+        if self.net_scale not in (1, 2, 4):
+            raise ValueError(f"net_scale must be 1, 2 or 4, got {self.net_scale}")
+        factor = self.net_scale * 2 ** (len(self.motion_channels) - 1)
         if self.image_size < factor or self.image_size % factor:
             raise ValueError(f"image_size {self.image_size} must be a positive multiple of {factor}")
 
@@ -383,10 +387,13 @@ class WarpGenerator(nn.Module):
         plate = background_plate(ref_image, ref_points, ref_person[:, 0])  # (B, 3, H, W) without the person
         prior_image = composite(ref_image, plate, prior_masks, maps)
         x = torch.cat([prior_image, plate], dim=1) * 2.0 - 1.0
-        net_in = F.avg_pool2d(torch.cat([x, tgt_structure, prior_masks, ref_person], dim=1), 4)
-        # Reference features at every level, warped by the prior flow (a quarter resolution and coarser).
+        scale = self.config.net_scale
+        net_in = torch.cat([x, tgt_structure, prior_masks, ref_person], dim=1)
+        net_in = F.avg_pool2d(net_in, scale) if scale > 1 else net_in
+        # Reference features at every level, warped by the prior flow (1 / net_scale resolution and coarser).
         prior_flow = (prior_masks[..., None] * maps).sum(1)  # (B, H, W, 2)
-        img_feats = [warp_image(f, prior_flow) for f in self.image_encoder(F.avg_pool2d(ref_image * 2 - 1, 4))]
+        ref_small = F.avg_pool2d(ref_image * 2 - 1, scale) if scale > 1 else ref_image * 2 - 1
+        img_feats = [warp_image(f, prior_flow) for f in self.image_encoder(ref_small)]
         feats = [fuse(torch.cat([a, f], dim=1)) for fuse, a, f in zip(self.fuse, self.encoder(net_in), img_feats)]
         out = F.interpolate(self.decoder(feats), size=(h, w), mode="bilinear", align_corners=False)
         masks = torch.softmax(prior + out[:, :k], dim=1)
