@@ -298,6 +298,8 @@ class BodyStyle:
         azimuth_deg, elevation_deg, yfov_deg, margin: the default camera (:func:`fit_camera`).
         batch: frames per Anny forward call.
         platform: GL backend, ``"osmesa"`` or ``"egl"``.
+        vertex_colors: optional (V, 3) float sRGB colours in [0, 1] per Anny vertex, replacing the region
+            colours (e.g. patterned clothing).
     """
 
     size: tuple[int, int] = (256, 256)
@@ -320,6 +322,7 @@ class BodyStyle:
     margin: float = 0.08
     batch: int = 16
     platform: str = "osmesa"
+    vertex_colors: np.ndarray | None = None
 
     def region_colors(self) -> np.ndarray:
         """(len(REGION_NAMES), 3) uint8 colour per region code."""
@@ -411,6 +414,8 @@ class BodyRenderer(RendererBase):
         return self._mesh.offscreen
 
     def _vertex_colors(self) -> np.ndarray:
+        if self._colors is None and self.style.vertex_colors is not None:
+            self._colors = np.asarray(self.style.vertex_colors, np.float64)
         if self._colors is None:
             rest = anny_model.anny_rest(self.style.phenotype)
             self._colors = anny_model.vertex_colors(self.style.region_colors(), rest)  # (V, 3) float

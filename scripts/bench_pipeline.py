@@ -10,6 +10,10 @@ Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2v
   (:func:`motion2video.frames.model.generate`), at 1 thread and at the pipeline's default thread count.
   ``generator_fps_128`` = the pipeline path at its defaults (batch 8, channels_last, default threads);
   ``generator_fps_128_batch1`` and ``generator_fps_128_best`` (best batch size) beside it.
+- ``generators_side_by_side``: frames/s at 128x128 of the body generator and of each ``--compare-frame-model``
+  (default: the previous body generator ``frames-body-128-v1``), measured in the same run, each through
+  its pipeline path at the pipeline's defaults (a warp generator through ``encode_reference`` /
+  ``decode``: person crop, generation, paste, on the demo reference and poses moved around it).
 - ``end_to_end``: K=5 futures x 48 frames after 16 observed, body and face: the wall time of
   :func:`motion2video.pipeline.synthesize` (checkpoint loading included) and each stage timed alone
   (sampling, structure rendering, generation, encoding of the three outputs); ``overhead_ratio`` =
@@ -110,6 +114,49 @@ def bench_generator(frame_model, *, repeats: int, frames: int = 16) -> dict:
         "model_generate_fps_best": max(r["fps"] for r in plain),
         "table": table,
     }
+
+
+def bench_warp_generator(frame_model, *, repeats: int, frames: int = 16) -> dict:
+    """Frames/s of a warp generator at its size through ``decode`` (the pipeline's path): the demo body
+    reference resized to the model size, target poses = its pose moved and bent a little (a real pose, so
+    the crop is the size the pipeline would use)."""
+    import cv2
+
+    from motion2video.reference import load_reference_pose
+
+    net = frame_model.model
+    size = net.config.image_size
+    image = cv2.cvtColor(cv2.imread(str(demo.DEMO_INPUTS / "reference_body_128.png")), cv2.COLOR_BGR2RGB)
+    image = cv2.resize(image, (size, size), interpolation=cv2.INTER_AREA)
+    pose = load_reference_pose(demo.DEMO_INPUTS / "reference_body_128.pose.npz")
+    points = np.asarray(pose.points, np.float32) * (size / pose.width)
+    rng = np.random.default_rng(0)
+    targets = points[None] + rng.normal(0.0, 0.02 * size, (frames, 17, 2)).astype(np.float32)
+    table = []
+    for threads in sorted({1, P.default_generator_threads()}):
+        with P.torch_threads(threads):
+            state = net.encode_reference(image, points)
+            for batch in (1, 4, 8):
+                sec = median_seconds(lambda: net.decode(state, targets, batch_size=batch), repeats=repeats)
+                table.append({"path": "decode", "threads": threads, "batch": batch, "fps": round(frames / sec, 2)})
+    mine = [r for r in table if r["threads"] == P.default_generator_threads()]
+    default = next(r for r in mine if r["batch"] == P.SynthesisConfig.batch_size)
+    return {
+        "image_size": size,
+        "kind": "warp",
+        "frames_per_measurement": frames,
+        "generator_fps_128": default["fps"] if size == 128 else None,
+        "generator_fps_128_batch1": next(r["fps"] for r in mine if r["batch"] == 1),
+        "generator_fps_128_best": max(r["fps"] for r in mine),
+        "table": table,
+    }
+
+
+def bench_any_generator(frame_model, *, repeats: int) -> dict:
+    """:func:`bench_warp_generator` or :func:`bench_generator`, by the model's kind."""
+    if getattr(frame_model, "kind", "analogy") == "warp":
+        return bench_warp_generator(frame_model, repeats=repeats)
+    return bench_generator(frame_model, repeats=repeats)
 
 
 def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> dict:
@@ -217,6 +264,9 @@ def main(argv: list[str] | None = None) -> int:
                         "(default: the shipped motion2video/weights)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per measurement (default 3)")
     parser.add_argument("--no-demo", action="store_true", help="skip the demo run (peak memory)")
+    parser.add_argument("--compare-frame-model", action="append", default=None, metavar="MODEL",
+                        help="also measure this body generator's frames/s at 128 in the same run (repeatable; "
+                        "default: frames-body-128-v1 from --weights when it is there)")
     args = parser.parse_args(argv)
     files = demo.weight_files(args.weights)
     missing = [str(p) for p in files.values() if not p.is_file()]
@@ -229,9 +279,20 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="bench_pipeline_") as tmp:
         work = Path(tmp)
         print("frame generator ...", flush=True)
-        result["generator"] = bench_generator(load_frame_model(files[demo.BODY["frame_model"]]),
-                                              repeats=args.repeats)
+        result["generator"] = bench_any_generator(load_frame_model(files[demo.BODY["frame_model"]]),
+                                                  repeats=args.repeats)
         result["generator_fps_128"] = result["generator"]["generator_fps_128"]
+        side = {demo.BODY["frame_model"]: result["generator_fps_128"]}
+        compare = args.compare_frame_model
+        if compare is None:
+            previous = args.weights / "frames-body-128-v1.safetensors"
+            compare = [str(previous)] if previous.is_file() else []
+        for name in compare:
+            print(f"frame generator {name} ...", flush=True)
+            other = load_frame_model(name)
+            side[other.path.name.removesuffix(".safetensors")] = bench_any_generator(
+                other, repeats=args.repeats)["generator_fps_128"]
+        result["generators_side_by_side"] = side
         result["end_to_end"] = {}
         for name, spec in (("body", demo.BODY), ("face", demo.FACE)):
             print(f"end to end ({name}) ...", flush=True)
@@ -250,6 +311,7 @@ def main(argv: list[str] | None = None) -> int:
     parts += [f"{k} overhead {v['overhead_ratio']} (wall {v['wall_s']} s)" for k, v in e2e.items()]
     if "demo" in result:
         parts.append(f"demo {result['demo']['wall_s']} s, peak {result['demo']['peak_rss_mb']} MB")
+    parts.append("side by side: " + ", ".join(f"{k} {v}" for k, v in result["generators_side_by_side"].items()))
     print(f"wrote {args.json}: " + "; ".join(parts))
     return 0
 

@@ -41,6 +41,9 @@ def test_rendered_body_sequences(tmp_path):
     assert seqs.images.shape == (2, 3, 64, 64, 3) and seqs.images.dtype == np.uint8
     assert seqs.points.shape == (2, 3, 17, 2) and seqs.structure_images is None
     assert all(is_test_clip(str(c)) for c in seqs.clip)  # held-out clips only
+    # Silhouettes come with the frames: the person covers some of the picture, and its pixels differ
+    # from the background pixels of another frame where the person is not.
+    assert seqs.masks.shape == (2, 3, 64, 64) and 0.01 < seqs.masks.mean() < 0.5
     # The person moves between frames, the joints project inside the picture, the background is kept.
     assert not np.array_equal(seqs.images[0, 0], seqs.images[0, 2])
     assert np.all((seqs.points > -2) & (seqs.points < 66))
@@ -92,8 +95,22 @@ def test_train_and_evaluate_commands(tmp_path, capsys):
                "--test-sequences", "1", "--contact-sheet", str(sheet), "--no-progress"])
     assert rc == 0 and sheet.is_file()
     results = json.loads(out_json.read_text())["results"]
-    assert set(results) == {"generator", "copy-reference", "limb-warp"}
-    assert all(set(v) == {"psnr", "ssim"} and np.isfinite(v["psnr"]) for v in results.values())
+    assert set(results) == {"generator", "copy-reference", "limb-warp"}  # frames-body-128-v1 is 128 px
+    assert all(np.isfinite(v["psnr"]) and np.isfinite(v["person_psnr"]) and v["person_sharpness"] > 0
+               for v in results.values())
+    # The warp generator trains and evaluates through the same commands, with the old one as a baseline.
+    warp = tmp_path / "warp.safetensors"
+    rc = main(["train-frames", "--domain", "body", "--model-kind", "warp", "-o", str(warp), "--steps", "2",
+               "--size", "64", "--batch-size", "2", "--train-sequences", "2", "--cache", str(cache), "--no-progress"])
+    assert rc == 0
+    capsys.readouterr()
+    rc = main(["evaluate-frames", "--model", str(warp), "--json", str(out_json), "--cache", str(cache),
+               "--test-sequences", "1", "--baseline-model", str(ckpt), "--no-progress"])
+    assert rc == 0
+    payload = json.loads(out_json.read_text())
+    assert payload["model_kind"] == "warp" and set(payload["results"]) == {"generator", "copy-reference",
+                                                                            "limb-warp", "tiny"}
+    assert "person_psnr_vs_tiny_2db" in payload["targets_met"]
 
 
 def test_commands_refuse_bad_input(tmp_path, capsys):

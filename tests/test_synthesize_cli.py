@@ -119,3 +119,51 @@ def test_bad_input_one_line_exit_2_and_no_partial_files(ckpt, body_args, mocap_d
                   str(ckpt["frames_body"]), str(DEMO / "walk_to_run.npz")] + ref + k + o, capsys, out)
     assert "no such checkpoint" in err
     assert "--observed must be >= 2" in _fails(body_args[:6] + ["--observed", "1"] + ref + k + o, capsys, out)
+
+
+def _warp_frame_model(folder: Path) -> Path:
+    """A 64 px warp generator trained for 2 steps on the toy set by the real training loop."""
+    from motion2video.frames.data import toy_sequences
+    from motion2video.frames.train import TrainFramesConfig, train_frames
+    from motion2video.frames.warp import WarpGeneratorConfig
+
+    seqs = toy_sequences("body", num_sequences=2, frames_per_sequence=3, image_size=FRAME_SIZE)
+    result = train_frames(seqs, output=folder / "frames_warp.safetensors",
+                          config=TrainFramesConfig(steps=2, batch_size=2, warmup_steps=1, checkpoint_every=2,
+                                                   log_every=1, model_kind="warp"),
+                          model_config=WarpGeneratorConfig(image_size=FRAME_SIZE), progress=False)
+    return Path(result.path)
+
+
+def test_warp_model_keeps_a_full_resolution_background(ckpt, mocap_dir, tmp_path, capsys):
+    warp = _warp_frame_model(tmp_path)
+    out = tmp_path / "w.mp4"
+    args = ["synthesize", "--motion-model", str(ckpt["body"]), "--frame-model", str(warp),
+            str(mocap_dir / "cmu" / "131_02.bvh"), "--observed", "6", "--horizon", "4",
+            "--reference", str(DEMO / "reference_body_128.png"), "--samples", "1", "-o", str(out)]
+    assert main(args + ["--size", "128"]) == 0
+    assert "resized" not in capsys.readouterr().err  # the 128 px reference is used as it is
+    video = read_video(out)[0]
+    assert video.shape[1:] == (128, 128, 3)  # one cell of 128 px (the frame drawn inside it)
+    sheet = read_image(output_paths(out)[2])
+    assert sheet.shape[0] > 2 * 128
+    # An analogy generator cannot make another size.
+    out2 = tmp_path / "a.mp4"
+    err = _fails(args[:4] + [str(ckpt["frames_body"])] + args[5:-1] + [str(out2), "--size", "128"], capsys, out2)
+    assert "needs a warp frame model" in err
+
+
+@pytest.mark.parametrize("points, message", [
+    (lambda p: p + [0.0, 500.0], "joint(s) outside the 64x64 image"),
+    (lambda p: np.full_like(p, 30.0), "no visible person"),
+])
+def test_bad_reference_poses_are_refused(body_args, tmp_path, capsys, points, message):
+    from motion2video.reference import ReferencePose, load_reference_pose, save_reference_pose
+
+    good = load_reference_pose(DEMO / "reference_body_128.pose.npz")
+    bad = tmp_path / "bad.pose.npz"
+    save_reference_pose(bad, ReferencePose("body", good.width, good.height, points=points(good.points)))
+    out = tmp_path / "x.mp4"
+    err = _fails(body_args + ["--reference", str(DEMO / "reference_body_128.png"), "--reference-pose", str(bad),
+                              "--samples", "1", "-o", str(out)], capsys, out)
+    assert message in err and "bad.pose.npz" in err

@@ -209,6 +209,8 @@ class SynthesisConfig:
         motion_threads: torch threads while sampling (1: the small recurrent models are fastest so).
         generator_threads: torch threads while generating (None: :func:`default_generator_threads`).
         crf, preset: x264 settings of the two videos.
+        size: output frame size (None: the generator's size); another size needs a warp generator, which
+            keeps the reference's background at this size and generates the person at its own size.
     """
 
     samples: int = 5
@@ -221,6 +223,7 @@ class SynthesisConfig:
     generator_threads: int | None = None
     crf: int = 18
     preset: str = "medium"
+    size: int | None = None
 
 
 @dataclass
@@ -320,8 +323,18 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     if layout_domain != domain:
         raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.name} predicts "
                          f"{layout_domain} motion: give a {layout_domain} frame model (frames-{layout_domain}-128)")
+    size = gen_config.image_size if config.size is None else int(config.size)
+    if size != gen_config.image_size and getattr(frames_model, "kind", "analogy") != "warp":
+        raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
+                         f"{gen_config.image_size} px frames only)")
     clip = load_clip(bundle, input_path).data
-    ref = load_reference(reference, size=gen_config.image_size, domain=domain, pose_path=reference_pose)
+    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
+    if domain == "body" and ref.pose is not None:
+        from motion2video.frames.warp import check_reference_points
+        from motion2video.reference import reference_pose_path
+
+        check_reference_points(ref.pose.points, width=size, height=size,
+                               path=reference_pose if reference_pose is not None else reference_pose_path(reference))
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -330,7 +343,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     timings["sampling"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    structures = render_structures(fc, domain=domain, size=gen_config.image_size, reference=ref)
+    structures = render_structures(fc, domain=domain, size=size, reference=ref)
     timings["structures"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -18,8 +18,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "evaluate-frames",
         help="score a frame generator against copy-reference and limb-warp on held-out pairs",
         description="Render (or reuse from the cache) the held-out split (held-out identities and clips) "
-        "for the model's domain and size, and report PSNR and SSIM (scikit-image) for the generator, "
-        "copy-reference and limb-warp on the same pairs.",
+        "for the model's domain and size, and report whole-frame PSNR and SSIM (scikit-image) and person "
+        "metrics (PSNR, SSIM and sharpness ratio inside the target's silhouette, PSNR and sharpness where the "
+        "person moved) for the generator, copy-reference, limb-warp and the previous generator on the same pairs.",
         epilog=EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -33,9 +34,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--test-sequences", type=int, default=None,
                    help="render only this many held-out sequences (default 32, 9 frames each: 256 pairs)")
     p.add_argument("--contact-sheet", default=None,
-                   help="also write a PNG: reference | target | generated | copy-reference | limb-warp")
+                   help="also write a PNG: reference | target | new | old | copy-reference | limb-warp")
+    p.add_argument("--baseline-model", action="append", default=None, metavar="MODEL",
+                   help="also score this generator (checkpoint or shipped name) as a named baseline on the same "
+                   "pairs; repeatable (default for body models: the previous generator frames-body-128-v1)")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
     p.set_defaults(run=run)
+
+
+DEFAULT_BASELINE = {"body": "frames-body-128-v1"}  # the previous body generator, scored next to every new one
 
 
 def run(args: argparse.Namespace) -> int:
@@ -59,15 +66,33 @@ def run(args: argparse.Namespace) -> int:
         spec = replace(spec, num_sequences=args.test_sequences,
                        num_identities=min(spec.num_identities, args.test_sequences))
     cache = Path(args.cache) if args.cache else default_cache_dir()
+    names = args.baseline_model
+    explicit = names is not None
+    if names is None:
+        names = [DEFAULT_BASELINE[cfg.domain]] if cfg.domain in DEFAULT_BASELINE else []
+    baselines = {}
+    for name in names:
+        other = load_frame_model(name)
+        if other.path.resolve() == loaded.path.resolve():
+            continue
+        same = (other.config.domain, other.config.image_size) == (cfg.domain, cfg.image_size)
+        if not same and not explicit:  # the default baseline only goes with models of its size
+            continue
+        if not same:
+            raise InputError(f"baseline model is {other.config.domain}/{other.config.image_size}, the evaluated "
+                             f"model {cfg.domain}/{cfg.image_size}", other.path)
+        baselines[other.path.name.removesuffix(".safetensors")] = other.model
     seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
-    evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs)
+    evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs, baseline_models=baselines)
     payload = evaluation.to_dict()
     payload["targets_met"] = evaluation.targets_met()
     payload["model"] = str(loaded.path)
+    payload["model_kind"] = loaded.kind
     payload["model_step"] = loaded.step
     print(json.dumps(payload, indent=2, sort_keys=True))
     if args.json:
-        write_json(evaluation, args.json, extra={"model": str(loaded.path), "model_step": loaded.step})
+        write_json(evaluation, args.json, extra={"model": str(loaded.path), "model_kind": loaded.kind,
+                                                 "model_step": loaded.step})
     if args.contact_sheet:
         out = Path(args.contact_sheet)
         out.parent.mkdir(parents=True, exist_ok=True)

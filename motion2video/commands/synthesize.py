@@ -50,6 +50,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--horizon", type=int, default=None, help="future frames (default: the motion model's)")
     p.add_argument("--start", type=int, default=0, help="first observed frame of the clip (default 0)")
     p.add_argument("--batch-size", type=int, default=4, help="generator frames per forward pass (default 4)")
+    p.add_argument("--size", type=int, default=None,
+                   help="output frame size (default: the frame model's); a warp body model (frames-body-128) "
+                   "keeps the reference background at this size and generates the person at its own size")
     p.add_argument("--threads", type=int, default=None,
                    help="torch threads for the frame generator (default: half the cores, 1 to 4; sampling uses 1)")
     p.set_defaults(run=run)
@@ -62,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--samples must be >= 1, got {args.samples}")
     if args.batch_size < 1:
         raise InputError(f"--batch-size must be >= 1, got {args.batch_size}")
+    if args.size is not None and not 32 <= args.size <= 1024:
+        raise InputError(f"--size must be in 32..1024, got {args.size}")
     if args.threads is not None and args.threads < 1:
         raise InputError(f"--threads must be >= 1, got {args.threads}")
     for name in ("observed", "horizon"):
@@ -69,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
         if value is not None and value < (2 if name == "observed" else 1):
             raise InputError(f"--{name} must be >= {2 if name == 'observed' else 1}, got {value}")
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
-                             seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads)
+                             seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
+                             size=args.size)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

@@ -41,6 +41,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--crop", type=int, default=None,
                    help="train on CROP x CROP windows holding both poses of a pair (0: whole frames; "
                    "default size/2, about 8x less compute per step than whole frames for the same quality)")
+    p.add_argument("--model-kind", choices=("analogy", "warp"), default="analogy",
+                   help="analogy: the feature-analogy generator; warp: the generator that warps the reference "
+                   "person along per-limb transforms (body only)")
+    p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
+                   help="warp model: its network works at 1/NET_SCALE of the resolution (default 4)")
+    p.add_argument("--init-from", default=None,
+                   help="start from this checkpoint's weights (same kind), with a fresh optimiser and schedule")
+    p.add_argument("--edge-weight", type=float, default=None,
+                   help="weight of the gradient (Sobel) L1 inside the target silhouette (default 1 for warp, 0 else)")
+    p.add_argument("--person-weight", type=float, default=None,
+                   help="weight of the L1 inside the target silhouette (default 2 for warp, 0 else)")
     p.add_argument("--adversarial", action="store_true", help="add the patch discriminator (slow on CPU)")
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
@@ -66,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     if args.steps < 1:
         raise InputError(f"--steps must be >= 1, got {args.steps}")
+    if args.model_kind == "warp" and args.domain != "body":
+        raise InputError("--model-kind warp makes body frames only (use --domain body)")
     if args.batch_size < 1:
         raise InputError(f"--batch-size must be >= 1, got {args.batch_size}")
     output = Path(args.output)
@@ -80,13 +93,25 @@ def run(args: argparse.Namespace) -> int:
     crop = default_crop(args.domain, args.size) if args.crop is None else args.crop
     if crop < 0 or crop > args.size or crop % 16:
         raise InputError(f"--crop must be 0 or a multiple of 16 up to --size, got {crop}")
+    warp = args.model_kind == "warp"
+    edge = args.edge_weight if args.edge_weight is not None else (1.0 if warp else 0.0)
+    person = args.person_weight if args.person_weight is not None else (2.0 if warp else 0.0)
     cache = Path(args.cache) if args.cache else default_cache_dir()
     seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
     config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
                                adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
-                               seed=args.seed)
-    result = train_frames(seqs, output=output, config=config, resume=args.resume,
-                          progress=not args.no_progress,
+                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person)
+    model_config = None
+    if warp:
+        from motion2video.frames.data import structure_channels
+        from motion2video.frames.warp import WarpGeneratorConfig
+
+        model_config = WarpGeneratorConfig(image_size=args.size, structure_channels=structure_channels("body"),
+                                           net_scale=args.net_scale or 4)
+    elif args.net_scale is not None:
+        raise InputError("--net-scale is a setting of --model-kind warp")
+    result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
+                          progress=not args.no_progress, init_from=args.init_from,
                           extra_metadata={"dataset_spec": spec.key()})
     last = result.history[-1] if result.history else {}
     print(json.dumps({"checkpoint": str(result.path), "steps": result.steps,

@@ -4,8 +4,9 @@ A checkpoint ``NAME.safetensors`` holds only what inference needs (weights + met
 writes a second file beside it, ``NAME.state.safetensors``, with the optimiser (and discriminator) state so a
 run can resume; it is never shipped.
 
-Metadata keys (all strings): ``format`` = ``"motion2video-frames"``, ``config`` (FrameGeneratorConfig as
-JSON), ``version`` (package version), ``step`` (training steps done), ``train`` (JSON summary: training
+Metadata keys (all strings): ``format`` = ``"motion2video-frames"``, ``kind`` (``"analogy"``: the feature-analogy
+:class:`FrameGenerator`; ``"warp"``: the warping :class:`~motion2video.frames.warp.WarpGenerator`; absent in
+older checkpoints, which are analogy models), ``config`` (the kind's config as JSON), ``version`` (package version), ``step`` (training steps done), ``train`` (JSON summary: training
 config, data summary, wall time, ...).
 """
 
@@ -23,24 +24,42 @@ from motion2video import __version__
 from motion2video.atomic import atomic_output
 from motion2video.errors import InputError
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
+from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 
 FORMAT = "motion2video-frames"
 WEIGHTS_DIR = Path(__file__).resolve().parents[1] / "weights"
 SUFFIX = ".safetensors"
+MODEL_KINDS = {"analogy": (FrameGenerator, FrameGeneratorConfig), "warp": (WarpGenerator, WarpGeneratorConfig)}
+
+
+def model_kind(model: torch.nn.Module) -> str:
+    """``"warp"`` for a WarpGenerator, ``"analogy"`` for a FrameGenerator."""
+    return "warp" if isinstance(model, WarpGenerator) else "analogy"
+
+
+def build_model(kind: str, config) -> torch.nn.Module:
+    """A fresh generator of ``kind`` (see :data:`MODEL_KINDS`) with ``config`` (its config dataclass)."""
+    if kind not in MODEL_KINDS:
+        raise ValueError(f"unknown model kind {kind!r}; known: {', '.join(MODEL_KINDS)}")
+    return MODEL_KINDS[kind][0](config)
 
 
 @dataclass
 class LoadedFrameModel:
     """A rebuilt generator (eval mode) and what its checkpoint says about itself."""
 
-    model: FrameGenerator
+    model: FrameGenerator | WarpGenerator
     path: Path
     step: int
     train: dict = field(default_factory=dict)
 
     @property
-    def config(self) -> FrameGeneratorConfig:
+    def config(self) -> FrameGeneratorConfig | WarpGeneratorConfig:
         return self.model.config
+
+    @property
+    def kind(self) -> str:
+        return model_kind(self.model)
 
 
 def state_path(path: str | Path) -> Path:
@@ -55,11 +74,12 @@ def _atomic_save(tensors: dict[str, torch.Tensor], path: Path, metadata: dict[st
         save_file({k: v.detach().contiguous().cpu() for k, v in tensors.items()}, str(tmp), metadata=metadata)
 
 
-def save_frame_model(model: FrameGenerator, path: str | Path, *, step: int, train: dict | None = None) -> Path:
+def save_frame_model(model: FrameGenerator | WarpGenerator, path: str | Path, *, step: int, train: dict | None = None) -> Path:
     """Write the generator's weights and metadata to ``path`` (atomically: tmp file + rename)."""
     path = Path(path)
     metadata = {
         "format": FORMAT,
+        "kind": model_kind(model),
         "config": model.config.to_json(),
         "version": __version__,
         "step": str(int(step)),
@@ -95,8 +115,15 @@ def load_frame_model(path_or_name: str | Path) -> LoadedFrameModel:
         raise InputError(f"cannot read the checkpoint ({type(err).__name__}: {err})", path) from None
     if metadata.get("format") != FORMAT:
         raise InputError(f"not a frame-generator checkpoint (format {metadata.get('format')!r})", path)
-    config = FrameGeneratorConfig.from_dict(json.loads(metadata["config"]))
-    model = FrameGenerator(config)
+    kind = metadata.get("kind", "analogy")
+    if kind not in MODEL_KINDS:
+        raise InputError(f"unknown frame-model kind {kind!r} (known: {', '.join(MODEL_KINDS)})", path)
+    model_cls, config_cls = MODEL_KINDS[kind]
+    try:
+        config = config_cls.from_dict(json.loads(metadata["config"]))
+    except (KeyError, ValueError, TypeError) as err:
+        raise InputError(f"bad frame-model config in the checkpoint ({err})", path) from None
+    model = model_cls(config)
     missing, unexpected = model.load_state_dict(tensors, strict=False)
     if missing or unexpected:
         raise InputError(f"checkpoint weights do not match its config (missing {len(missing)}, "

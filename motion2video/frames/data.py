@@ -123,6 +123,7 @@ class FramePairs:
         ref_images, tgt_images: (B, H, W, 3) uint8.
         ref_points, tgt_points: (B, K, 2) float32 control points, pixels.
         ref_structures, tgt_structures: (B, S, H, W) float32 structure maps.
+        ref_masks, tgt_masks: (B, H, W) bool person silhouettes, or None when the sequences have none.
     """
 
     ref_images: np.ndarray
@@ -131,6 +132,8 @@ class FramePairs:
     tgt_points: np.ndarray
     ref_structures: np.ndarray
     tgt_structures: np.ndarray
+    ref_masks: np.ndarray | None = None
+    tgt_masks: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])
@@ -158,6 +161,9 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
     ref_img, tgt_img = seqs.images[s, r], seqs.images[s, t]  # (B, H, W, 3)
     ref_pts, tgt_pts = seqs.points[s, r].astype(np.float32), seqs.points[s, t].astype(np.float32)  # (B, K, 2)
     ref_face = tgt_face = None
+    ref_mask = tgt_mask = None
+    if seqs.masks is not None:
+        ref_mask, tgt_mask = seqs.masks[s, r], seqs.masks[s, t]  # (B, H, W)
     if seqs.structure_images is not None:
         ref_face, tgt_face = seqs.structure_images[s, r], seqs.structure_images[s, t]  # (B, H, W)
     if flip is not None and np.any(flip):
@@ -172,6 +178,9 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
         if ref_face is not None:
             ref_face, tgt_face = ref_face.copy(), tgt_face.copy()
             ref_face[f], tgt_face[f] = ref_face[f, :, ::-1], tgt_face[f, :, ::-1]
+        if ref_mask is not None:
+            ref_mask, tgt_mask = ref_mask.copy(), tgt_mask.copy()
+            ref_mask[f], tgt_mask[f] = ref_mask[f, :, ::-1], tgt_mask[f, :, ::-1]
     if crop:
         if rng is None:
             raise ValueError("make_pairs needs an rng to place crops")
@@ -185,13 +194,16 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
         tgt_pts = tgt_pts - origins[:, None, :].astype(np.float32)
         if ref_face is not None:
             ref_face, tgt_face = cut(ref_face), cut(tgt_face)
+        if ref_mask is not None:
+            ref_mask, tgt_mask = cut(ref_mask), cut(tgt_mask)
         size = crop
     if seqs.domain == "body":
         ref_st, tgt_st = body_structures(ref_pts, size), body_structures(tgt_pts, size)
     else:
         ref_st, tgt_st = face_structures(ref_face), face_structures(tgt_face)
+    masks = (None, None) if ref_mask is None else (np.ascontiguousarray(ref_mask), np.ascontiguousarray(tgt_mask))
     return FramePairs(np.ascontiguousarray(ref_img), np.ascontiguousarray(tgt_img), ref_pts, tgt_pts,
-                      ref_st, tgt_st)
+                      ref_st, tgt_st, *masks)
 
 
 def crop_origins(rng: np.random.Generator, ref_points: np.ndarray, tgt_points: np.ndarray, *, size: int,
@@ -247,6 +259,8 @@ def save_shard(path: Path, seqs: FrameSequences) -> None:
                   clip=np.asarray(seqs.clip, dtype=str), start=seqs.start, domain=np.asarray(seqs.domain))
     if seqs.structure_images is not None:
         arrays["structure_images"] = seqs.structure_images
+    if seqs.masks is not None:
+        arrays["masks"] = seqs.masks
     save_npz(path, arrays, compressed=True)
 
 
@@ -257,6 +271,7 @@ def load_shard(path: Path) -> FrameSequences:
                 domain=str(z["domain"]), images=z["images"], points=z["points"],
                 structure_images=z["structure_images"] if "structure_images" in z.files else None,
                 identity=z["identity"], clip=z["clip"], start=z["start"],
+                masks=z["masks"] if "masks" in z.files else None,
             )
     except (OSError, KeyError, ValueError, zlib.error) as err:
         raise InputError(f"unreadable cache shard ({type(err).__name__}: {err}); delete it to regenerate",
@@ -332,6 +347,7 @@ def toy_sequences(domain: str = "body", *, num_sequences: int = 8, frames_per_se
     struct = np.zeros((n, t, s, s), np.uint8) if domain == "face" else None
     k = H36M_17.num_joints if domain == "body" else 12
     points = np.zeros((n, t, k, 2), np.float32)
+    masks = np.zeros((n, t, s, s), bool)
     width = max(1, s // 12)
     for i in range(n):
         bg = background_crop(rng, pool, s)
@@ -368,7 +384,8 @@ def toy_sequences(domain: str = "body", *, num_sequences: int = 8, frames_per_se
                 r = np.array([[np.cos(rot), -np.sin(rot)], [np.sin(rot), np.cos(rot)]])
                 pts = c + np.concatenate([ring, mouth_pts]) @ r.T
             images[i, j] = frame
+            masks[i, j] = np.any(frame != bg, axis=-1)
             points[i, j] = pts
     return FrameSequences(domain=domain, images=images, points=points, structure_images=struct,
                           identity=np.arange(n, dtype=np.int64), clip=np.array(["toy"] * n),
-                          start=np.zeros(n, np.int64))
+                          start=np.zeros(n, np.int64), masks=masks)

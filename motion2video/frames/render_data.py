@@ -122,10 +122,32 @@ def _rgb255(colour: tuple[float, float, float]) -> tuple[int, int, int]:
     return tuple(int(round(255 * c)) for c in colour)
 
 
+def identity_vertex_colors(identity: Identity, palette: np.ndarray) -> np.ndarray | None:
+    """(V, 3) float Anny vertex colours of an identity with patterned clothing (the body style's region
+    colours ``palette`` (R, 3) uint8, with each pattern blended in by its region's weight), or None when
+    its clothes are flat."""
+    from renderers import anny_model
+
+    if identity.top_pattern is None and identity.trousers_pattern is None:
+        return None
+    rest = anny_model.anny_rest(dict(identity.phenotype))
+    weights = anny_model.region_weights(rest)  # (V, R)
+    colours = weights @ (np.asarray(palette, np.float64) / 255.0)  # (V, 3)
+    for region, pattern, base in ((anny_model.TOP, identity.top_pattern, identity.top),
+                                  (anny_model.TROUSERS, identity.trousers_pattern, identity.trousers)):
+        if pattern is None:
+            continue
+        w = weights[:, region] * pattern.weights(rest.vertices)  # (V,)
+        colours += w[:, None] * (np.asarray(pattern.colour) - np.round(255 * np.asarray(base)) / 255.0)[None]
+    return np.clip(colours, 0.0, 1.0)
+
+
 def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
-    """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, clip index, start)."""
+    """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, masks (T, S, S) bool,
+    clip index, start)."""
     from motion2video.core.camera import project
     from motion2video.motion import Motion
+    from renderers.body import BodyStyle
     from renderers.registry import renderer_for
 
     spec = source.spec
@@ -143,12 +165,13 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
         azimuth_deg=float(rng.uniform(*BODY_AZIMUTH_DEG)),
         elevation_deg=float(rng.uniform(*BODY_ELEVATION_DEG)),
     )
+    look["vertex_colors"] = identity_vertex_colors(identity, BodyStyle(size=(size, size), **look).region_colors())
     gain = light_jitter(rng)
     with renderer_for("body3d", "mesh", size=size, **look) as renderer:
         out = renderer.renderer.render_with_masks(motion)
     images = relight(out.frames, out.masks, gain)
     points = project(motion.joints, out.camera)[..., :2].astype(np.float32)  # (T, 17, 2)
-    return images, points, ci, int(times[0])
+    return images, points, out.masks, ci, int(times[0])
 
 
 def render_shard(source: SequenceSource, shard: int, *,
@@ -159,17 +182,18 @@ def render_shard(source: SequenceSource, shard: int, *,
     last = min(spec.num_sequences, first + spec.sequences_per_shard)
     if first >= last:
         raise ValueError(f"shard {shard} is past the end of the split ({spec.num_shards} shards)")
-    images, points, structs, ident, clips, starts = [], [], [], [], [], []
+    images, points, structs, ident, clips, starts, masks = [], [], [], [], [], [], []
     for i in range(first, last):
         rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
         ident_index = i % spec.num_identities
         identity = source.identities[ident_index]
         if spec.domain == "body":
-            im, pts, ci, start = render_body_sequence(source, rng, identity)
+            im, pts, mk, ci, start = render_body_sequence(source, rng, identity)
         else:
-            im, pts, st, ci, start = render_face_sequence(source, rng, identity)
+            im, pts, st, mk, ci, start = render_face_sequence(source, rng, identity)
             structs.append(st)
         images.append(im)
+        masks.append(mk)
         points.append(pts)
         ident.append(ident_index)
         clips.append(source.clip_names[ci])
@@ -180,6 +204,7 @@ def render_shard(source: SequenceSource, shard: int, *,
         domain=spec.domain, images=np.stack(images), points=np.stack(points),
         structure_images=np.stack(structs) if structs else None,
         identity=np.asarray(ident, np.int64), clip=np.asarray(clips), start=np.asarray(starts, np.int64),
+        masks=np.stack(masks),
     )
 
 
@@ -224,10 +249,11 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
 
     Returns:
         images (T, S, S, 3) uint8, points (T, K, 2) float32 projected control vertices, structures
-        (T, S, S) uint8 grey structure renders, clip index, first source frame.
+        (T, S, S) uint8 grey structure renders, masks (T, S, S) bool, clip index, first source frame.
     """
     from motion2video.data.face_dynamics import head_pose_track
     from motion2video.motion import NUM_EXPRESSIONS, FaceMotion
+    from renderers.body import BodyStyle
     from renderers.registry import renderer_for
 
     spec = source.spec
@@ -260,4 +286,4 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
     points = np.concatenate([out.landmarks, camera.project(verts[:, control])[..., :2]], axis=1)  # (T, 8+K, 2)
     points = points.astype(np.float32)
     structures = np.rint(grey.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # (T, S, S)
-    return images, points, structures, ci, int(times[0])
+    return images, points, structures, out.masks, ci, int(times[0])

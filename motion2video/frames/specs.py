@@ -18,7 +18,7 @@ import numpy as np
 
 
 SPLITS = ("train", "test")
-DATA_VERSION = 1
+DATA_VERSION = 2  # 2: person masks stored, patterned clothing, 24 backgrounds
 
 
 def default_data_root() -> Path:
@@ -39,6 +39,7 @@ class FrameSequences:
         identity: (N,) int64 identity index (unique within a split).
         clip: (N,) str, the capture each sequence comes from.
         start: (N,) int64, the first source frame of each sequence.
+        masks: (N, T, H, W) bool silhouettes of the person (rendered), or None (old caches).
     """
 
     domain: str
@@ -48,6 +49,7 @@ class FrameSequences:
     identity: np.ndarray
     clip: np.ndarray
     start: np.ndarray
+    masks: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n, t, h, w, c = self.images.shape
@@ -59,6 +61,8 @@ class FrameSequences:
             raise ValueError("face sequences need structure_images; body sequences must not have them")
         if self.structure_images is not None and self.structure_images.shape != (n, t, h, w):
             raise ValueError(f"structure_images must be {(n, t, h, w)}, got {self.structure_images.shape}")
+        if self.masks is not None and self.masks.shape != (n, t, h, w):
+            raise ValueError(f"masks must be {(n, t, h, w)}, got {self.masks.shape}")
 
     @property
     def num_sequences(self) -> int:
@@ -87,6 +91,7 @@ class FrameSequences:
         if not parts:
             raise ValueError("nothing to concatenate")
         face = parts[0].structure_images is not None
+        masked = all(p.masks is not None for p in parts)
         return FrameSequences(
             domain=parts[0].domain,
             images=np.concatenate([p.images for p in parts]),
@@ -95,6 +100,7 @@ class FrameSequences:
             identity=np.concatenate([p.identity for p in parts]),
             clip=np.concatenate([p.clip for p in parts]),
             start=np.concatenate([p.start for p in parts]),
+            masks=np.concatenate([p.masks for p in parts]) if masked else None,
         )
 
 
@@ -117,6 +123,55 @@ class Identity:
     shoes: tuple[float, float, float]
     hair: tuple[float, float, float]
     iris: tuple[float, float, float]
+    top_pattern: "ClothingPattern | None" = None
+    trousers_pattern: "ClothingPattern | None" = None
+
+
+PATTERN_KINDS = ("stripes", "vertical-stripes", "checks")
+
+
+@dataclass(frozen=True)
+class ClothingPattern:
+    """A procedural two-colour pattern on a clothing region, defined on the rest-pose mesh (so it moves
+    with the body).
+
+    Attributes:
+        kind: one of :data:`PATTERN_KINDS` (horizontal bands, vertical bands, or a checkerboard).
+        colour: the second colour (RGB in [0, 1]); the region's own colour is the first.
+        period: pattern period in metres on the rest mesh.
+        phase: offset in periods.
+    """
+
+    kind: str
+    colour: tuple[float, float, float]
+    period: float
+    phase: float = 0.0
+
+    def weights(self, rest_vertices: np.ndarray) -> np.ndarray:
+        """(V,) weight of the second colour per vertex in [0, 1] for (V, 3) rest vertices (z up, metres);
+        band edges are softened over about a tenth of a period so the mesh does not alias them."""
+        x, y, z = (np.asarray(rest_vertices, np.float64)[:, i] / self.period + self.phase for i in range(3))
+        if self.kind == "stripes":
+            wave = np.sin(2 * np.pi * z)
+        elif self.kind == "vertical-stripes":
+            wave = np.sin(2 * np.pi * (x + 0.5 * y))
+        elif self.kind == "checks":
+            wave = np.sin(2 * np.pi * z) * np.sin(2 * np.pi * (x + 0.5 * y))
+        else:
+            raise ValueError(f"unknown pattern kind {self.kind!r}")
+        return 0.5 + 0.5 * np.tanh(3.0 * wave)
+
+
+def sample_pattern(rng: np.random.Generator, base: tuple[float, float, float]) -> ClothingPattern | None:
+    """A pattern for a garment of colour ``base``: none (flat) one time in four, else stripes or checks in
+    a contrasting colour with a period of 8 to 16 cm."""
+    if rng.random() < 0.25:
+        return None
+    kind = PATTERN_KINDS[int(rng.integers(len(PATTERN_KINDS)))]
+    lum = float(np.dot(base, (0.3, 0.59, 0.11)))
+    colour = _hsv_colour(rng, v_range=(0.05, 0.35) if lum > 0.5 else (0.7, 0.98))
+    return ClothingPattern(kind=kind, colour=colour, period=float(rng.uniform(0.08, 0.16)),
+                           phase=float(rng.uniform(0, 1)))
 
 
 PHENOTYPE_KEYS = ("gender", "age", "muscle", "weight", "height", "proportions")
@@ -154,14 +209,18 @@ def sample_identity(rng: np.random.Generator) -> Identity:
     x = rng.uniform(0, len(SKIN_TONES) - 1)
     i = min(int(x), len(SKIN_TONES) - 2)
     skin = (1 - (x - i)) * SKIN_TONES[i] + (x - i) * SKIN_TONES[i + 1]
+    top = _hsv_colour(rng)
+    trousers = _hsv_colour(rng, v_range=(0.15, 0.8))
     return Identity(
         phenotype=tuple((k, float(pheno[k])) for k in PHENOTYPE_KEYS),
         skin=tuple(float(c) for c in skin),
-        top=_hsv_colour(rng),
-        trousers=_hsv_colour(rng, v_range=(0.15, 0.8)),
+        top=top,
+        trousers=trousers,
         shoes=_hsv_colour(rng, s_range=(0.0, 0.6), v_range=(0.05, 0.6)),
         hair=tuple(float(c) for c in HAIR_COLOURS[rng.integers(len(HAIR_COLOURS))] * rng.uniform(0.8, 1.1)),
         iris=tuple(float(c) for c in IRIS_COLOURS[rng.integers(len(IRIS_COLOURS))]),
+        top_pattern=sample_pattern(rng, top),
+        trousers_pattern=sample_pattern(rng, trousers),
     )
 
 
@@ -175,7 +234,20 @@ def identities(split: str, count: int, *, seed: int = 0) -> list[Identity]:
 
 # Images shipped inside scikit-image (no download): textures and scenes without people.
 BACKGROUND_IMAGES = ("brick", "grass", "gravel", "rocket", "coffee", "chelsea", "hubble_deep_field",
-                     "immunohistochemistry", "moon", "cell")
+                     "immunohistochemistry", "moon", "cell", "clock", "coins", "page", "text", "horse", "retina",
+                     "colorwheel", "microaneurysms", "logo", "checkerboard", "binary_blobs", "cat")
+PROCEDURAL_BACKGROUNDS = 4  # plus floor-and-wall gradients and tiles drawn here (24 backgrounds in all)
+
+
+def procedural_backgrounds(size: int = 256) -> list[np.ndarray]:
+    """Drawn backgrounds: a wall/floor split, diagonal tiles, a vertical gradient and wooden-like boards,
+    (size, size, 3) uint8 each."""
+    yy, xx = np.mgrid[0:size, 0:size].astype(np.float32) / size
+    wall = np.where(yy[..., None] < 0.62, [200, 190, 170], [110, 90, 70]) * (0.8 + 0.2 * yy[..., None])
+    tiles = 150 + 70 * ((np.floor(xx * 8 + yy * 8) + np.floor(xx * 8 - yy * 8)) % 2)[..., None] * [1.0, 0.9, 0.7]
+    gradient = (60 + 160 * yy[..., None]) * np.array([0.6, 0.8, 1.0])
+    boards = (120 + 40 * np.sin(2 * np.pi * (xx * 6 + 0.3 * np.sin(12 * yy))))[..., None] * [1.0, 0.75, 0.5]
+    return [np.clip(b, 0, 255).astype(np.uint8) for b in (wall, tiles, gradient, boards)]
 
 
 def background_images() -> list[np.ndarray]:
@@ -185,10 +257,12 @@ def background_images() -> list[np.ndarray]:
     out = []
     for name in BACKGROUND_IMAGES:
         img = np.asarray(getattr(skimage.data, name)())
+        if img.dtype == bool:
+            img = img.astype(np.uint8) * 255
         if img.ndim == 2:
             img = np.repeat(img[..., None], 3, axis=2)
         out.append(np.ascontiguousarray(img[..., :3]).astype(np.uint8))
-    return out
+    return out + procedural_backgrounds()
 
 
 def background_crop(rng: np.random.Generator, pool: list[np.ndarray], size: int) -> np.ndarray:
@@ -252,11 +326,12 @@ class DatasetSpec:
 
 
 def default_spec(domain: str, split: str, image_size: int = 128, *, seed: int = 0) -> DatasetSpec:
-    """The dataset sizes used for the shipped models (train: 240 sequences x 12 frames; test: 32 x 9)."""
+    """The dataset sizes used for the shipped models (train: 320 sequences x 12 frames of 200 identities;
+    test: 32 x 9 of 8 held-out identities)."""
     window = 1.2 if domain == "body" else 4.0  # faces change more slowly than bodies
     if split == "train":
-        return DatasetSpec(domain=domain, split=split, image_size=image_size, num_sequences=240,
-                           frames_per_sequence=12, num_identities=40, window_seconds=window, seed=seed)
+        return DatasetSpec(domain=domain, split=split, image_size=image_size, num_sequences=320,
+                           frames_per_sequence=12, num_identities=200, window_seconds=window, seed=seed)
     return DatasetSpec(domain=domain, split=split, image_size=image_size, num_sequences=32,
                        frames_per_sequence=9, num_identities=8, window_seconds=window, sequences_per_shard=8,
                        seed=seed)

@@ -18,11 +18,12 @@ import numpy as np
 import torch
 
 from motion2video.errors import InputError
-from motion2video.frames.checkpoint import (load_frame_model, load_train_state, save_frame_model,
-                                            save_train_state, state_path)
+from motion2video.frames.checkpoint import (build_model, load_frame_model, load_train_state, model_kind,
+                                            save_frame_model, save_train_state, state_path)
 from motion2video.frames.data import FrameSequences, make_pairs, sample_pair_index, structure_channels
-from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, PatchDiscriminator,
-                                       count_parameters, images_to_tensor, reconstruction_loss)
+from motion2video.frames.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
+                                       images_to_tensor, reconstruction_loss)
+from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,10 @@ class TrainFramesConfig:
         checkpoint_every: write the checkpoint and resume state every this many steps.
         log_every: record the losses every this many steps.
         seed: seeds the initialisation and the batches.
+        model_kind: ``"analogy"`` (:class:`FrameGenerator`) or ``"warp"`` (:class:`WarpGenerator`).
+        edge_weight: weight of the L1 between Sobel gradients of the output and the truth inside the
+            target person's silhouette (needs sequences with masks); it pushes towards sharp people.
+        person_weight: weight of an extra L1 inside the target person's silhouette.
     """
 
     steps: int = 3000
@@ -60,6 +65,9 @@ class TrainFramesConfig:
     checkpoint_every: int = 250
     log_every: int = 25
     seed: int = 0
+    model_kind: str = "analogy"
+    edge_weight: float = 0.0
+    person_weight: float = 0.0
 
     def __post_init__(self) -> None:
         if self.steps < 1 or self.batch_size < 1 or self.checkpoint_every < 1 or self.log_every < 1:
@@ -68,6 +76,8 @@ class TrainFramesConfig:
             raise ValueError("lr must be > 0")
         if self.crop < 0:
             raise ValueError("crop must be >= 0")
+        if self.model_kind not in ("analogy", "warp"):
+            raise ValueError(f"model_kind must be analogy or warp, got {self.model_kind!r}")
 
 
 def learning_rate(step: int, config: TrainFramesConfig) -> float:
@@ -100,7 +110,25 @@ def _batch_tensors(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | N
     x_tgt = images_to_tensor(pairs.tgt_images)
     p_ref = torch.from_numpy(pairs.ref_structures)  # (B, S, H, W)
     p_tgt = torch.from_numpy(pairs.tgt_structures)
-    return x_ref, x_tgt, p_ref, p_tgt
+    return x_ref, x_tgt, p_ref, p_tgt, pairs
+
+
+def sobel(x: torch.Tensor) -> torch.Tensor:
+    """(B, C, H, W) -> (B, 2C, H, W) horizontal and vertical Sobel responses (zero padding)."""
+    k = torch.tensor([[-1.0, 0.0, 1.0], [-2.0, 0.0, 2.0], [-1.0, 0.0, 1.0]], dtype=x.dtype, device=x.device) / 8.0
+    c = x.shape[1]
+    kx = k.view(1, 1, 3, 3).expand(c, 1, 3, 3)
+    ky = k.t().contiguous().view(1, 1, 3, 3).expand(c, 1, 3, 3)
+    return torch.cat([torch.nn.functional.conv2d(x, kx, padding=1, groups=c),
+                      torch.nn.functional.conv2d(x, ky, padding=1, groups=c)], dim=1)
+
+
+def person_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """L1 and Sobel-gradient L1 inside a (B, 1, H, W) mask (means over the masked pixels)."""
+    area = mask.sum().clamp_min(1.0)
+    l1 = ((pred - target).abs() * mask).sum() / (3 * area)
+    edge = ((sobel(pred) - sobel(target)).abs() * mask).sum() / (6 * area)
+    return l1, edge
 
 
 def train_frames(
@@ -112,6 +140,7 @@ def train_frames(
     resume: bool = False,
     progress: bool = True,
     extra_metadata: dict | None = None,
+    init_from: str | Path | None = None,
 ) -> TrainFramesResult:
     """Train a frame generator on ``seqs`` and write ``output`` (+ its ``.state`` resume file).
 
@@ -124,12 +153,21 @@ def train_frames(
             the checkpoint's); without them training starts from scratch (a note is printed).
         progress: show a tqdm progress bar.
         extra_metadata: merged into the checkpoint's ``train`` summary.
+        init_from: start from the weights of this checkpoint (same kind, same parameter shapes; its
+            config may differ in settings without weights, e.g. the warp network's ``net_scale``), with a
+            fresh optimiser and schedule. Ignored when resuming.
     """
     output = Path(output)
-    if model_config is None:
+    warp = config.model_kind == "warp"
+    if model_config is None and warp:
+        model_config = WarpGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
+                                           structure_channels=structure_channels(seqs.domain))
+    elif model_config is None:
         model_config = FrameGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
                                             structure_channels=structure_channels(seqs.domain))
-    factor = 2 ** (len(model_config.channels) - 1)
+    if (config.edge_weight or config.person_weight) and seqs.masks is None:
+        raise ValueError("edge_weight / person_weight need sequences with person masks")
+    factor = 2 ** (len(model_config.channels) - 1) if not warp else 8
     if config.crop and (config.crop > seqs.image_size or config.crop % factor):
         raise ValueError(f"crop {config.crop} must be <= the image size {seqs.image_size} and a multiple of {factor}")
     if (model_config.domain, model_config.image_size) != (seqs.domain, seqs.image_size):
@@ -137,16 +175,29 @@ def train_frames(
                          f"{seqs.domain}/{seqs.image_size}")
     torch.manual_seed(config.seed)
     start_step, past_wall = 0, 0.0
-    model = FrameGenerator(model_config)
+    model = build_model(config.model_kind, model_config)
     have_state = output.is_file() and state_path(output).is_file()
     if resume and have_state:
         loaded = load_frame_model(output)
         if (loaded.config.domain, loaded.config.image_size) != (seqs.domain, seqs.image_size):
             raise InputError(f"cannot resume: the checkpoint is {loaded.config.domain}/{loaded.config.image_size}"
                              f" but the data is {seqs.domain}/{seqs.image_size}", output)
+        if loaded.kind != config.model_kind:
+            raise InputError(f"cannot resume: the checkpoint is a {loaded.kind} model, not {config.model_kind}",
+                             output)
         model = loaded.model
     elif resume:
         print(f"train-frames: nothing to resume at {output} (no checkpoint + .state file); starting from step 0")
+    if init_from is not None and not (resume and have_state):
+        source = load_frame_model(init_from)
+        if source.kind != config.model_kind:
+            raise InputError(f"cannot start from a {source.kind} model when training a {config.model_kind} model",
+                             init_from)
+        try:
+            model.load_state_dict(source.model.state_dict())
+        except RuntimeError as err:
+            raise InputError(f"its weights do not fit the model being trained ({str(err).splitlines()[0]})",
+                             init_from) from None
     model.train()
     optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, betas=(0.9, 0.99))
     disc = disc_opt = None
@@ -164,6 +215,8 @@ def train_frames(
         "train_config": dataclasses.asdict(config),
         "data": seqs.summary(),
         "parameters": count_parameters(model),
+        "model_kind": model_kind(model),
+        "init_from": None if init_from is None else str(init_from),
         **(extra_metadata or {}),
     }
     history: list[dict] = []
@@ -188,15 +241,23 @@ def train_frames(
         rng = np.random.default_rng([config.seed, step])
         index = sample_pair_index(rng, seqs, config.batch_size)
         flip = rng.random(config.batch_size) < 0.5 if config.flip else None
-        x_ref, x_tgt, p_ref, p_tgt = _batch_tensors(seqs, index, flip, crop=config.crop, rng=rng)
+        x_ref, x_tgt, p_ref, p_tgt, pairs = _batch_tensors(seqs, index, flip, crop=config.crop, rng=rng)
         lr = learning_rate(step, config)
         for group in optimizer.param_groups:
             group["lr"] = lr
 
-        pred = model(x_ref, p_ref, p_tgt)  # (B, 3, H, W)
+        if isinstance(model, WarpGenerator):
+            pred = model(x_ref, torch.from_numpy(pairs.ref_points), torch.from_numpy(pairs.tgt_points), p_tgt)
+        else:
+            pred = model(x_ref, p_ref, p_tgt)  # (B, 3, H, W)
         rec = reconstruction_loss(pred, x_tgt, ssim_weight=config.ssim_weight)
         total = rec.total
         terms = {"loss": float(rec.total.detach()), "l1": rec.l1, "ssim": rec.ssim}
+        if config.edge_weight or config.person_weight:
+            mask = torch.from_numpy(pairs.tgt_masks)[:, None].float()
+            p_l1, p_edge = person_terms(pred, x_tgt, mask)
+            total = total + config.person_weight * p_l1 + config.edge_weight * p_edge
+            terms.update(person_l1=float(p_l1.detach()), person_edge=float(p_edge.detach()))
         if disc is not None:
             g_adv = ((disc(pred, p_tgt) - 1.0) ** 2).mean()
             total = total + config.adv_weight * g_adv

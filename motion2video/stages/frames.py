@@ -22,6 +22,12 @@ from motion2video.stages.structure import Structures, structure_maps, structure_
 GENERATE_CHUNK = 64  # target structures materialised at once (33 x 128 x 128 float32 = 2.2 MB each)
 
 
+def is_warp(net) -> bool:
+    """Whether ``net`` is the warp generator (:mod:`motion2video.frames.warp`), which takes keypoints and
+    frames of any size, rather than the feature-analogy generator, which takes structure maps."""
+    return getattr(net, "kind", "analogy") == "warp"
+
+
 def default_generator_threads() -> int:
     """Half the CPU cores, 1 to 4. On the 2-core machines this was built on, two threads were slower than
     one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench_pipeline.py``."""
@@ -89,8 +95,18 @@ class GeneratedFrames:
 def generate_video_frames(model, reference: Reference, structures: Structures, *, batch_size: int = 4,
                           threads: int | None = None, channels_last: bool = True) -> GeneratedFrames:
     """Run :func:`generate_frames` over every observed and future frame of :class:`Structures`, building
-    the structure maps a chunk at a time (so a long video never holds all of them)."""
+    the structure maps a chunk at a time (so a long video never holds all of them). A warp generator
+    (:class:`~motion2video.frames.warp.WarpGenerator`) goes through its ``encode_reference`` / ``decode``
+    at the structures' size instead (the person generated at the model's size, pasted into the reference)."""
     net = getattr(model, "model", model)
+    if is_warp(net):
+        n = structures.num_targets
+        with torch_threads(threads):
+            state = net.encode_reference(reference.image, structures.points[0])
+            frames = net.decode(state, structures.points[1:1 + n], batch_size=batch_size)
+        to, k, tf = structures.observed, structures.samples, structures.horizon
+        size = structures.size
+        return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
     size = net.config.image_size
     if structures.size != size:
         raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
@@ -121,18 +137,26 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
         previews the same shape, the structures drawn (:func:`~motion2video.stages.structure.structure_previews`).
     """
     net = getattr(model, "model", model)
-    size = net.config.image_size
-    if structures.size != size:
-        raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
-    ref_structure = structure_maps(structures, slice(0, 1))[0]
+    warp = is_warp(net)
+    if warp:  # the warp generator works at any frame size: its person crop is resized to the model's size
+        with torch_threads(threads):
+            state = net.encode_reference(reference.image, structures.points[0])
+    else:
+        size = net.config.image_size
+        if structures.size != size:
+            raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
+        ref_structure = structure_maps(structures, slice(0, 1))[0]
     steps = structures.observed + structures.horizon
     for start in range(0, steps, chunk):
         rows = timeline_rows(structures, start, min(steps, start + chunk))  # (t, K)
         unique, inverse = np.unique(rows, return_inverse=True)
         t0 = time.perf_counter()
         with torch_threads(threads):
-            frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),
-                                     batch_size=batch_size, channels_last=channels_last)
+            if warp:
+                frames = net.decode(state, structures.points[unique], batch_size=batch_size)
+            else:
+                frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),
+                                         batch_size=batch_size, channels_last=channels_last)
         if clock is not None:
             clock["generation"] = clock.get("generation", 0.0) + time.perf_counter() - t0
         previews = structure_previews(structures, unique)
