@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from motion2video import metrics as M  # noqa: E402
-from motion2video.atomic import write_text  # noqa: E402
+from motion2video.atomic import write_section  # noqa: E402
 from motion2video.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_FACE,
@@ -92,18 +92,6 @@ def md_table(header: list[str], rows: list[list]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     lines += ["| " + " | ".join(fmt(c) for c in row) + " |" for row in rows]
     return "\n".join(lines)
-
-
-def write_section(path: Path, body: str) -> None:
-    """Replace (or append) the issue-3 section of ``path``, keeping everything else."""
-    text = path.read_text() if path.exists() else "# Results\n"
-    block = f"{BEGIN}\n{body.rstrip()}\n{END}"
-    if BEGIN in text and END in text:
-        head, rest = text.split(BEGIN, 1)
-        text = head + block + rest.split(END, 1)[1]
-    else:
-        text = text.rstrip() + "\n\n" + block + "\n"
-    write_text(path, text)
 
 
 SHIPPED_DIR = [WEIGHTS_DIR]  # --weights replaces it (e.g. for a smoke run on other checkpoints)
@@ -463,7 +451,7 @@ def cmd_results(args: argparse.Namespace) -> int:
     sections.append(bad_input_section(record, tmp))
     record["wall_time_s"] = time.perf_counter() - t0
     sections.append(f"\n_Generated {record['started']} in {record['wall_time_s'] / 60:.1f} min._")
-    write_section(Path(args.doc), "\n\n".join(part.strip() for part in sections))
+    write_section(args.doc, BEGIN, END, "\n\n".join(part.strip() for part in sections))
     out = Path(args.json)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(record, indent=2, default=str) + "\n")

@@ -32,7 +32,7 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from motion2video.atomic import write_text  # noqa: E402
+from motion2video.atomic import write_section  # noqa: E402
 from motion2video.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_MOCAP,
@@ -425,17 +425,6 @@ def tried_section(record: dict) -> str:
     return "\n".join(lines)
 
 
-def write_section(doc: Path, body: str) -> None:
-    text = doc.read_text() if doc.is_file() else "# Results\n"
-    block = f"{BEGIN}\n{body.strip()}\n{END}"
-    if BEGIN in text and END in text:
-        head, rest = text.split(BEGIN, 1)
-        text = head + block + rest.split(END, 1)[1]
-    else:
-        text = text.rstrip() + "\n\n" + block + "\n"
-    write_text(doc, text)
-
-
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--weights", default=str(WEIGHTS_DIR), help="folder of the corpus-trained checkpoints")
@@ -467,7 +456,7 @@ def main(argv: list[str] | None = None) -> int:
     sections.append(tried_section(record))
     record["wall_time_s"] = time.perf_counter() - t0
     sections.append(f"_Generated {record['started']} in {record['wall_time_s'] / 60:.1f} min._")
-    write_section(Path(args.doc), "\n\n".join(s.strip() for s in sections))
+    write_section(args.doc, BEGIN, END, "\n\n".join(s.strip() for s in sections))
     out = Path(args.json)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(record, indent=2, default=str) + "\n")

@@ -67,3 +67,18 @@ def write_text(path: str | Path, text: str) -> Path:
 def write_json(path: str | Path, record: dict, *, indent: int = 2) -> Path:
     """Write ``record`` as JSON (trailing newline) to ``path`` atomically; returns ``path``."""
     return write_text(path, json.dumps(record, indent=indent) + "\n")
+
+
+def write_section(path: str | Path, begin: str, end: str, body: str) -> Path:
+    """Replace the text between the marker lines ``begin`` and ``end`` of a document (or append the marked
+    block when the markers are missing; a missing file starts as ``# Results``), keeping everything else;
+    written atomically. Used by the ``scripts/make_results*.py`` generators of ``docs/``."""
+    path = Path(path)
+    text = path.read_text() if path.is_file() else "# Results\n"
+    block = f"{begin}\n{body.strip()}\n{end}"
+    if begin in text and end in text:
+        head, rest = text.split(begin, 1)
+        text = head + block + rest.split(end, 1)[1]
+    else:
+        text = text.rstrip() + "\n\n" + block + "\n"
+    return write_text(path, text)
