@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +41,7 @@ from motion2video.checkpoint import CheckpointMeta, config_dict, read_meta, save
 from motion2video.data.dataset import MotionDataset
 from motion2video.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
+from motion2video.schedule import learning_rate  # noqa: F401 (the one schedule; old import path)
 
 SUFFIX = ".safetensors"
 
@@ -115,16 +115,6 @@ def last_paths(out: str | Path) -> tuple[Path, Path]:
     out = Path(out)
     stem = out.name[: -len(SUFFIX)] if out.name.endswith(SUFFIX) else out.name
     return out.with_name(stem + ".last" + SUFFIX), out.with_name(stem + ".last.optim" + SUFFIX)
-
-
-def learning_rate(step: int, config: TrainConfig) -> float:
-    """Linear warm-up then cosine decay from ``lr`` to ``lr * final_lr_fraction`` at ``steps``."""
-    if step < config.warmup_steps:
-        return config.lr * (step + 1) / config.warmup_steps
-    span = max(config.steps - config.warmup_steps, 1)
-    progress = min((step - config.warmup_steps) / span, 1.0)
-    low = config.lr * config.final_lr_fraction
-    return low + 0.5 * (config.lr - low) * (1.0 + math.cos(math.pi * progress))
 
 
 def make_optimizers(model: torch.nn.Module, config: TrainConfig) -> dict[str, torch.optim.Optimizer]:

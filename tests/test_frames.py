@@ -144,7 +144,7 @@ def test_checkpoint_round_trip_and_errors(tmp_path):
 
 
 def test_learning_rate_schedule():
-    cfg = TrainFramesConfig(steps=100, warmup_steps=10, lr=1e-3, lr_final_fraction=0.1)
+    cfg = TrainFramesConfig(steps=100, warmup_steps=10, lr=1e-3, final_lr_fraction=0.1)
     assert learning_rate(0, cfg) == pytest.approx(1e-4)
     assert learning_rate(9, cfg) == pytest.approx(1e-3)
     assert learning_rate(99, cfg) == pytest.approx(1e-4, rel=0.05)

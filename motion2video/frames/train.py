@@ -9,7 +9,6 @@ batches as an uninterrupted one.
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,6 +17,7 @@ import numpy as np
 import torch
 
 from motion2video.errors import InputError
+from motion2video.schedule import learning_rate  # the one schedule of both training loops
 from motion2video.frames.checkpoint import (build_model, load_frame_model, load_train_state, model_kind,
                                             save_frame_model, save_train_state, state_path)
 from motion2video.frames.data import FrameSequences, make_pairs, sample_pair_index, structure_channels
@@ -35,7 +35,7 @@ class TrainFramesConfig:
         batch_size: pairs per step.
         lr: peak learning rate (Adam).
         warmup_steps: linear warm-up length.
-        lr_final_fraction: the cosine decay ends at ``lr * lr_final_fraction``.
+        final_lr_fraction: the cosine decay ends at ``lr * final_lr_fraction``.
         ssim_weight: weight of (1 - SSIM) next to L1.
         adversarial: add a conditional patch discriminator (LSGAN); off by default (slow on CPU).
         adv_weight: weight of the generator's adversarial term.
@@ -56,7 +56,7 @@ class TrainFramesConfig:
     batch_size: int = 8
     lr: float = 1e-3
     warmup_steps: int = 100
-    lr_final_fraction: float = 0.05
+    final_lr_fraction: float = 0.05
     ssim_weight: float = 1.0
     adversarial: bool = False
     adv_weight: float = 0.01
@@ -78,16 +78,6 @@ class TrainFramesConfig:
             raise ValueError("crop must be >= 0")
         if self.model_kind not in ("analogy", "warp"):
             raise ValueError(f"model_kind must be analogy or warp, got {self.model_kind!r}")
-
-
-def learning_rate(step: int, config: TrainFramesConfig) -> float:
-    """Learning rate at ``step`` (0-based): linear warm-up, then cosine decay to the final fraction."""
-    if step < config.warmup_steps:
-        return config.lr * (step + 1) / config.warmup_steps
-    span = max(1, config.steps - config.warmup_steps)
-    progress = min(1.0, (step - config.warmup_steps) / span)
-    low = config.lr * config.lr_final_fraction
-    return low + 0.5 * (config.lr - low) * (1.0 + math.cos(math.pi * progress))
 
 
 @dataclass
