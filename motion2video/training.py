@@ -41,7 +41,7 @@ from motion2video.checkpoint import CheckpointMeta, config_dict, read_meta, save
 from motion2video.data.dataset import MotionDataset
 from motion2video.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
-from motion2video.schedule import learning_rate  # noqa: F401 (the one schedule; old import path)
+from motion2video.schedule import learning_rate
 
 SUFFIX = ".safetensors"
 
