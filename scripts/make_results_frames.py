@@ -1,6 +1,6 @@
 """Issue 10 evidence: the body frame generator measured on the person, next to its baselines, in one run.
 
-    python scripts/make_results_frames.py [--model frames-body-128] [--cache DIR]
+    python scripts/make_results_frames.py [--model frames-body-128] [--cache DIR] [--bench out/bench_pipeline.json]
 
 Runs ``motion2video evaluate-frames --model MODEL`` once on the held-out body pairs (held-out identities and
 clips; the previous generator ``frames-body-128-v1``, copy-reference and limb-warp scored on the same pairs),
@@ -11,6 +11,9 @@ and writes:
   PSNR / sharpness where the person moved, and the issue's targets met or missed;
 - docs/images/frames_body_person_sheet.png: reference | target | new | old | copy-reference | limb-warp;
 - out/results_frames.json: the evaluation as evaluate-frames writes it.
+
+With ``--bench``, the speed of the new and the previous body generator side by side, from a JSON written by
+``scripts/bench_pipeline.py`` (``generators_side_by_side``), is added to the section.
 
 About a minute on 2 cores when the held-out shards are cached (``--cache``), plus a few minutes to render
 them the first time.
@@ -58,7 +61,18 @@ def table(results: dict, model: str) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def section(evaluation: dict, model: str, command: str, minutes: float) -> str:
+def speed_line(bench: dict | None) -> str:
+    if not bench or not bench.get("generators_side_by_side"):
+        return ""
+    side = bench["generators_side_by_side"]
+    machine = bench.get("machine", {})
+    shown = ", ".join(f"`{name}` {fps:.1f}" for name, fps in side.items())
+    return (f"Speed at 128x128 (`python scripts/bench_pipeline.py`, same run, load average "
+            f"{machine.get('load_average_1min', float('nan')):.1f}): {shown} frames/s. The warp generator pays for "
+            f"the person crop and its paste back into the full-size reference.\n")
+
+
+def section(evaluation: dict, model: str, command: str, minutes: float, bench: dict | None = None) -> str:
     res = evaluation["results"]
     gen = res["generator"]
     margins = ", ".join(f"{gen['person_psnr'] - res[k]['person_psnr']:+.2f} dB over {k}"
@@ -89,6 +103,7 @@ edge loss doubled: 17.45 dB, the shipped model. The two missed person targets ne
 bone, so loose clothing and foreshortened limbs land a few pixels off, and the visibility mask then blends
 rather than copies.
 
+{speed_line(bench)}
 Reference | target | new | old | copy-reference | limb-warp, on held-out pairs:
 
 ![body person sheet](images/frames_body_person_sheet.png)
@@ -103,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cache", default=None, help="frame-data cache folder (evaluate-frames --cache)")
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames.json"))
+    parser.add_argument("--bench", default=None, help="a bench_pipeline.py JSON: adds the generators' speed")
     args = parser.parse_args(argv)
 
     start = time.perf_counter()
@@ -115,7 +131,9 @@ def main(argv: list[str] | None = None) -> int:
     subprocess.run([sys.executable, "-m", "motion2video.cli", *cmd[1:]], check=True, cwd=ROOT)
     evaluation = json.loads(Path(args.json).read_text())
     shown = f"motion2video evaluate-frames --model {args.model} --json out/results_frames.json"
-    write_section(args.doc, BEGIN, END, section(evaluation, args.model, shown, (time.perf_counter() - start) / 60))
+    bench = json.loads(Path(args.bench).read_text()) if args.bench else None
+    write_section(args.doc, BEGIN, END, section(evaluation, args.model, shown, (time.perf_counter() - start) / 60,
+                                                bench))
     print(f"wrote {args.doc}, {sheet} and {args.json}")
     return 0
 
