@@ -95,7 +95,7 @@ def _bad_inputs(tmp: Path) -> dict[str, tuple[list[str], str]]:
         "fps 0 in the file": ([str(_npz(tmp / "fps0.npz", joints=walk, fps=0.0, skeleton="h36m-17"))], "fps"),
         "negative --fps": ([good, "--fps", "-5"], "fps"),
         "unparseable BVH": ([str(tmp / "garbage.bvh")], "garbage.bvh"),
-        "output folder missing": ([good, "-o", str(tmp / "no" / "such" / "dir" / "out.mp4")], "does not exist"),
+        "output folder under a file": ([good, "-o", str(tmp / "a_file" / "no" / "out.mp4")], "a_file is a file"),
         "output folder is a file": ([good, "-o", str(tmp / "a_file" / "out.mp4")], "a_file"),
         "unknown output extension": ([good, "-o", str(tmp / "out.avi")], "extension"),
         "size below 32": ([good, "--size", "16"], "between 32 and 2048"),
@@ -119,6 +119,15 @@ def test_bad_input_one_line_exit_2_no_output(case, tmp_path, capsys):
     assert phrase in lines[0], lines[0]
     assert "Traceback" not in err and printed == ""
     assert set(tmp_path.rglob("*")) == before  # nothing written, not even a temporary file
+
+
+def test_missing_output_folders_are_created(tmp_path, capsys, mocap_dir):
+    out = tmp_path / "no" / "such" / "dir" / "out.mp4"
+    code, printed, err = _run(["render", str(mocap_dir / "cmu" / "08_01.bvh"), "--frames", "5", "--size", "48",
+                               "-o", str(out), "--no-progress"], capsys)
+    assert code == 0, err
+    assert out.is_file() and out.stat().st_size > 0
+    assert [p.name for p in out.parent.iterdir()] == ["out.mp4"]  # no temporary file left beside it
 
 
 @pytest.mark.slow

@@ -108,13 +108,14 @@ def test_bad_input_one_line_exit_2_and_no_partial_files(ckpt, body_args, mocap_d
     assert "131_02.bvh" in err and "face model" in err
     err = _fails(body_args[:5] + [str(DEMO / "smile.npz")] + ref + k + o, capsys, out)
     assert "smile.npz" in err and "body model" in err
-    # A reference pose of the wrong kind, a wrong output extension, a missing output folder, a missing model.
+    # A reference pose of the wrong kind, a wrong output extension, an output folder under a file, a missing model.
     err = _fails(body_args + ref + ["--reference-pose", str(DEMO / "reference_face.pose.npz")] + k + o, capsys, out)
     assert "face pose, but the frame model makes body frames" in err
     assert "must be an .mp4" in _fails(body_args + ref + k + ["-o", str(tmp_path / "x.gif")], capsys,
                                        tmp_path / "x.gif")
-    assert "output folder does not exist" in _fails(body_args + ref + k + ["-o", str(tmp_path / "no" / "x.mp4")],
-                                                    capsys, tmp_path / "no" / "x.mp4")
+    (tmp_path / "afile").write_text("x")
+    assert "afile is a file" in _fails(body_args + ref + k + ["-o", str(tmp_path / "afile" / "no" / "x.mp4")],
+                                       capsys, tmp_path / "afile" / "no" / "x.mp4")
     err = _fails(["synthesize", "--motion-model", str(tmp_path / "none.safetensors"), "--frame-model",
                   str(ckpt["frames_body"]), str(DEMO / "walk_to_run.npz")] + ref + k + o, capsys, out)
     assert "no such checkpoint" in err

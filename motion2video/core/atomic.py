@@ -16,8 +16,10 @@ import numpy as np
 
 
 def check_output_path(path: str | Path, extensions: tuple[str, ...]) -> Path:
-    """Validate an output path before any work is done: one of ``extensions`` (lower-case, with the dot), an
-    existing and writable folder, not itself a folder. Raises InputError naming the path."""
+    """Validate an output path before any work is done: one of ``extensions`` (lower-case, with the dot), not
+    itself a folder, in a folder that exists and is writable or can be created (missing folders are created
+    by the writers when the output is written, so a failed command leaves none behind). Raises InputError
+    naming the path."""
     from motion2video.core.errors import InputError
 
     out = Path(path)
@@ -25,10 +27,12 @@ def check_output_path(path: str | Path, extensions: tuple[str, ...]) -> Path:
         raise InputError(f"unsupported output extension {out.suffix or '(none)'!r}: the output must be an "
                          f"{' or '.join(extensions)} file", out)
     folder = out.parent
+    while not folder.exists() and folder != folder.parent:  # the nearest existing ancestor
+        folder = folder.parent
     if not folder.is_dir():
-        raise InputError("the output folder does not exist", out)
+        raise InputError(f"{folder} is a file, so the output folder cannot be created", out)
     if not os.access(folder, os.W_OK | os.X_OK):
-        raise InputError("the output folder is not writable", out)
+        raise InputError(f"the output folder {folder} is not writable", out)
     if out.is_dir():
         raise InputError("the output path is a directory", out)
     return out
