@@ -30,6 +30,7 @@ from motion2video import __version__
 from motion2video.atomic import atomic_output
 from motion2video.data.dataset import DatasetConfig, Split
 from motion2video.data.windows import FeatureLayout, NormStats
+from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
 from motion2video.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
 
@@ -173,7 +174,8 @@ def save_checkpoint(path: str | Path, *, model: torch.nn.Module, meta: Checkpoin
     path = Path(path)
     tensors = {k: v.detach().contiguous().cpu() for k, v in model.state_dict().items()}
     with atomic_output(path) as tmp:
-        save_file(tensors, str(tmp), metadata={"format": FORMAT, "motion2video": meta.to_json()})
+        save_file(tensors, str(tmp), metadata={"format": FORMAT, "format_version": str(CHECKPOINT_FORMAT_VERSION),
+                                               "motion2video": meta.to_json()})
     return path
 
 
@@ -189,10 +191,13 @@ def read_meta(path: str | Path) -> CheckpointMeta:
     if fmt != FORMAT:
         what = OTHER_FORMATS.get(fmt, "not a motion2video checkpoint" if fmt is None else f"a {fmt!r} file")
         raise InputError(f"wrong kind of checkpoint: this is {what}, not a motion model", path)
+    check_format_version(metadata, path)
+    if "motion2video" not in metadata:
+        raise InputError("damaged checkpoint metadata: the 'motion2video' record is missing", path)
     try:
         return CheckpointMeta.from_json(metadata["motion2video"])
-    except (KeyError, TypeError, ValueError, json.JSONDecodeError) as err:
-        raise InputError(f"the checkpoint metadata is damaged ({err})", path) from None
+    except (KeyError, TypeError, ValueError, AttributeError, json.JSONDecodeError) as err:
+        raise InputError(f"damaged checkpoint metadata ({type(err).__name__}: {err})", path) from None
 
 
 def load_model(path_or_name: str | Path, *, device: str | torch.device = "cpu") -> ModelBundle:

@@ -22,6 +22,7 @@ from safetensors.torch import save_file
 
 from motion2video import __version__
 from motion2video.atomic import atomic_output
+from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
 from motion2video.errors import InputError
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
@@ -79,6 +80,7 @@ def save_frame_model(model: FrameGenerator | WarpGenerator, path: str | Path, *,
     path = Path(path)
     metadata = {
         "format": FORMAT,
+        "format_version": str(CHECKPOINT_FORMAT_VERSION),
         "kind": model_kind(model),
         "config": model.config.to_json(),
         "version": __version__,
@@ -115,22 +117,30 @@ def load_frame_model(path_or_name: str | Path) -> LoadedFrameModel:
         raise InputError(f"cannot read the checkpoint ({type(err).__name__}: {err})", path) from None
     if metadata.get("format") != FORMAT:
         raise InputError(f"not a frame-generator checkpoint (format {metadata.get('format')!r})", path)
+    check_format_version(metadata, path)
     kind = metadata.get("kind", "analogy")
     if kind not in MODEL_KINDS:
         raise InputError(f"unknown frame-model kind {kind!r} (known: {', '.join(MODEL_KINDS)})", path)
     model_cls, config_cls = MODEL_KINDS[kind]
     try:
         config = config_cls.from_dict(json.loads(metadata["config"]))
-    except (KeyError, ValueError, TypeError) as err:
-        raise InputError(f"bad frame-model config in the checkpoint ({err})", path) from None
-    model = model_cls(config)
+    except (KeyError, ValueError, TypeError, AttributeError) as err:
+        raise InputError(f"damaged checkpoint metadata: bad frame-model config ({type(err).__name__}: {err})",
+                         path) from None
+    try:
+        model = model_cls(config)
+    except (ValueError, TypeError, RuntimeError) as err:
+        raise InputError(f"damaged checkpoint metadata: cannot build the {kind} model ({err})", path) from None
     missing, unexpected = model.load_state_dict(tensors, strict=False)
     if missing or unexpected:
         raise InputError(f"checkpoint weights do not match its config (missing {len(missing)}, "
                          f"unexpected {len(unexpected)})", path)
     model.eval()
-    return LoadedFrameModel(model=model, path=path, step=int(metadata.get("step", "0")),
-                            train=json.loads(metadata.get("train", "{}")))
+    try:
+        step, train = int(metadata.get("step", "0")), json.loads(metadata.get("train", "{}"))
+    except (TypeError, ValueError) as err:
+        raise InputError(f"damaged checkpoint metadata (step / train: {err})", path) from None
+    return LoadedFrameModel(model=model, path=path, step=step, train=train)
 
 
 def save_train_state(path: str | Path, *, optimizer: torch.optim.Optimizer, step: int,
