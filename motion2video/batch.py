@@ -25,6 +25,7 @@ import io
 import json
 import os
 import shlex
+import signal
 import subprocess
 import sys
 import time
@@ -331,6 +332,21 @@ def init_worker() -> None:
         _PARSER = build_parser()
 
 
+def _init_pool_worker() -> None:
+    """Initializer of the local pool's processes: Ctrl-C reaches the whole process group, and the driver
+    decides (it stops the workers and removes their temporary files); a worker must not die half-way on its
+    own and print a traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    init_worker()
+
+
+def _exit_on_sigterm(signum, frame) -> None:
+    """A pool worker told to stop unwinds (its writers remove their temporary files, ffmpeg is stopped, and
+    multiprocessing's own clean-up runs) instead of vanishing."""
+    sys.exit(143)
+
+
 def run_job(job: Job) -> JobResult:
     """Run one job in this process: parse its arguments with the real command line parser and call the
     command. Never raises for a failing job: the error becomes the row's one-line ``error``."""
@@ -380,7 +396,7 @@ class LocalPool:
     def _executor(self) -> ProcessPoolExecutor:
         if self._pool is None:
             self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self._context,
-                                             initializer=init_worker)
+                                             initializer=_init_pool_worker)
         return self._pool
 
     def warm(self) -> None:
@@ -430,16 +446,22 @@ class LocalPool:
                 self._pool.shutdown(wait=True, cancel_futures=True)
                 self._pool = None
 
-    def close(self) -> None:
+    def close(self, *, kill: bool = False) -> None:
+        """Shut the pool down; ``kill`` stops the workers at once (jobs in flight are abandoned: their
+        temporary files are the caller's to remove) instead of waiting for them."""
         if self._pool is not None:
+            if kill:  # SIGTERM: each worker unwinds its job (see _exit_on_sigterm)
+                for process in list(getattr(self._pool, "_processes", {}).values()):
+                    process.terminate()
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
     def __enter__(self) -> "LocalPool":
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, *exc) -> None:
+        self.close(kill=exc_type is not None and issubclass(exc_type, BaseException)
+                   and not issubclass(exc_type, Exception))
 
 
 def _warm(seconds: float) -> int:

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
+import threading
 
 from motion2video import __version__
 from motion2video.errors import InputError
@@ -35,20 +37,32 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every ``finally`` and atomic writer cleans up on the way out."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 2
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         return int(args.run(args) or 0)
     except InputError as err:
         print(f"motion2video {args.command}: error: {err}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"motion2video {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:  # SIGINT (Ctrl-C) or SIGTERM: outputs and temporary files are gone
+        terminated = isinstance(err, Terminated)
+        print(f"motion2video {args.command}: {'terminated (SIGTERM)' if terminated else 'interrupted (SIGINT)'}; "
+              "no partial output left", file=sys.stderr)
+        return 143 if terminated else 130
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ them, with soft weights across each cut so interpolated vertex colours draw stra
 
 from __future__ import annotations
 
+import os
 import threading
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Mapping
@@ -69,6 +70,7 @@ def get_anny() -> "_anny_t.Anny":
     global _MODEL
     with _LOCK:
         if _MODEL is None:
+            _init_warp_quietly()
             import anny
             import torch
 
@@ -80,6 +82,24 @@ def get_anny() -> "_anny_t.Anny":
             _check_facial_actions(model)
             _MODEL = model
     return _MODEL
+
+
+def _init_warp_quietly() -> None:
+    """Initialise NVIDIA Warp (Anny's skinning kernels) without its console output: its greeting and
+    kernel-load lines go to stdout at the INFO level, and its native CUDA probe writes a warning straight to
+    file descriptor 2 on machines without a GPU driver (this project's default). Warnings and errors of Warp
+    itself still show."""
+    import warp
+
+    warp.config.log_level = warp.LOG_WARNING
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            warp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def _check_facial_actions(model) -> None:

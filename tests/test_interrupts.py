@@ -1,0 +1,123 @@
+"""SIGINT / SIGTERM in the middle of real work (issue 12): one line, exit 130 / 143, no file at the output path
+and no temporary file left behind. Every test starts the real command in a subprocess, waits until it is
+writing, then signals it: SIGINT to its process group (what Ctrl-C in a terminal does), SIGTERM to the process
+alone (what `kill PID` and schedulers do)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from motion2video.batch import video_frame_count
+
+REPO = Path(__file__).resolve().parents[1]
+DEMO = REPO / "demo_inputs"
+
+
+def _temporaries(folder: Path) -> list[Path]:
+    """Files the atomic writers use before the rename (``.NAME.*.tmp.EXT`` / ``.NAME.*.partial.EXT``)."""
+    return [p for p in folder.rglob(".*") if p.is_file() and (".tmp" in p.name or ".partial" in p.name)]
+
+
+def _start(argv: list[str], cwd: Path) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(REPO), "TQDM_DISABLE": "1"}
+    return subprocess.Popen([sys.executable, "-m", "motion2video.cli", *argv], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def _wait_until(proc: subprocess.Popen, ready, timeout: float = 240.0) -> None:
+    end = time.monotonic() + timeout
+    while not ready():
+        if proc.poll() is not None:
+            out, err = proc.communicate()
+            pytest.fail(f"the command ended before it was interrupted (exit {proc.returncode}): {err[-2000:]}")
+        if time.monotonic() > end:
+            proc.kill()
+            pytest.fail("the command never started writing")
+        time.sleep(0.05)
+
+
+def _interrupt(proc: subprocess.Popen, sig: int) -> tuple[int, str, str]:
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, sig)  # Ctrl-C: the whole group (the command and its ffmpeg / workers)
+    else:
+        os.kill(proc.pid, sig)
+    try:
+        out, err = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail("the command did not stop after the signal")
+    return proc.returncode, out, err
+
+
+def _check_stopped(code: int, err: str, sig: int, command: str) -> None:
+    expected = 130 if sig == signal.SIGINT else 143
+    lines = [line for line in err.strip().splitlines() if line.strip()]
+    assert code == expected, (code, err[-2000:])
+    assert len(lines) == 1 and lines[0].startswith(f"motion2video {command}: "), err[-2000:]
+    assert ("interrupted" if sig == signal.SIGINT else "terminated") in lines[0]
+    assert "Traceback" not in err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_long_mesh_render(sig, tmp_path, mocap_dir):
+    out = tmp_path / "out" / "long.mp4"
+    proc = _start(["render", str(mocap_dir / "cmu" / "13_10.bvh"), "--style", "mesh", "--size", "96",
+                   "-o", str(out), "--no-progress"], tmp_path)
+    # Encoding has begun: the temporary video beside the output holds frames.
+    _wait_until(proc, lambda: any(p.stat().st_size > 0 for p in _temporaries(tmp_path)))
+    code, _, err = _interrupt(proc, sig)
+    _check_stopped(code, err, sig, "render")
+    assert not out.exists() and _temporaries(tmp_path) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_synthesize(sig, tmp_path):
+    out = tmp_path / "futures.mp4"
+    proc = _start(["synthesize", "--motion-model", "mtvae-add", "--frame-model", "frames-body-128",
+                   str(DEMO / "walk_to_run.npz"), "--reference", str(DEMO / "reference_body_128.png"),
+                   "--samples", "5", "--horizon", "400", "-o", str(out)], tmp_path)
+    _wait_until(proc, lambda: any(p.stat().st_size > 0 for p in _temporaries(tmp_path)))
+    code, _, err = _interrupt(proc, sig)
+    _check_stopped(code, err, sig, "synthesize")
+    assert not out.exists() and not (tmp_path / "futures-structure.mp4").exists()
+    assert not (tmp_path / "futures-sheet.png").exists() and _temporaries(tmp_path) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_train(sig, tmp_path, mocap_dir):
+    out = tmp_path / "run.safetensors"
+    config = '{"model": {"hidden_dim": 16, "latent_dim": 4}, "train": {"batch_size": 8, "checkpoint_every": 3}}'
+    proc = _start(["train", "--model", "cvae", "--data", str(mocap_dir / "cmu"), "-o", str(out), "--steps", "100000",
+                   "--config", config, "--no-progress", "--threads", "1"], tmp_path)
+    _wait_until(proc, lambda: (tmp_path / "run.last.safetensors").exists())  # training steps are running
+    code, _, err = _interrupt(proc, sig)
+    _check_stopped(code, err, sig, "train")
+    assert not out.exists() and _temporaries(tmp_path) == []
+    # The periodic checkpoint (written atomically) is what --resume continues from.
+    assert (tmp_path / "run.last.safetensors").stat().st_size > 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_batch(sig, tmp_path, mocap_dir):
+    out_dir = tmp_path / "out"
+    proc = _start(["batch", str(mocap_dir / "cmu" / "0[1-9]_0*.bvh"), "--out", str(out_dir), "--workers", "2",
+                   "--template", "render {input} -o {output} --style mesh --size 64 --frames 400", "--no-progress"],
+                  tmp_path)
+    _wait_until(proc, lambda: any(p.stat().st_size > 0 for p in _temporaries(tmp_path)))
+    code, _, err = _interrupt(proc, sig)
+    _check_stopped(code, err, sig, "batch")
+    assert _temporaries(tmp_path) == []
+    assert not (out_dir / "results.jsonl").exists()
+    for video in out_dir.glob("*.mp4"):  # a job that finished before the signal is whole; no partial video
+        assert video_frame_count(video) == 400, video
