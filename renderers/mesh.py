@@ -23,11 +23,47 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion2video.core.camera import PinholeCamera, project
+from motion2video.core.errors import InputError
 
 PLATFORMS = ("osmesa", "egl")
 _PLATFORM_CLASSES = {"osmesa": "OSMesaPlatform", "egl": "EGLPlatform"}
 _RENDERERS: dict[tuple[int, int, str], object] = {}
 _LOCK = threading.RLock()
+
+
+# The GL library each backend loads, and the Debian package that installs it.
+GL_LIBRARIES = {"osmesa": ("OSMesa", "libosmesa6"), "egl": ("EGL", "libegl1")}
+
+
+class GLUnavailable(InputError):
+    """The GL library of a backend is not installed: a one-line, fixable problem (exit 2 from the CLI)."""
+
+
+def gl_library(platform: str) -> str | None:
+    """The path (or soname) of ``platform``'s GL library when the dynamic loader can load it, else None.
+    Mirrors how PyOpenGL looks for it (``libNAME.so``, then ``libNAME.so.N``)."""
+    import ctypes
+    import ctypes.util
+
+    name = GL_LIBRARIES[platform][0]
+    candidates = [ctypes.util.find_library(name), f"lib{name}.so"] + [f"lib{name}.so.{i}" for i in range(9, -1, -1)]
+    for candidate in candidates:
+        if not candidate:
+            continue
+        try:
+            ctypes.CDLL(candidate)
+        except OSError:
+            continue
+        return candidate
+    return None
+
+
+def gl_unavailable_message(platform: str) -> str:
+    """What to do when ``platform``'s GL library is missing (one line)."""
+    name, package = GL_LIBRARIES[platform]
+    return (f"the mesh and face styles need the {name} library (lib{name}) for {platform} rendering, and it is "
+            f"not installed: install it with `sudo apt-get install {package}` (Debian/Ubuntu; `make setup` does "
+            f"this), or use --style skeleton or --style heatmap, which need no GL")
 
 
 class RenderError(RuntimeError):
@@ -152,6 +188,8 @@ def _import_pyrender(platform: str):
                 f"OpenGL was already initialised with {active} in this process; cannot render with "
                 f"platform={platform!r} (set PYOPENGL_PLATFORM={platform} before anything imports OpenGL)"
             )
+    if "pyrender" not in sys.modules and gl_library(platform) is None:
+        raise GLUnavailable(gl_unavailable_message(platform))  # PyOpenGL would fail with an AttributeError
     os.environ["PYOPENGL_PLATFORM"] = platform
     try:
         import pyrender

@@ -1,0 +1,43 @@
+"""`motion2video doctor`: what this machine can do, what is missing, and the fix for each missing thing."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+EXAMPLES = """\
+examples:
+  motion2video doctor
+  motion2video doctor --json out/doctor.json
+
+Checks: torch (version, threads), ffmpeg, the GL backends OSMesa and EGL (each renders one triangle in a child
+process), the Anny model cache (built or not, size), and that every shipped checkpoint loads. Exit status 0 when
+everything essential works (GL is not essential: skeleton and heatmap styles need none), 1 otherwise.
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "doctor",
+        help="check the installation: torch, ffmpeg, GL backends, the Anny cache, the shipped checkpoints",
+        description="Print what is available and what is missing, each missing thing with its fix.",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--json", default=None, help="also write the checks as JSON here")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import asdict
+
+    from motion2video.atomic import check_output_path, write_text
+    from motion2video.doctor import report, run_checks
+
+    if args.json:
+        check_output_path(args.json, (".json",))
+    checks = run_checks()
+    print(report(checks))
+    if args.json:
+        write_text(args.json, json.dumps([asdict(c) for c in checks], indent=2) + "\n")
+    return 0 if all(c.ok for c in checks if c.essential) else 1
