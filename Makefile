@@ -5,7 +5,7 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
 export PYOPENGL_PLATFORM ?= osmesa
 
-.PHONY: setup demo test test-fast golden bench clean
+.PHONY: setup demo test test-fast fuzz golden bench clean
 
 setup: $(STAMP)
 
@@ -30,6 +30,10 @@ test: setup
 test-fast: setup
 	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -q -m "not slow"
+
+# every reader fuzzed with 10,000 derandomised hypothesis examples (make test runs 200 of them)
+fuzz: setup
+	$(PY) -m pytest -q --hypothesis-profile=fuzz tests/test_fuzz_readers.py
 
 golden: setup
 	$(PY) -m pytest -q --update-golden tests/test_golden.py

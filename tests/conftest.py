@@ -7,6 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import settings
+
+# Property-based tests (tests/test_fuzz_readers.py): "ci" is the default profile (200 derandomised examples per
+# reader, the same cases on every run); `make fuzz` runs "fuzz" (10,000 per reader, still repeatable).
+settings.register_profile("ci", max_examples=200, derandomize=True, print_blob=True)
+settings.register_profile("fuzz", max_examples=10_000, derandomize=True, print_blob=True)
+settings.load_profile("ci")
 
 from motion2video.formats.canonical import CanonicalClip, floor_height
 from motion2video.formats.manifest import ManifestEntry, read_manifest
