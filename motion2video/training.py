@@ -161,9 +161,15 @@ def validation_loss(model: torch.nn.Module, dataset: MotionDataset, *, step: int
     return {k: v / len(idx) for k, v in sums.items()}
 
 
-def _save_sidecar(path: Path, optimizers: dict[str, torch.optim.Optimizer], record: dict) -> None:
-    """Optimiser states as tensors ``<group>/<param index>/<key>``; param groups and the record as JSON."""
+def _save_sidecar(path: Path, optimizers: dict[str, torch.optim.Optimizer], record: dict,
+                  model: torch.nn.Module | None = None) -> None:
+    """Optimiser states as tensors ``<group>/<param index>/<key>``, the model's weights as ``model/<name>``;
+    param groups and the record as JSON. One file, written atomically, so a run killed at any moment resumes
+    from weights and optimiser state of the same step."""
     tensors, groups = {}, {}
+    if model is not None:
+        for key, value in model.state_dict().items():
+            tensors[f"model/{key}"] = value.detach().contiguous().cpu()
     for name, opt in optimizers.items():
         sd = opt.state_dict()
         for pid, state in sd["state"].items():
@@ -183,6 +189,8 @@ def _load_sidecar(path: Path, optimizers: dict[str, torch.optim.Optimizer]) -> d
         groups = json.loads(meta["param_groups"])
         states: dict[str, dict[int, dict]] = {name: {} for name in optimizers}
         for key in f.keys():
+            if key.startswith("model/"):
+                continue
             name, pid, item = key.split("/", 2)
             states.setdefault(name, {}).setdefault(int(pid), {})[item] = f.get_tensor(key)
     if set(groups) != set(optimizers):
@@ -261,7 +269,7 @@ def train_model(
     def periodic(step: int) -> None:
         save_checkpoint(last, model=model, meta=record_meta(step))
         _save_sidecar(sidecar, optimizers, {"step": step, "history": history,
-                                            "wall_time_s": wall_before + time.perf_counter() - t0})
+                                            "wall_time_s": wall_before + time.perf_counter() - t0}, model)
 
     model.train()
     bar = tqdm(range(start_step, config.steps), initial=start_step, total=config.steps, disable=not progress,
@@ -351,8 +359,11 @@ def _resume(model, optimizers, *, last: Path, sidecar: Path, model_name: str, da
         raise InputError("cannot resume: the model config differs from the periodic checkpoint's", last)
     if meta.data_config != dataset.config or meta.split != dataset.split:
         raise InputError("cannot resume: the data config or split differs from the periodic checkpoint's", last)
-    with safe_open(str(last), framework="pt") as f:
-        state = {k: f.get_tensor(k) for k in f.keys()}
+    with safe_open(str(sidecar), framework="pt") as f:  # the weights saved with the optimiser state
+        state = {k[len("model/"):]: f.get_tensor(k) for k in f.keys() if k.startswith("model/")}
+    if not state:  # a sidecar of an older version: the periodic checkpoint's weights
+        with safe_open(str(last), framework="pt") as f:
+            state = {k: f.get_tensor(k) for k in f.keys()}
     model.load_state_dict(state, strict=True)
     record = _load_sidecar(sidecar, optimizers)
     return int(record["step"]), list(record["history"]), float(record["wall_time_s"])

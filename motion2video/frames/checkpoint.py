@@ -145,9 +145,14 @@ def load_frame_model(path_or_name: str | Path) -> LoadedFrameModel:
 
 def save_train_state(path: str | Path, *, optimizer: torch.optim.Optimizer, step: int,
                      discriminator: torch.nn.Module | None = None,
-                     disc_optimizer: torch.optim.Optimizer | None = None, extra: dict | None = None) -> Path:
-    """Write the resume state for checkpoint ``path`` to :func:`state_path` (optimiser moments, step)."""
+                     disc_optimizer: torch.optim.Optimizer | None = None, extra: dict | None = None,
+                     model: torch.nn.Module | None = None) -> Path:
+    """Write the resume state for checkpoint ``path`` to :func:`state_path` (optimiser moments, step, and the
+    generator's weights as ``gen.<name>``: one atomic file, so a run killed between writing the checkpoint and
+    its state still resumes from weights and optimiser state of the same step)."""
     tensors: dict[str, torch.Tensor] = {}
+    if model is not None:
+        tensors.update({f"gen.{k}": v.detach().contiguous() for k, v in model.state_dict().items()})
     meta = {"format": FORMAT + "-state", "step": str(int(step)), "extra": json.dumps(extra or {})}
     groups = [("opt", optimizer)]
     if discriminator is not None:
@@ -168,14 +173,19 @@ def save_train_state(path: str | Path, *, optimizer: torch.optim.Optimizer, step
 
 def load_train_state(path: str | Path, *, optimizer: torch.optim.Optimizer,
                      discriminator: torch.nn.Module | None = None,
-                     disc_optimizer: torch.optim.Optimizer | None = None) -> tuple[int, dict]:
-    """Restore what :func:`save_train_state` wrote into the given objects; returns (step, extra)."""
+                     disc_optimizer: torch.optim.Optimizer | None = None,
+                     model: torch.nn.Module | None = None) -> tuple[int, dict]:
+    """Restore what :func:`save_train_state` wrote into the given objects (the generator's weights too, when
+    the state holds them); returns (step, extra)."""
     src = state_path(path)
     if not src.is_file():
         raise InputError("no resume state beside the checkpoint (expected " + src.name + ")", path)
     with safe_open(str(src), framework="pt") as f:
         meta = f.metadata() or {}
         tensors = {k: f.get_tensor(k) for k in f.keys()}
+    weights = {k[4:]: v for k, v in tensors.items() if k.startswith("gen.")}
+    if model is not None and weights:
+        model.load_state_dict(weights)
     if discriminator is not None:
         discriminator.load_state_dict({k[5:]: v for k, v in tensors.items() if k.startswith("disc.")})
     groups = [("opt", optimizer)] + ([("dopt", disc_optimizer)] if disc_optimizer is not None else [])

@@ -196,7 +196,7 @@ def train_frames(
         disc_opt = torch.optim.Adam(disc.parameters(), lr=config.lr, betas=(0.5, 0.99))
     if resume and have_state:
         start_step, extra = load_train_state(output, optimizer=optimizer, discriminator=disc,
-                                             disc_optimizer=disc_opt)
+                                             disc_optimizer=disc_opt, model=model)
         past_wall = float(extra.get("total_wall_s", 0.0))
     if start_step >= config.steps:
         print(f"train-frames: {output} has already done {start_step} >= {config.steps} steps")
@@ -223,12 +223,13 @@ def train_frames(
                       "last_losses": history[-1] if history else {}}
         save_frame_model(model, output, step=step, train=train_meta)
         save_train_state(output, optimizer=optimizer, step=step, discriminator=disc, disc_optimizer=disc_opt,
-                         extra={"total_wall_s": total})
+                         extra={"total_wall_s": total}, model=model)
 
     running: dict[str, float] = {}
     step = start_step
     for step in range(start_step, config.steps):
         rng = np.random.default_rng([config.seed, step])
+        torch.manual_seed((config.seed * 1_000_003 + step) % (2 ** 63))  # any torch randomness: a function of the step
         index = sample_pair_index(rng, seqs, config.batch_size)
         flip = rng.random(config.batch_size) < 0.5 if config.flip else None
         x_ref, x_tgt, p_ref, p_tgt, pairs = _batch_tensors(seqs, index, flip, crop=config.crop, rng=rng)
