@@ -146,6 +146,11 @@ def read_face_csv(path: str | Path, *, timecode_rate: float = TIMECODE_RATE) -> 
     fps = _estimate_fps(times, fps_declared)
     if fps is not None:
         times = times - np.nanmin(times)
+        # Rows are consecutive captures: gaps of lost tracking are short. A span far beyond the rows' count
+        # is a damaged timecode or frame number (it would otherwise resample to billions of frames).
+        if times[-1] > 10.0 * num / fps + 60.0:
+            raise InputError(f"the row times span {times[-1]:.3g} s for {num} rows at {fps:g} fps: a damaged "
+                             "timecode or frame number", path)
     else:
         times = np.full(num, np.nan)
     return FaceCsv(path=str(path), times=times, blendshapes=shapes, head_ypr=head, valid=valid, fps=fps)
