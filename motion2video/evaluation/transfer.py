@@ -14,6 +14,7 @@ MT-VAE enters through analogy: z = E(obs_source, future_source), x_R = D(obs_tar
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +22,7 @@ import torch
 
 from motion2video import metrics as M
 from motion2video.checkpoint import ModelBundle
+from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import WindowSet
 from motion2video.models.behavior import BehaviorModel

@@ -76,6 +76,11 @@ class BehaviorConfig:
     kl_multiplier_lr: float = 1e-3  # dual ascent step size eta
     flow_blocks: int = 6
     flow_hidden: int = 128
+    # Issue 13 (measured: the shipped model could not even reconstruct a jump from its own start posture,
+    # its z only set the decoder's initial state): feed z to the decoder at every step, and give the
+    # behaviour encoder the frame-to-frame velocities beside the frames. Both off = the old architecture.
+    decoder_feeds_z: bool = False
+    encoder_velocities: bool = False
 
 
 @register_model("behavior", BehaviorConfig, kind="stochastic")
@@ -85,10 +90,10 @@ class BehaviorModel(LatentSampler, nn.Module):
         self.config = config
         c = config
         F, H, Z = c.feature_dim, c.hidden_dim, c.latent_dim
-        self.encoder = LSTMEncoder(F, H, layer_norm=c.layer_norm)
+        self.encoder = LSTMEncoder(2 * F if c.encoder_velocities else F, H, layer_norm=c.layer_norm)
         self.posterior_head = GaussianHead(H, Z)
         self.decoder = LSTMDecoder(
-            feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=False
+            feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=c.decoder_feeds_z
         )
         self.regressor = nn.Sequential(
             nn.Linear(Z, c.regressor_dim),
@@ -108,6 +113,9 @@ class BehaviorModel(LatentSampler, nn.Module):
         check_sequences(sequence, None, feature_dim=self.config.feature_dim)
         if sequence.shape[1] < 2:
             raise ValueError(f"a behaviour sequence needs >= 2 frames, got {sequence.shape[1]}")
+        if self.config.encoder_velocities:  # [x_t, x_t - x_{t-1}] (zero velocity at the start posture)
+            velocity = torch.diff(sequence, dim=1, prepend=sequence[:, :1])
+            sequence = torch.cat([sequence, velocity], dim=-1)  # (B, T, 2F)
         return self.posterior_head(self.encoder(sequence)[:, -1])
 
     def behavior_latent(self, sequence: torch.Tensor) -> torch.Tensor:
