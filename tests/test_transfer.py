@@ -108,6 +108,23 @@ def test_reenactment_follows_the_target_position_and_heading(ckpts, clips):
     np.testing.assert_allclose(b, expected, atol=1e-4)
 
 
+def test_reenactment_keeps_the_target_start_and_its_bone_lengths(ckpts, clips):
+    """Issue 13: the re-enactment starts at the target's posture and every generated frame has the start
+    posture's bone lengths (a tiny, barely trained model's raw joints stretch its bones)."""
+    from motion2video.evaluation.signatures import bone_length_spread, bone_lengths
+
+    bundle = load_model(ckpts["behavior"])
+    source = load_clip(bundle, clips["source"])
+    target = load_clip(bundle, clips["target"])
+    result = transfer_behavior(bundle, source, target, target_frame=100, horizon=HORIZON)
+    seq = result.reenacted[0]
+    start = _resampled(clips["target"])[0][int(np.floor(100 * 25.0 / 120.0 + 0.5))]
+    np.testing.assert_allclose(seq[0], start, atol=1e-4)
+    assert bone_length_spread(seq) < 1e-5
+    np.testing.assert_allclose(bone_lengths(seq[1:]), np.repeat(bone_lengths(seq[:1]), HORIZON, axis=0), atol=1e-5)
+    assert np.abs(np.diff(seq[:, 0], axis=0)).max() > 0  # the body moves
+
+
 def test_flow_samples_grid_is_seeded(ckpts, clips, tmp_path):
     paths = {}
     for name, seed in (("a", 3), ("b", 3), ("c", 4)):

@@ -244,3 +244,27 @@ RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
         "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
     },
 }
+
+
+def bone_lengths(joints: np.ndarray, parents: tuple[int, ...] = H36M_17.parents) -> np.ndarray:
+    """(..., J) length of the bone from each joint to its parent over (..., J, D) joints (0 at the root)."""
+    j = np.asarray(joints, np.float64)
+    par = np.array([p if p >= 0 else i for i, p in enumerate(parents)])
+    return np.linalg.norm(j - j[..., par, :], axis=-1)
+
+
+def with_bone_lengths(joints: np.ndarray, lengths: np.ndarray,
+                      parents: tuple[int, ...] = H36M_17.parents) -> np.ndarray:
+    """Rigid bones: (..., J, D) joints with every bone rescaled along its own direction to ``lengths`` (J,)
+    (from :func:`bone_lengths`; the root's entry is ignored), walking down the tree from the root, which stays
+    where it is. A bone of zero length keeps its parent's position."""
+    j = np.asarray(joints, np.float64)
+    out = j.copy()
+    for i, p in enumerate(parents):  # parents come before their children in every skeleton here
+        if p < 0:
+            continue
+        d = j[..., i, :] - j[..., p, :]
+        norm = np.linalg.norm(d, axis=-1, keepdims=True)
+        unit = np.divide(d, norm, out=np.zeros_like(d), where=norm > 1e-12)
+        out[..., i, :] = out[..., p, :] + unit * float(lengths[i])
+    return out

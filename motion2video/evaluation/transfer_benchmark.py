@@ -221,7 +221,14 @@ def _window_before(clip: np.ndarray, frame: int, length: int) -> np.ndarray:
 def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray) -> np.ndarray:
     """A behaviour model's re-enactments: sources (N, 1 + H, 17, 3), postures (N, 17, 3) -> (N, 1 + H, 17, 3)
     (the target posture, then H generated frames), exactly as ``motion2video transfer`` makes them."""
-    from motion2video.stages.latents import behavior_latents, behavior_model, decode_sequences, encode_sequences, reenact
+    from motion2video.stages.latents import (
+        behavior_latents,
+        behavior_model,
+        decode_sequences,
+        encode_sequences,
+        reenact,
+        rigid_bones,
+    )
 
     model = behavior_model(bundle)
     horizon = sources.shape[1] - 1
@@ -232,7 +239,7 @@ def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray) -> 
         z = behavior_latents(model, src_feats)
         gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon)
         seq = np.concatenate([tgt_feats, gen], axis=1)
-        out.append(decode_sequences(bundle, seq[:, None], tgt_frame)[0, 0])
+        out.append(rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])[0])
     return np.stack(out)
 
 

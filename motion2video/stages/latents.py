@@ -59,6 +59,21 @@ def behavior_latents(model: BehaviorModel, features: np.ndarray) -> np.ndarray:
     return model.behavior_latent(as_model_input(features, model)).cpu().numpy()
 
 
+def rigid_bones(layout: str, sequences: np.ndarray) -> np.ndarray:
+    """Re-enactments with the bone lengths of their start posture: (K, 1 + H, 17, 3) world joints, every
+    frame's bones rescaled along their own directions to frame 0's lengths (pelvis, root trajectory and joint
+    directions kept; :func:`motion2video.core.skeletons.with_bone_lengths`). The decoder predicts joint
+    positions, not rotations, so its bones stretch by several per cent without this. Other layouts (2D
+    pixels, faces) are returned as they are."""
+    if layout != "body3d":
+        return sequences
+    from motion2video.core.skeletons import bone_lengths, with_bone_lengths
+
+    seq = np.asarray(sequences)
+    out = np.stack([with_bone_lengths(s, bone_lengths(s[0])) for s in seq])
+    return out.astype(seq.dtype, copy=False)
+
+
 @torch.no_grad()
 def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int) -> np.ndarray:
     """Enact behaviours z (N, Z) from normalised start postures (N, F): (N, horizon, F) float32."""
