@@ -226,6 +226,23 @@ def test_behavior_transfer_api_and_flow_sampling() -> None:
     assert out.shape == (3, 2, 5, F) and torch.isfinite(out).all()
 
 
+def test_behavior_issue13_options_velocities_z_at_every_step_and_root_weight() -> None:
+    """The encoder reads [frames, velocities], the decoder gets z at every step, and the root features' error
+    is weighted: the reconstruction error grows by exactly (w - 1) x the root part."""
+    obs, future = _batch()
+    model = _tiny("behavior", latent_dim=4, decoder_feeds_z=True, encoder_velocities=True).eval()
+    assert model.encoder.cell.w_x.in_features == 2 * F and _tiny("behavior").encoder.cell.w_x.in_features == F
+    assert model.decoder.cell.w_x.in_features == F + 4
+    sequence = torch.cat([obs[:, -1:], future], dim=1)
+    z = model.behavior_latent(sequence)
+    assert model.transfer(z, torch.randn(3, F), 6).shape == (3, 6, F)
+    pred, target = torch.randn(3, 7, F), torch.randn(3, 7, F)
+    plain = _tiny("behavior").reconstruction_error(pred, target)
+    weighted = _tiny("behavior", root_weight=4.0, root_dims=2).reconstruction_error(pred, target)
+    root = (pred - target)[..., -2:].pow(2).sum(dim=(1, 2)).mean()
+    torch.testing.assert_close(weighted, plain + 3.0 * root)
+
+
 # ---------------------------------------------------------------------------------------------- flow
 
 
