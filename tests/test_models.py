@@ -243,6 +243,31 @@ def test_behavior_issue13_options_velocities_z_at_every_step_and_root_weight() -
     torch.testing.assert_close(weighted, plain + 3.0 * root)
 
 
+def test_behavior_root_trajectory_decoder_follows_a_given_path_or_makes_its_own() -> None:
+    """With ``root_trajectory`` the re-enactment's root features are exactly the given path; without a path
+    the decoder generates its own root; training mixes both (its loss backpropagates)."""
+    from motion2video.stages.latents import behavior_root
+
+    model = _tiny("behavior", latent_dim=4, root_trajectory=True, root_dims=2)
+    obs, future = _batch()
+    model.train()
+    model.loss(obs, future, step=0).total.backward()
+    assert model.decoder.cell.w_x.weight.grad is not None
+    model.eval()
+    z, start = torch.randn(3, 4), torch.randn(3, F)
+    path = torch.randn(3, 7, 2)
+    with torch.no_grad():
+        along = model.transfer(z, start, 7, root=path)
+        free = model.transfer(z, start, 7)
+    torch.testing.assert_close(along[..., -2:], path)
+    assert not torch.allclose(free[..., -2:], path) and torch.isfinite(free).all()
+    source = np.random.default_rng(0).normal(size=(3, 8, F)).astype(np.float32)
+    root = behavior_root(model, source, start.numpy())
+    np.testing.assert_allclose(root[..., 0], source[:, 1:, -2])  # horizontal: the source's own relative path
+    np.testing.assert_allclose(root[..., 1] - source[:, 1:, -1], np.repeat((start.numpy()[:, -1] - source[:, 0, -1])[:, None], 7, 1), rtol=1e-5, atol=1e-5)
+    assert behavior_root(_tiny("behavior"), source, start.numpy()) is None
+
+
 # ---------------------------------------------------------------------------------------------- flow
 
 

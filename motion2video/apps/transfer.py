@@ -9,7 +9,8 @@ Pipeline (``motion2video transfer``):
    anchor the training windows use, whose behaviour sequence starts at the last observed frame), then the
    checkpoint's normalisation. The behaviour encoder's posterior mean is z_beta (:func:`behavior_latents`).
 2. ``TARGET[F]`` is encoded the same way (a one-frame sequence, anchored at itself); the decoder enacts
-   z_beta from it for H frames (:meth:`BehaviorModel.transfer`).
+   z_beta from it for H frames (:meth:`BehaviorModel.transfer`); a model with ``root_trajectory`` enacts it
+   along the source's root path (:func:`~motion2video.stages.latents.behavior_root`).
 3. The H generated frames are decoded back with the TARGET's window frame; 3D bodies then get the bone
    lengths of the target's start posture in every frame (:func:`~motion2video.stages.latents.rigid_bones`).
 
@@ -44,6 +45,7 @@ from motion2video.stages.clips import LoadedClip, model_frame
 from motion2video.stages.latents import (
     behavior_latents,
     behavior_model,
+    behavior_root,
     decode_sequences,
     encode_sequences,
     reenact,
@@ -125,7 +127,8 @@ def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedCli
     src_feats, src_frame = encode_sequences(bundle, source.data[None, s:s + 1 + horizon])  # (1, 1+H, F)
     tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
     z = behavior_latents(model, src_feats)  # (1, Z)
-    gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon)  # (1, H, F)
+    root = behavior_root(model, src_feats, tgt_feats[:, 0])  # (1, H, R) or None
+    gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)
     seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)
     reenacted = rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])
     shown_source = decode_sequences(bundle, src_feats[:, None], src_frame)[0, 0]  # (1+H, ...)

@@ -224,6 +224,7 @@ def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray) -> 
     from motion2video.stages.latents import (
         behavior_latents,
         behavior_model,
+        behavior_root,
         decode_sequences,
         encode_sequences,
         reenact,
@@ -237,7 +238,7 @@ def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray) -> 
         src_feats, _ = encode_sequences(bundle, src[None])  # (1, 1+H, F)
         tgt_feats, tgt_frame = encode_sequences(bundle, post[None, None])  # (1, 1, F)
         z = behavior_latents(model, src_feats)
-        gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon)
+        gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=behavior_root(model, src_feats, tgt_feats[:, 0]))
         seq = np.concatenate([tgt_feats, gen], axis=1)
         out.append(rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])[0])
     return np.stack(out)

@@ -42,6 +42,7 @@ from torch import nn
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     GaussianHead,
+    LSTMCell,
     LSTMDecoder,
     LSTMEncoder,
     check_sequences,
@@ -86,6 +87,53 @@ class BehaviorConfig:
     # clips (the pelvis height is 1 of 51 features and jumps are rare). 1.0 = the plain summed squared error.
     root_weight: float = 1.0
     root_dims: int = 3
+    # The decoder's access to the behaviour's root trajectory: at every step it may get the behaviour's root
+    # features (the last ``root_dims``: x, y relative to the start in its heading frame, height) and then
+    # enacts the pose along that path (the root it outputs is the given one). Trained with the trajectory
+    # given for a random ``root_given_prob`` share of the sequences and not given for the rest, so the same
+    # decoder also generates its own root (flow samples, and ``decode`` without a trajectory).
+    root_trajectory: bool = False
+    root_given_prob: float = 0.5
+
+
+class RootTrajectoryDecoder(nn.Module):
+    """The behaviour decoder with access to a root trajectory: an autoregressive residual LSTM whose state
+    starts at (tanh(A z), A' z) and whose input at step t is [z, y_{t-1}, m r_t, m], with r_t (root_dims,) the
+    given root features and m = 1 where a trajectory is given (then the root part of y_t is replaced by r_t),
+    m = 0 where not (the decoder makes its own root).
+    z (B, Z), first_input (B, F), root (B, horizon, R) or None, given (B,) bool or None (all given when a
+    root is passed) -> (B, horizon, F).
+    """
+
+    def __init__(self, *, feature_dim: int, latent_dim: int, hidden_dim: int, root_dims: int,
+                 layer_norm: bool) -> None:
+        super().__init__()
+        self.root_dims = root_dims
+        self.init_h = nn.Linear(latent_dim, hidden_dim)
+        self.init_c = nn.Linear(latent_dim, hidden_dim)
+        self.cell = LSTMCell(latent_dim + feature_dim + root_dims + 1, hidden_dim, layer_norm=layer_norm)
+        self.out = nn.Linear(hidden_dim, feature_dim)
+
+    def forward(self, z: torch.Tensor, first_input: torch.Tensor, *, horizon: int,
+                root: torch.Tensor | None = None, given: torch.Tensor | None = None) -> torch.Tensor:
+        B, R = z.shape[0], self.root_dims
+        if root is not None and root.shape != (B, horizon, R):
+            raise ValueError(f"root must be (B, horizon, {R}) = {(B, horizon, R)}, got {tuple(root.shape)}")
+        if root is None:
+            m = z.new_zeros(B, 1)
+            root = z.new_zeros(B, horizon, R)
+        else:
+            m = (torch.ones(B, dtype=torch.bool, device=z.device) if given is None else given).to(z.dtype)[:, None]
+        h, c = torch.tanh(self.init_h(z)), self.init_c(z)
+        y = first_input
+        outputs = []
+        for t in range(horizon):
+            r = root[:, t] * m  # (B, R)
+            h, c = self.cell(torch.cat([z, y, r, m], dim=-1), (h, c))
+            y = y + self.out(h)
+            y = torch.cat([y[:, :-R], m * root[:, t] + (1 - m) * y[:, -R:]], dim=-1)  # the given root wins
+            outputs.append(y)
+        return torch.stack(outputs, dim=1)
 
 
 @register_model("behavior", BehaviorConfig, kind="stochastic")
@@ -97,9 +145,13 @@ class BehaviorModel(LatentSampler, nn.Module):
         F, H, Z = c.feature_dim, c.hidden_dim, c.latent_dim
         self.encoder = LSTMEncoder(2 * F if c.encoder_velocities else F, H, layer_norm=c.layer_norm)
         self.posterior_head = GaussianHead(H, Z)
-        self.decoder = LSTMDecoder(
-            feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=c.decoder_feeds_z
-        )
+        if c.root_trajectory:
+            self.decoder = RootTrajectoryDecoder(feature_dim=F, latent_dim=Z, hidden_dim=H, root_dims=c.root_dims,
+                                                 layer_norm=c.layer_norm)
+        else:
+            self.decoder = LSTMDecoder(
+                feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=c.decoder_feeds_z
+            )
         self.regressor = nn.Sequential(
             nn.Linear(Z, c.regressor_dim),
             nn.ReLU(),
@@ -127,10 +179,17 @@ class BehaviorModel(LatentSampler, nn.Module):
         """The behaviour representation (posterior mean) of sequence (B, T, F): (B, Z)."""
         return self.behavior_posterior(sequence).mu
 
-    def transfer(self, z: torch.Tensor, start_posture: torch.Tensor, horizon: int) -> torch.Tensor:
-        """Enact behaviour z (B, Z) from start_posture (B, F): (B, horizon, F) (the frames after the start)."""
+    def transfer(self, z: torch.Tensor, start_posture: torch.Tensor, horizon: int,
+                 root: torch.Tensor | None = None) -> torch.Tensor:
+        """Enact behaviour z (B, Z) from start_posture (B, F): (B, horizon, F) (the frames after the start).
+
+        ``root`` (B, horizon, root_dims): the behaviour's root trajectory for a ``root_trajectory`` model (the
+        generated root is then this one; None = the model generates its own); ignored by other models.
+        """
         if start_posture.ndim != 2 or start_posture.shape[-1] != self.config.feature_dim:
             raise ValueError(f"start_posture must be (B, {self.config.feature_dim}), got {tuple(start_posture.shape)}")
+        if self.config.root_trajectory:
+            return self.decoder(z, start_posture, horizon=horizon, root=root)
         return self.decoder(z, start_posture, horizon=horizon)
 
     # -- model protocol --------------------------------------------------------------------------
@@ -157,7 +216,11 @@ class BehaviorModel(LatentSampler, nn.Module):
         post = self.encode(obs, future)
         start = obs[:, -1]  # (B, F)
         z = reparameterize(post, torch.randn_like(post.mu))
-        pred = self.decoder(z, start, horizon=future.shape[1])  # (B, Tf, F)
+        if c.root_trajectory:  # the true root path given to a random share of the sequences
+            given = torch.rand(future.shape[0], device=future.device) < c.root_given_prob
+            pred = self.decoder(z, start, horizon=future.shape[1], root=future[..., -c.root_dims:], given=given)
+        else:
+            pred = self.decoder(z, start, horizon=future.shape[1])  # (B, Tf, F)
         recon = self.reconstruction_error(pred, future)
         kl = kl_std_normal(post).mean()
         reg_err = (self.regressor(z) - start).pow(2).sum(dim=-1).mean()

@@ -74,11 +74,34 @@ def rigid_bones(layout: str, sequences: np.ndarray) -> np.ndarray:
     return out.astype(seq.dtype, copy=False)
 
 
+def behavior_root(model: BehaviorModel, source: np.ndarray, start: np.ndarray) -> np.ndarray | None:
+    """The root trajectory a ``root_trajectory`` behaviour model re-enacts along, or None for other models.
+
+    Args:
+        source: (N, 1 + H, F) normalised behaviour sequences (each anchored at its first frame).
+        start: (N, F) normalised start postures of the re-enactments.
+    Returns:
+        (N, H, R) the source's root features after its start (x, y relative to its start in its heading frame,
+        which is the same relative path in the target's heading frame), its height shifted by the difference
+        of the start heights (a jump rises as high above the target's start as above the source's).
+    """
+    c = model.config
+    if not getattr(c, "root_trajectory", False):
+        return None
+    r = c.root_dims
+    root = np.array(source[:, 1:, -r:], np.float32, copy=True)
+    root[..., -1] += (start[:, -1] - source[:, 0, -1])[:, None]
+    return root
+
+
 @torch.no_grad()
-def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int) -> np.ndarray:
-    """Enact behaviours z (N, Z) from normalised start postures (N, F): (N, horizon, F) float32."""
+def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int,
+            root: np.ndarray | None = None) -> np.ndarray:
+    """Enact behaviours z (N, Z) from normalised start postures (N, F): (N, horizon, F) float32, along the root
+    trajectory ``root`` (N, horizon, R) for a ``root_trajectory`` model (:func:`behavior_root`)."""
     model.eval()
-    return model.transfer(as_model_input(z, model), as_model_input(start, model), horizon).cpu().numpy()
+    r = None if root is None else as_model_input(root, model)
+    return model.transfer(as_model_input(z, model), as_model_input(start, model), horizon, root=r).cpu().numpy()
 
 
 def analogy_model(bundle: ModelBundle) -> torch.nn.Module:
