@@ -12,7 +12,8 @@ Writes, from the committed ``demo_inputs/`` only (nothing outside the repository
 - ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``jump.npz`` (a procedural jump: the
   committed demo inputs hold no real mocap excerpt) re-enacted by ``behavior`` from the standing posture of
   ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-128``, side by side
-  with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment;
+  with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
+  ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
 - ``out/inputs/<clip>_<style>.mp4``: every demo input rendered in every style that fits it (skip: --no-inputs).
 
 Every video plays the observed frames framed green, then each sampled future framed red.
@@ -98,7 +99,7 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     from motion2video.frames.checkpoint import load_frame_model
     from motion2video.reference import load_reference
     from motion2video.stages.clips import load_clip
-    from motion2video.video import VideoWriter
+    from motion2video.video import VideoWriter, write_image
 
     t0 = time.perf_counter()
     spec = TRANSFER
@@ -110,16 +111,27 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     result = transfer_behavior(bundle, source, target, source_start=spec["behavior_start"],
                                target_frame=spec["target_frame"])
     video = out / "transfer_body.mp4"
+    kept = []
+    z = result.source[:, 0, 2]  # the source's pelvis height: the sheet shows start, crouch, top, landing
+    low = int(np.argmin(z[: int(np.argmax(z)) + 1]))
+    top = int(np.argmax(z))
+    shown = sorted({0, low, top, min(top + (top - low), len(z) - 1)})
     with VideoWriter(video, result.fps) as writer:
+        done = 0
         for chunk in iter_transfer(result, style="frames", size=size, frame_model=frame_model, reference=reference):
             writer.write(chunk)
+            kept += [chunk[i - done] for i in shown if done <= i < done + len(chunk)]
+            done += len(chunk)
+    kept += kept[-1:] * (len(kept) % 2)  # an even number of cells: two per row
+    rows = [np.concatenate(kept[i:i + 2], axis=1) for i in range(0, len(kept), 2)]
+    sheet = write_image(out / "transfer_body-sheet.png", np.concatenate(rows, axis=0))
     npz = save_npz(out / "transfer_body.npz", {"source": result.source, "reenacted": result.reenacted,
                                                "z": result.z, "fps": np.float64(result.fps)})
     rise = lambda seq: float(seq[:, 0, 2].max() - seq[:, 0, 2].min())  # noqa: E731
     print(f"transfer: {spec['behavior']} re-enacted from {spec['target']} by {spec['reference']}: pelvis rises "
           f"{rise(result.source):.2f} m in the source, {rise(result.reenacted[0]):.2f} m in the re-enactment "
           f"({time.perf_counter() - t0:.1f} s)")
-    return {"transfer_body": video, "transfer_body_npz": npz}
+    return {"transfer_body": video, "transfer_body_npz": npz, "transfer_body_sheet": sheet}
 
 
 def render_inputs(out: Path, *, size: int = 128) -> dict[str, Path]:
