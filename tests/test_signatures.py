@@ -99,3 +99,22 @@ def test_copying_the_source_carries_every_signature_but_not_the_start_posture(mo
         assert r.ratio == pytest.approx(1.0, abs=1e-9)
         assert r.start_error > 0.05 and r.bone_spread < 0.01
 
+
+
+def test_feet_above_bends_the_knees_of_a_sinking_body_and_keeps_its_bones(clip):
+    """A real standing posture pushed 0.25 m down: leg IK puts the ankles back on the floor, the knees bend
+    (the pelvis comes closer to the ankles by the drop), every bone keeps its length; a walk whose ankles
+    stay above the floor is unchanged."""
+    from motion2video.core.skeletons import L_ANKLE, R_ANKLE, feet_above
+
+    walk = clip("cmu/07_01.bvh")[8:57]
+    floor = float(walk[:, [R_ANKLE, L_ANKLE], 2].min())
+    np.testing.assert_array_equal(feet_above(walk, floor), walk)
+    stand = clip("cmu/02_04.bvh")[:1]
+    sunk = stand - np.array([0.0, 0.0, 0.25])
+    fixed = feet_above(sunk, float(stand[0, [R_ANKLE, L_ANKLE], 2].min()))
+    assert fixed[0, [R_ANKLE, L_ANKLE], 2].min() >= stand[0, [R_ANKLE, L_ANKLE], 2].min() - 1e-9
+    np.testing.assert_allclose(S.bone_lengths(fixed), S.bone_lengths(stand), atol=1e-9)
+    np.testing.assert_array_equal(fixed[0, 0], sunk[0, 0])  # the pelvis stays where it was put
+    drop = (stand[0, 0, 2] - stand[0, R_ANKLE, 2]) - (fixed[0, 0, 2] - fixed[0, R_ANKLE, 2])
+    assert drop == pytest.approx(0.25, abs=0.03)

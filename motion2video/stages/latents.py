@@ -64,14 +64,20 @@ def rigid_bones(layout: str, sequences: np.ndarray) -> np.ndarray:
     frame's bones rescaled along their own directions to frame 0's lengths (pelvis, root trajectory and joint
     directions kept; :func:`motion2video.core.skeletons.with_bone_lengths`). The decoder predicts joint
     positions, not rotations, so its bones stretch by several per cent without this. Other layouts (2D
-    pixels, faces) are returned as they are."""
+    pixels, faces) are returned as they are. The generated frames' ankles are then kept at or above the
+    start posture's lower ankle (:func:`motion2video.core.skeletons.feet_above`, leg IK): a pelvis that drops
+    bends the knees instead of pushing the feet into the ground."""
     if layout != "body3d":
         return sequences
-    from motion2video.core.skeletons import bone_lengths, with_bone_lengths
+    from motion2video.core.skeletons import L_ANKLE, R_ANKLE, bone_lengths, feet_above, with_bone_lengths
 
     seq = np.asarray(sequences)
-    out = np.stack([with_bone_lengths(s, bone_lengths(s[0])) for s in seq])
-    return out.astype(seq.dtype, copy=False)
+    out = []
+    for s in seq:
+        rigid = with_bone_lengths(s, bone_lengths(s[0]))
+        floor = float(min(s[0, R_ANKLE, 2], s[0, L_ANKLE, 2]))  # the start posture's lower ankle
+        out.append(np.concatenate([rigid[:1], feet_above(rigid[1:], floor)]))
+    return np.stack(out).astype(seq.dtype, copy=False)
 
 
 def behavior_root(model: BehaviorModel, source: np.ndarray, start: np.ndarray) -> np.ndarray | None:
