@@ -147,7 +147,8 @@ def _latents_and_transfers(bundle: ModelBundle, obs: np.ndarray, fut: np.ndarray
     """z(x_beta), the self-reconstruction, the transfer x_R and z(x_R), batched.
 
     Behaviour models: z from [x_t, x_beta] and re-enactment from the target's last observed posture;
-    other latent models (MT-VAE analogy): z = E(obs, future) and x_R = D(target obs, z).
+    other latent models (MT-VAE analogy): z = E(obs, future) and x_R = D(target obs, z). A behaviour model
+    with ``root_trajectory`` reconstructs and re-enacts along the source's root path, as ``transfer`` does.
     """
     model = bundle.model
     model.eval()
@@ -156,8 +157,17 @@ def _latents_and_transfers(bundle: ModelBundle, obs: np.ndarray, fut: np.ndarray
     for i in range(0, len(obs), batch):
         o, f, t = (as_model_input(x[i:i + batch], model) for x in (obs, fut, target_obs))
         z = model.encode(o, f).mu
-        rec = model.decode(o, z, horizon=horizon)
-        x_r = model.decode(t, z, horizon=horizon)
+        if isinstance(model, BehaviorModel) and model.config.root_trajectory:
+            # as `motion2video transfer`: enacted along the source's root path (height shifted to the start)
+            r = model.config.root_dims
+            path = f[..., -r:]
+            shifted = path.clone()
+            shifted[..., -1] += (t[:, -1, -1] - o[:, -1, -1])[:, None]
+            rec = model.transfer(z, o[:, -1], horizon, root=path)
+            x_r = model.transfer(z, t[:, -1], horizon, root=shifted)
+        else:
+            rec = model.decode(o, z, horizon=horizon)
+            x_r = model.decode(t, z, horizon=horizon)
         z_r = model.encode(t, x_r).mu
         for acc, v in ((zs, z), (selfs, rec), (trans, x_r), (zr, z_r)):
             acc.append(v.cpu().numpy())
