@@ -125,7 +125,9 @@ def render(bench: dict, live: dict, *, command: str, seconds: float) -> str:
           "Start error: mean per-joint distance (m) between the first generated frame and the target posture "
           "(root-relative, heading-aligned; real motion moves about 0.01-0.03 m per frame). Bone spread: the "
           "largest per-bone s.d. / mean length over the generated frames (real mocap < 0.01). Medians over "
-          "the pairs.", ""]
+          "the pairs. Every behaviour-model row goes through what `motion2video transfer` does to its output: "
+          "bones rescaled to the start posture's lengths and ankles kept above the start's lower ankle by leg IK "
+          "(`motion2video.stages.latents.rigid_bones`); the analogy rows are the raw decoder output.", ""]
     L += _table(bench, "held-out", "start", "{start_error:.3f} m / {bone_spread:.3f}")
     L.append("")
     if live:
@@ -136,8 +138,8 @@ def render(bench: dict, live: dict, *, command: str, seconds: float) -> str:
               "future frames); `motion2video.evaluation.transfer.evaluate_transfer`: self = reconstruction, "
               "transfer = re-enacted from another held-out clip's window, prior = z ~ N(0, I), flow = z = "
               "T^-1(u). Mean absolute velocity / acceleration of the features per frame (m/frame, m/frame^2; "
-              f"held-out ground truth **{real_v:.4f} / {real_a:.4f}**), the ratio to the ground truth in "
-              "brackets (target: within 0.8-1.2). Realism: accuracy of the linear real/fake classifier on the "
+              f"held-out ground truth **{real_v:.4f} / {real_a:.4f}**), and their ratio to the ground truth "
+              "(target: within 0.8-1.2). Realism: accuracy of the linear real/fake classifier on the "
               "full descriptor (poses + velocity / acceleration statistics; target <= 0.75) and on poses alone.",
               "", "| model | origin | velocity / acceleration | vs real | classifier (full) | classifier (poses) |",
               "| --- | --- | ---: | ---: | ---: | ---: |"]
