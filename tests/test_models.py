@@ -243,6 +243,24 @@ def test_behavior_issue13_options_velocities_z_at_every_step_and_root_weight() -
     torch.testing.assert_close(weighted, plain + 3.0 * root)
 
 
+def test_motion_stats_error_penalises_sluggish_motion_and_not_a_phase_shift() -> None:
+    """The liveliness term is 0 for the true sequence and for a time-shifted copy of a periodic one (same
+    speed, other phase), and positive for a slowed-down (half-amplitude) copy."""
+    from motion2video.models.behavior import motion_stats_error
+
+    t = torch.arange(49, dtype=torch.float32)
+    wave = torch.sin(2 * np.pi * t / 12)[None, :, None].repeat(2, 1, F)  # (2, 49, F), period 12 frames
+    true, start = wave[:, 1:], wave[:, 0]
+    shifted = torch.sin(2 * np.pi * (t + 12) / 12)[None, 1:, None].repeat(2, 1, F)
+    assert float(motion_stats_error(true, true, start)) == 0.0
+    assert float(motion_stats_error(shifted, true, start)) < 1e-6
+    assert float(motion_stats_error(0.5 * true, true, start)) > 0.1
+    model = _tiny("behavior", motion_stats_weight=3.0)
+    model.train()
+    obs, future = _batch()
+    assert torch.isfinite(model.loss(obs, future, step=0).total)
+
+
 def test_behavior_root_trajectory_decoder_follows_a_given_path_or_makes_its_own() -> None:
     """With ``root_trajectory`` the re-enactment's root features are exactly the given path; without a path
     the decoder generates its own root; training mixes both (its loss backpropagates)."""

@@ -94,6 +94,22 @@ class BehaviorConfig:
     # decoder also generates its own root (flow samples, and ``decode`` without a trajectory).
     root_trajectory: bool = False
     root_given_prob: float = 0.5
+    # Liveliness (issue 13, item 3): weight of a moment-matching term, the squared difference between the
+    # generated and the true sequence's mean absolute velocity and acceleration per feature (summed over
+    # features, times the sequence length). The squared error alone is minimised by smooth, slow motion.
+    motion_stats_weight: float = 0.0
+
+
+def motion_stats_error(pred: torch.Tensor, target: torch.Tensor, start: torch.Tensor) -> torch.Tensor:
+    """How much livelier or more sluggish ``pred`` is than ``target`` (both (B, T, F), after start (B, F)):
+    per sequence and feature, the squared difference of the mean absolute velocity plus that of the mean
+    absolute acceleration, summed over features, times T, averaged over the batch."""
+    p = torch.cat([start[:, None], pred], dim=1)
+    t = torch.cat([start[:, None], target], dim=1)
+    vp, vt = torch.diff(p, dim=1), torch.diff(t, dim=1)
+    ap, at = torch.diff(vp, dim=1), torch.diff(vt, dim=1)
+    err = (vp.abs().mean(1) - vt.abs().mean(1)).pow(2) + (ap.abs().mean(1) - at.abs().mean(1)).pow(2)  # (B, F)
+    return err.sum(-1).mean() * pred.shape[1]
 
 
 class RootTrajectoryDecoder(nn.Module):
@@ -222,6 +238,8 @@ class BehaviorModel(LatentSampler, nn.Module):
         else:
             pred = self.decoder(z, start, horizon=future.shape[1])  # (B, Tf, F)
         recon = self.reconstruction_error(pred, future)
+        if c.motion_stats_weight > 0:
+            recon = recon + c.motion_stats_weight * motion_stats_error(pred, future, start)
         kl = kl_std_normal(post).mean()
         reg_err = (self.regressor(z) - start).pow(2).sum(dim=-1).mean()
         gamma_kl = float(self.kl_multiplier)
