@@ -16,6 +16,13 @@ updated by dual gradient ascent (:func:`dual_ascent`) after every training-mode 
     gamma_KL <- max(0, gamma_KL + eta (KL - I_KL)).
 gamma_KL is a buffer (``kl_multiplier``), so it is saved in checkpoints.
 
+Options added for issue 13 (all off by default, so older checkpoints load as they were; the shipped checkpoint
+uses all of them, see weights/behavior.md): ``decoder_feeds_z`` (z at every decoder step),
+``encoder_velocities`` (the encoder reads frame differences too), ``root_weight`` (the root trajectory's share
+of the reconstruction error), ``root_trajectory`` (:class:`RootTrajectoryDecoder`: the decoder can be given the
+behaviour's root path and enacts the pose along it) and ``motion_stats_weight`` (:func:`motion_stats_error`,
+matching the generated motion's mean speed and acceleration to the real one's).
+
 After training, a normalizing flow (:mod:`motion2video.models.flow`) is fitted to posterior latents
 (:meth:`BehaviorModel.fit_flow`); ``sample(..., use_flow=True)`` draws u ~ N(0, I) and decodes z = T^-1(u).
 
