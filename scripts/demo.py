@@ -9,6 +9,11 @@ Writes, from the committed ``demo_inputs/`` only (nothing outside the repository
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
   ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``;
+- ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``jump.npz`` (a procedural jump: the
+  committed demo inputs hold no real mocap excerpt) re-enacted by ``behavior`` from the standing posture of
+  ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-128``, side by side
+  with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
+  ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
 - ``out/inputs/<clip>_<style>.mp4``: every demo input rendered in every style that fits it (skip: --no-inputs).
 
 Every video plays the observed frames framed green, then each sampled future framed red.
@@ -30,11 +35,16 @@ BODY = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="walk_
 FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-128", clip="smile.npz",
             reference="reference_face.png", start=0)
 MESH_SIZE = 256
+# Behaviour transfer: the jump (stands 0.8 s, then crouches and jumps) from its frame 10, re-enacted from wave.npz's
+# first (standing) posture.
+TRANSFER = dict(motion_model="behavior", frame_model="frames-body-128", behavior="jump.npz", behavior_start=10,
+                target="wave.npz", target_frame=0, reference="reference_body_128.png")
 
 
 def weight_files(weights: Path = WEIGHTS) -> dict[str, Path]:
     """Checkpoint name -> file in ``weights`` for the four checkpoints the demo uses."""
-    names = [BODY["motion_model"], BODY["frame_model"], FACE["motion_model"], FACE["frame_model"]]
+    names = [BODY["motion_model"], BODY["frame_model"], FACE["motion_model"], FACE["frame_model"],
+             TRANSFER["motion_model"]]
     return {name: Path(weights) / f"{name}.safetensors" for name in names}
 
 
@@ -74,7 +84,54 @@ def run_demo(out: Path, *, samples: int = 5, seed: int = 0, weights: Path = WEIG
             written["mesh_body_sheet"] = write_image(out / "mesh_body-sheet.png",
                                                      contact_sheet(mesh.observed, mesh.futures))
             print(f"body mesh: {time.perf_counter() - t0:.1f} s")
+    written.update(run_transfer_demo(out, weights=weights))
     return written
+
+
+def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) -> dict[str, Path]:
+    """``out/transfer_body.mp4`` and ``.npz``: TRANSFER's behaviour re-enacted by the reference person, side by
+    side with the source (as ``motion2video transfer --style frames --reference ... --npz ...``)."""
+    import numpy as np
+
+    from motion2video.apps.transfer import iter_transfer, transfer_behavior
+    from motion2video.checkpoint import load_model
+    from motion2video.core.atomic import save_npz
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.reference import load_reference
+    from motion2video.stages.clips import load_clip
+    from motion2video.video import VideoWriter, write_image
+
+    t0 = time.perf_counter()
+    spec = TRANSFER
+    bundle = load_model(Path(weights) / f"{spec['motion_model']}.safetensors")
+    frame_model = load_frame_model(Path(weights) / f"{spec['frame_model']}.safetensors")
+    reference = load_reference(DEMO_INPUTS / spec["reference"], size=frame_model.config.image_size, domain="body")
+    source = load_clip(bundle, DEMO_INPUTS / spec["behavior"])
+    target = load_clip(bundle, DEMO_INPUTS / spec["target"])
+    result = transfer_behavior(bundle, source, target, source_start=spec["behavior_start"],
+                               target_frame=spec["target_frame"])
+    video = out / "transfer_body.mp4"
+    kept = []
+    z = result.source[:, 0, 2]  # the source's pelvis height: the sheet shows start, crouch, top, landing
+    low = int(np.argmin(z[: int(np.argmax(z)) + 1]))
+    top = int(np.argmax(z))
+    shown = sorted({0, low, top, min(top + (top - low), len(z) - 1)})
+    with VideoWriter(video, result.fps) as writer:
+        done = 0
+        for chunk in iter_transfer(result, style="frames", size=size, frame_model=frame_model, reference=reference):
+            writer.write(chunk)
+            kept += [chunk[i - done] for i in shown if done <= i < done + len(chunk)]
+            done += len(chunk)
+    kept += kept[-1:] * (len(kept) % 2)  # an even number of cells: two per row
+    rows = [np.concatenate(kept[i:i + 2], axis=1) for i in range(0, len(kept), 2)]
+    sheet = write_image(out / "transfer_body-sheet.png", np.concatenate(rows, axis=0))
+    npz = save_npz(out / "transfer_body.npz", {"source": result.source, "reenacted": result.reenacted,
+                                               "z": result.z, "fps": np.float64(result.fps)})
+    rise = lambda seq: float(seq[:, 0, 2].max() - seq[:, 0, 2].min())  # noqa: E731
+    print(f"transfer: {spec['behavior']} re-enacted from {spec['target']} by {spec['reference']}: pelvis rises "
+          f"{rise(result.source):.2f} m in the source, {rise(result.reenacted[0]):.2f} m in the re-enactment "
+          f"({time.perf_counter() - t0:.1f} s)")
+    return {"transfer_body": video, "transfer_body_npz": npz, "transfer_body_sheet": sheet}
 
 
 def render_inputs(out: Path, *, size: int = 128) -> dict[str, Path]:

@@ -61,8 +61,9 @@ train_one() {
 lane_a() {
   train_one mtvae-add mtvae-add "$MOCAP" 4000 "{$MTVAE, $BODY_DATA, $TRAIN}"
   train_one mtvae-add-dlow dlow "$MOCAP" 600 "{$DLOW}" --base "$WEIGHTS/mtvae-add.safetensors"
-  train_one behavior behavior "$MOCAP" 3000 \
-      "{\"model\": {\"hidden_dim\": 128, \"latent_dim\": 32, \"regressor_dim\": 128}, $BODY_DATA, $TRAIN}"
+  # behaviour model with root-trajectory access (issue 13; see weights/behavior.md): 4000 steps, 10-13 min
+  train_one behavior behavior "$MOCAP" 4000 \
+      "{\"model\": {\"hidden_dim\": 128, \"latent_dim\": 32, \"regressor_dim\": 128, \"decoder_feeds_z\": true, \"encoder_velocities\": true, \"kl_budget\": 100.0, \"root_weight\": 10.0, \"root_trajectory\": true, \"motion_stats_weight\": 60.0}, $BODY_DATA, $TRAIN}"
 }
 
 lane_b() {

@@ -226,6 +226,66 @@ def test_behavior_transfer_api_and_flow_sampling() -> None:
     assert out.shape == (3, 2, 5, F) and torch.isfinite(out).all()
 
 
+def test_behavior_issue13_options_velocities_z_at_every_step_and_root_weight() -> None:
+    """The encoder reads [frames, velocities], the decoder gets z at every step, and the root features' error
+    is weighted: the reconstruction error grows by exactly (w - 1) x the root part."""
+    obs, future = _batch()
+    model = _tiny("behavior", latent_dim=4, decoder_feeds_z=True, encoder_velocities=True).eval()
+    assert model.encoder.cell.w_x.in_features == 2 * F and _tiny("behavior").encoder.cell.w_x.in_features == F
+    assert model.decoder.cell.w_x.in_features == F + 4
+    sequence = torch.cat([obs[:, -1:], future], dim=1)
+    z = model.behavior_latent(sequence)
+    assert model.transfer(z, torch.randn(3, F), 6).shape == (3, 6, F)
+    pred, target = torch.randn(3, 7, F), torch.randn(3, 7, F)
+    plain = _tiny("behavior").reconstruction_error(pred, target)
+    weighted = _tiny("behavior", root_weight=4.0, root_dims=2).reconstruction_error(pred, target)
+    root = (pred - target)[..., -2:].pow(2).sum(dim=(1, 2)).mean()
+    torch.testing.assert_close(weighted, plain + 3.0 * root)
+
+
+def test_motion_stats_error_penalises_sluggish_motion_and_not_a_phase_shift() -> None:
+    """The liveliness term is 0 for the true sequence and for a time-shifted copy of a periodic one (same
+    speed, other phase), and positive for a slowed-down (half-amplitude) copy."""
+    from motion2video.models.behavior import motion_stats_error
+
+    t = torch.arange(49, dtype=torch.float32)
+    wave = torch.sin(2 * np.pi * t / 12)[None, :, None].repeat(2, 1, F)  # (2, 49, F), period 12 frames
+    true, start = wave[:, 1:], wave[:, 0]
+    shifted = torch.sin(2 * np.pi * (t + 12) / 12)[None, 1:, None].repeat(2, 1, F)
+    assert float(motion_stats_error(true, true, start)) == 0.0
+    assert float(motion_stats_error(shifted, true, start)) < 1e-6
+    assert float(motion_stats_error(0.5 * true, true, start)) > 0.1
+    model = _tiny("behavior", motion_stats_weight=3.0)
+    model.train()
+    obs, future = _batch()
+    assert torch.isfinite(model.loss(obs, future, step=0).total)
+
+
+def test_behavior_root_trajectory_decoder_follows_a_given_path_or_makes_its_own() -> None:
+    """With ``root_trajectory`` the re-enactment's root features are exactly the given path; without a path
+    the decoder generates its own root; training mixes both (its loss backpropagates)."""
+    from motion2video.stages.latents import behavior_root
+
+    model = _tiny("behavior", latent_dim=4, root_trajectory=True, root_dims=2)
+    obs, future = _batch()
+    model.train()
+    model.loss(obs, future, step=0).total.backward()
+    assert model.decoder.cell.w_x.weight.grad is not None
+    model.eval()
+    z, start = torch.randn(3, 4), torch.randn(3, F)
+    path = torch.randn(3, 7, 2)
+    with torch.no_grad():
+        along = model.transfer(z, start, 7, root=path)
+        free = model.transfer(z, start, 7)
+    torch.testing.assert_close(along[..., -2:], path)
+    assert not torch.allclose(free[..., -2:], path) and torch.isfinite(free).all()
+    source = np.random.default_rng(0).normal(size=(3, 8, F)).astype(np.float32)
+    root = behavior_root(model, source, start.numpy())
+    np.testing.assert_allclose(root[..., 0], source[:, 1:, -2])  # horizontal: the source's own relative path
+    np.testing.assert_allclose(root[..., 1] - source[:, 1:, -1], np.repeat((start.numpy()[:, -1] - source[:, 0, -1])[:, None], 7, 1), rtol=1e-5, atol=1e-5)
+    assert behavior_root(_tiny("behavior"), source, start.numpy()) is None
+
+
 # ---------------------------------------------------------------------------------------------- flow
 
 

@@ -43,6 +43,16 @@ def train_body_motion_model(mocap_dir: Path, folder: Path) -> Path:
     return out
 
 
+def train_behavior_model(folder: Path) -> Path:
+    """A 2-step behaviour model (root-trajectory decoder) on the body clips already linked by
+    :func:`train_body_motion_model`, trained through the CLI (the demo's transfer)."""
+    out = folder / "behavior.safetensors"
+    config = '{"model": {"hidden_dim": 16, "latent_dim": 4, "regressor_dim": 16, "root_trajectory": true}}'
+    assert main(["train", "--model", "behavior", "--data", str(folder / "mocap"), "-o", str(out), "--steps", "2",
+                 "--config", config, "--no-progress"]) == 0
+    return out
+
+
 def train_face_motion_model(face_dir: Path, folder: Path) -> Path:
     """A 2-step mtvae-add on one real ARKit capture, trained through the CLI."""
     out = folder / "face.safetensors"
@@ -309,15 +319,22 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     weights.mkdir()
     names = {"mtvae-add": checkpoints["body"], "frames-body-128": checkpoints["frames_body"],
              "mtvae-add-face": train_face_motion_model(face_dir, tmp_path),
-             "frames-face-128": train_frame_model("face", tmp_path)}
+             "frames-face-128": train_frame_model("face", tmp_path),
+             "behavior": train_behavior_model(checkpoints["body"].parent)}
     for name, path in names.items():
         (weights / f"{name}.safetensors").symlink_to(path)
     out = tmp_path / "out"
     assert demo.main(["--out", str(out), "--weights", str(weights), "--samples", "1"]) == 0
     printed = capsys.readouterr().out
     for name in ("futures_body.mp4", "futures_body-structure.mp4", "futures_body-sheet.png", "mesh_body.mp4",
-                 "mesh_body-sheet.png", "futures_face.mp4", "futures_face-structure.mp4", "futures_face-sheet.png"):
+                 "mesh_body-sheet.png", "futures_face.mp4", "futures_face-structure.mp4", "futures_face-sheet.png",
+                 "transfer_body.mp4", "transfer_body-sheet.png", "transfer_body.npz"):
         assert (out / name).is_file() and str(out / name) in printed, name
+    assert "transfer: jump.npz re-enacted" in printed
+    transfer, _ = read_video(out / "transfer_body.mp4")
+    assert transfer.shape[:2] == (1 + 48, 256) and transfer.shape[2] >= 2 * 256  # the source beside the re-enactment
+    kept = np.load(out / "transfer_body.npz")
+    assert kept["source"].shape == (1 + 48, 17, 3) and kept["reenacted"].shape == (1, 1 + 48, 17, 3)
     mesh, _ = read_video(out / "mesh_body.mp4")
     assert mesh.shape == (16 + 48, 256, 256, 3)
     assert_framed(mesh, observed=16, cells=1, columns=1, size=256)

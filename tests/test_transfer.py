@@ -108,6 +108,23 @@ def test_reenactment_follows_the_target_position_and_heading(ckpts, clips):
     np.testing.assert_allclose(b, expected, atol=1e-4)
 
 
+def test_reenactment_keeps_the_target_start_and_its_bone_lengths(ckpts, clips):
+    """Issue 13: the re-enactment starts at the target's posture and every generated frame has the start
+    posture's bone lengths (a tiny, barely trained model's raw joints stretch its bones)."""
+    from motion2video.evaluation.signatures import bone_length_spread, bone_lengths
+
+    bundle = load_model(ckpts["behavior"])
+    source = load_clip(bundle, clips["source"])
+    target = load_clip(bundle, clips["target"])
+    result = transfer_behavior(bundle, source, target, target_frame=100, horizon=HORIZON)
+    seq = result.reenacted[0]
+    start = _resampled(clips["target"])[0][int(np.floor(100 * 25.0 / 120.0 + 0.5))]
+    np.testing.assert_allclose(seq[0], start, atol=1e-4)
+    assert bone_length_spread(seq) < 1e-5
+    np.testing.assert_allclose(bone_lengths(seq[1:]), np.repeat(bone_lengths(seq[:1]), HORIZON, axis=0), atol=1e-5)
+    assert np.abs(np.diff(seq[:, 0], axis=0)).max() > 0  # the body moves
+
+
 def test_flow_samples_grid_is_seeded(ckpts, clips, tmp_path):
     paths = {}
     for name, seed in (("a", 3), ("b", 3), ("c", 4)):
@@ -292,3 +309,26 @@ def test_bad_input(case, ckpts, clips, face_dir, other_skeleton, tmp_path, capsy
                 "other-skeleton": "coco-17", "reference-without-frames": "--style frames", "no-flow": "flow",
                 "zero-samples": "--sample must be >= 1", "bad-suffix": "extension"}[case]
     assert expected in err
+
+
+def test_shipped_behavior_carries_held_out_jumps_and_speeds(mocap_dir, tmp_path, capsys):
+    """Issue 13 with the shipped checkpoint: on held-out subjects, re-enacted from other subjects' postures,
+    the median signature ratio of jumps (pelvis excursion) and walks / runs (root speed) is within 0.6-1.4,
+    the re-enactment starts at the target's posture and keeps its bone lengths; and the same number comes
+    out of ``transfer --npz``."""
+    from motion2video.evaluation import signatures as S
+    from motion2video.evaluation import transfer_benchmark as B
+
+    cases = tuple(c for c in B.CASES if c.split == "held-out" and c.behaviour in ("jump", "walk/run"))
+    results = B.run_benchmark(str(mocap_dir), transfer=load_model("behavior"), cases=cases)
+    for row in B.summarise(results):
+        if row["method"] == "transfer":
+            assert 0.6 <= row["median_ratio"] <= 1.4, row
+            assert row["start_error"] < 0.03 and row["bone_spread"] < 1e-4, row
+    npz = tmp_path / "t.npz"
+    assert main(["transfer", "--model", "behavior", "--behavior", str(mocap_dir / "cmu/02_04.bvh"),
+                 "--target", str(mocap_dir / "cmu/07_03.bvh"), "--target-frame", "144", "--style", "skeleton",
+                 "--size", "64", "-o", str(tmp_path / "t.mp4"), "--npz", str(npz)]) == 0
+    kept = np.load(npz)
+    ratio = S.pelvis_excursion(kept["reenacted"][0]) / S.pelvis_excursion(kept["source"])
+    assert 0.6 <= ratio <= 1.4 and S.pelvis_excursion(kept["source"]) > 0.5

@@ -9,8 +9,10 @@ Pipeline (``motion2video transfer``):
    anchor the training windows use, whose behaviour sequence starts at the last observed frame), then the
    checkpoint's normalisation. The behaviour encoder's posterior mean is z_beta (:func:`behavior_latents`).
 2. ``TARGET[F]`` is encoded the same way (a one-frame sequence, anchored at itself); the decoder enacts
-   z_beta from it for H frames (:meth:`BehaviorModel.transfer`).
-3. The H generated frames are decoded back with the TARGET's window frame.
+   z_beta from it for H frames (:meth:`BehaviorModel.transfer`); a model with ``root_trajectory`` enacts it
+   along the source's root path (:func:`~motion2video.stages.latents.behavior_root`).
+3. The H generated frames are decoded back with the TARGET's window frame; 3D bodies then get the bone
+   lengths of the target's start posture in every frame (:func:`~motion2video.stages.latents.rigid_bones`).
 
 Root trajectory: the body layouts carry the root as features (x, y relative to the start posture in its
 heading-aligned canonical frame; z = height above the floor), so the model generates the root motion along
@@ -40,7 +42,15 @@ from motion2video.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.stages.clips import LoadedClip, model_frame
-from motion2video.stages.latents import behavior_latents, behavior_model, decode_sequences, encode_sequences, reenact
+from motion2video.stages.latents import (
+    behavior_latents,
+    behavior_model,
+    behavior_root,
+    decode_sequences,
+    encode_sequences,
+    reenact,
+    rigid_bones,
+)
 from motion2video.stages.sampling import as_model_input
 from motion2video.stages.structure import (
     ALT_FACE_COLOURS,
@@ -117,9 +127,10 @@ def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedCli
     src_feats, src_frame = encode_sequences(bundle, source.data[None, s:s + 1 + horizon])  # (1, 1+H, F)
     tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
     z = behavior_latents(model, src_feats)  # (1, Z)
-    gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon)  # (1, H, F)
+    root = behavior_root(model, src_feats, tgt_feats[:, 0])  # (1, H, R) or None
+    gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)
     seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)
-    reenacted = decode_sequences(bundle, seq[:, None], tgt_frame)[0]  # (1, 1+H, ...)
+    reenacted = rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])
     shown_source = decode_sequences(bundle, src_feats[:, None], src_frame)[0, 0]  # (1+H, ...)
     return TransferResult(source=shown_source.astype(np.float32), reenacted=reenacted.astype(np.float32),
                           z=z, fps=bundle.data_config.fps, layout=bundle.data_config.layout,
@@ -151,7 +162,7 @@ def sample_behaviors(bundle: ModelBundle, target: LoadedClip, *, num_samples: in
         z = model.flow.inverse(u.to(next(model.parameters()).device))  # (K, Z)
         out = model.transfer(z, as_model_input(np.repeat(tgt_feats[:, 0], num_samples, axis=0), model), horizon)
     seq = np.concatenate([np.repeat(tgt_feats, num_samples, axis=0), out.cpu().numpy()], axis=1)  # (K, 1+H, F)
-    reenacted = decode_sequences(bundle, seq[None], tgt_frame)[0]  # (K, 1+H, ...)
+    reenacted = rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[None], tgt_frame)[0])
     return TransferResult(source=None, reenacted=reenacted.astype(np.float32), z=z.cpu().numpy(),
                           fps=bundle.data_config.fps, layout=bundle.data_config.layout, source_name=None,
                           target_name=target.path, target_frame=int(target_frame),

@@ -244,3 +244,61 @@ RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
         "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
     },
 }
+
+
+def bone_lengths(joints: np.ndarray, parents: tuple[int, ...] = H36M_17.parents) -> np.ndarray:
+    """(..., J) length of the bone from each joint to its parent over (..., J, D) joints (0 at the root)."""
+    j = np.asarray(joints, np.float64)
+    par = np.array([p if p >= 0 else i for i, p in enumerate(parents)])
+    return np.linalg.norm(j - j[..., par, :], axis=-1)
+
+
+def with_bone_lengths(joints: np.ndarray, lengths: np.ndarray,
+                      parents: tuple[int, ...] = H36M_17.parents) -> np.ndarray:
+    """Rigid bones: (..., J, D) joints with every bone rescaled along its own direction to ``lengths`` (J,)
+    (from :func:`bone_lengths`; the root's entry is ignored), walking down the tree from the root, which stays
+    where it is. A bone of zero length keeps its parent's position."""
+    j = np.asarray(joints, np.float64)
+    out = j.copy()
+    for i, p in enumerate(parents):  # parents come before their children in every skeleton here
+        if p < 0:
+            continue
+        d = j[..., i, :] - j[..., p, :]
+        norm = np.linalg.norm(d, axis=-1, keepdims=True)
+        unit = np.divide(d, norm, out=np.zeros_like(d), where=norm > 1e-12)
+        out[..., i, :] = out[..., p, :] + unit * float(lengths[i])
+    return out
+
+
+def feet_above(joints: np.ndarray, floor: float, *, legs=((R_HIP, R_KNEE, R_ANKLE), (L_HIP, L_KNEE, L_ANKLE))
+               ) -> np.ndarray:
+    """Ground contact by leg inverse kinematics: (T, 17, 3) world joints (z up) whose ankles never go below
+    height ``floor``. Where an ankle is lower it is lifted straight up to ``floor`` and the knee is placed
+    by two-bone IK (hip fixed, thigh and shin lengths kept) in the plane of hip, new ankle and the old knee,
+    so the leg bends the way it already bent: a body whose pelvis drops crouches instead of sinking into the
+    ground. Frames whose ankles are above ``floor`` are unchanged."""
+    j = np.array(joints, np.float64, copy=True)
+    for hip, knee, ankle in legs:
+        low = j[:, ankle, 2] < floor
+        if not low.any():
+            continue
+        h, k, a = j[low, hip], j[low, knee], j[low, ankle]
+        thigh = np.linalg.norm(k - h, axis=-1)
+        shin = np.linalg.norm(a - k, axis=-1)
+        target = a.copy()
+        target[:, 2] = floor
+        d_vec = target - h
+        dist = np.linalg.norm(d_vec, axis=-1)
+        reach = np.clip(dist, np.abs(thigh - shin) + 1e-6, thigh + shin - 1e-6)
+        axis = d_vec / np.maximum(dist, 1e-9)[:, None]
+        target = h + axis * reach[:, None]  # out of reach: as close as the leg gets
+        along = (thigh**2 - shin**2 + reach**2) / (2 * reach)  # hip -> foot of the knee's perpendicular
+        height = np.sqrt(np.maximum(thigh**2 - along**2, 0.0))
+        pole = k - h - axis * np.sum((k - h) * axis, axis=-1, keepdims=True)  # the old knee's bend direction
+        pole_n = np.linalg.norm(pole, axis=-1, keepdims=True)
+        fallback = np.cross(axis, np.array([0.0, 0.0, 1.0]))  # a straight leg: bend sideways of the leg axis
+        pole = np.where(pole_n > 1e-6, pole / np.maximum(pole_n, 1e-9), fallback / np.maximum(
+            np.linalg.norm(fallback, axis=-1, keepdims=True), 1e-9))
+        j[low, knee] = h + axis * along[:, None] + pole * height[:, None]
+        j[low, ankle] = target
+    return j

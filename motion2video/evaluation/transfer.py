@@ -14,6 +14,7 @@ MT-VAE enters through analogy: z = E(obs_source, future_source), x_R = D(obs_tar
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +22,7 @@ import torch
 
 from motion2video import metrics as M
 from motion2video.checkpoint import ModelBundle
+from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import WindowSet
 from motion2video.models.behavior import BehaviorModel
@@ -145,7 +147,8 @@ def _latents_and_transfers(bundle: ModelBundle, obs: np.ndarray, fut: np.ndarray
     """z(x_beta), the self-reconstruction, the transfer x_R and z(x_R), batched.
 
     Behaviour models: z from [x_t, x_beta] and re-enactment from the target's last observed posture;
-    other latent models (MT-VAE analogy): z = E(obs, future) and x_R = D(target obs, z).
+    other latent models (MT-VAE analogy): z = E(obs, future) and x_R = D(target obs, z). A behaviour model
+    with ``root_trajectory`` reconstructs and re-enacts along the source's root path, as ``transfer`` does.
     """
     model = bundle.model
     model.eval()
@@ -154,8 +157,17 @@ def _latents_and_transfers(bundle: ModelBundle, obs: np.ndarray, fut: np.ndarray
     for i in range(0, len(obs), batch):
         o, f, t = (as_model_input(x[i:i + batch], model) for x in (obs, fut, target_obs))
         z = model.encode(o, f).mu
-        rec = model.decode(o, z, horizon=horizon)
-        x_r = model.decode(t, z, horizon=horizon)
+        if isinstance(model, BehaviorModel) and model.config.root_trajectory:
+            # as `motion2video transfer`: enacted along the source's root path (height shifted to the start)
+            r = model.config.root_dims
+            path = f[..., -r:]
+            shifted = path.clone()
+            shifted[..., -1] += (t[:, -1, -1] - o[:, -1, -1])[:, None]
+            rec = model.transfer(z, o[:, -1], horizon, root=path)
+            x_r = model.transfer(z, t[:, -1], horizon, root=shifted)
+        else:
+            rec = model.decode(o, z, horizon=horizon)
+            x_r = model.decode(t, z, horizon=horizon)
         z_r = model.encode(t, x_r).mu
         for acc, v in ((zs, z), (selfs, rec), (trans, x_r), (zr, z_r)):
             acc.append(v.cpu().numpy())

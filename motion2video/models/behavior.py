@@ -16,6 +16,13 @@ updated by dual gradient ascent (:func:`dual_ascent`) after every training-mode 
     gamma_KL <- max(0, gamma_KL + eta (KL - I_KL)).
 gamma_KL is a buffer (``kl_multiplier``), so it is saved in checkpoints.
 
+Options added for issue 13 (all off by default, so older checkpoints load as they were; the shipped checkpoint
+uses all of them, see weights/behavior.md): ``decoder_feeds_z`` (z at every decoder step),
+``encoder_velocities`` (the encoder reads frame differences too), ``root_weight`` (the root trajectory's share
+of the reconstruction error), ``root_trajectory`` (:class:`RootTrajectoryDecoder`: the decoder can be given the
+behaviour's root path and enacts the pose along it) and ``motion_stats_weight`` (:func:`motion_stats_error`,
+matching the generated motion's mean speed and acceleration to the real one's).
+
 After training, a normalizing flow (:mod:`motion2video.models.flow`) is fitted to posterior latents
 (:meth:`BehaviorModel.fit_flow`); ``sample(..., use_flow=True)`` draws u ~ N(0, I) and decodes z = T^-1(u).
 
@@ -42,6 +49,7 @@ from torch import nn
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
     GaussianHead,
+    LSTMCell,
     LSTMDecoder,
     LSTMEncoder,
     check_sequences,
@@ -76,6 +84,79 @@ class BehaviorConfig:
     kl_multiplier_lr: float = 1e-3  # dual ascent step size eta
     flow_blocks: int = 6
     flow_hidden: int = 128
+    # Issue 13 (measured: the shipped model could not even reconstruct a jump from its own start posture,
+    # its z only set the decoder's initial state): feed z to the decoder at every step, and give the
+    # behaviour encoder the frame-to-frame velocities beside the frames. Both off = the old architecture.
+    decoder_feeds_z: bool = False
+    encoder_velocities: bool = False
+    # Weight of the last ``root_dims`` features (the root trajectory of the body layouts: x, y, height) in the
+    # reconstruction error. Measured: with weight 1 the model reconstructed no jump at all, even of training
+    # clips (the pelvis height is 1 of 51 features and jumps are rare). 1.0 = the plain summed squared error.
+    root_weight: float = 1.0
+    root_dims: int = 3
+    # The decoder's access to the behaviour's root trajectory: at every step it may get the behaviour's root
+    # features (the last ``root_dims``: x, y relative to the start in its heading frame, height) and then
+    # enacts the pose along that path (the root it outputs is the given one). Trained with the trajectory
+    # given for a random ``root_given_prob`` share of the sequences and not given for the rest, so the same
+    # decoder also generates its own root (flow samples, and ``decode`` without a trajectory).
+    root_trajectory: bool = False
+    root_given_prob: float = 0.5
+    # Liveliness (issue 13, item 3): weight of a moment-matching term, the squared difference between the
+    # generated and the true sequence's mean absolute velocity and acceleration per feature (summed over
+    # features, times the sequence length). The squared error alone is minimised by smooth, slow motion.
+    motion_stats_weight: float = 0.0
+
+
+def motion_stats_error(pred: torch.Tensor, target: torch.Tensor, start: torch.Tensor) -> torch.Tensor:
+    """How much livelier or more sluggish ``pred`` is than ``target`` (both (B, T, F), after start (B, F)):
+    per sequence and feature, the squared difference of the mean absolute velocity plus that of the mean
+    absolute acceleration, summed over features, times T, averaged over the batch."""
+    p = torch.cat([start[:, None], pred], dim=1)
+    t = torch.cat([start[:, None], target], dim=1)
+    vp, vt = torch.diff(p, dim=1), torch.diff(t, dim=1)
+    ap, at = torch.diff(vp, dim=1), torch.diff(vt, dim=1)
+    err = (vp.abs().mean(1) - vt.abs().mean(1)).pow(2) + (ap.abs().mean(1) - at.abs().mean(1)).pow(2)  # (B, F)
+    return err.sum(-1).mean() * pred.shape[1]
+
+
+class RootTrajectoryDecoder(nn.Module):
+    """The behaviour decoder with access to a root trajectory: an autoregressive residual LSTM whose state
+    starts at (tanh(A z), A' z) and whose input at step t is [z, y_{t-1}, m r_t, m], with r_t (root_dims,) the
+    given root features and m = 1 where a trajectory is given (then the root part of y_t is replaced by r_t),
+    m = 0 where not (the decoder makes its own root).
+    z (B, Z), first_input (B, F), root (B, horizon, R) or None, given (B,) bool or None (all given when a
+    root is passed) -> (B, horizon, F).
+    """
+
+    def __init__(self, *, feature_dim: int, latent_dim: int, hidden_dim: int, root_dims: int,
+                 layer_norm: bool) -> None:
+        super().__init__()
+        self.root_dims = root_dims
+        self.init_h = nn.Linear(latent_dim, hidden_dim)
+        self.init_c = nn.Linear(latent_dim, hidden_dim)
+        self.cell = LSTMCell(latent_dim + feature_dim + root_dims + 1, hidden_dim, layer_norm=layer_norm)
+        self.out = nn.Linear(hidden_dim, feature_dim)
+
+    def forward(self, z: torch.Tensor, first_input: torch.Tensor, *, horizon: int,
+                root: torch.Tensor | None = None, given: torch.Tensor | None = None) -> torch.Tensor:
+        B, R = z.shape[0], self.root_dims
+        if root is not None and root.shape != (B, horizon, R):
+            raise ValueError(f"root must be (B, horizon, {R}) = {(B, horizon, R)}, got {tuple(root.shape)}")
+        if root is None:
+            m = z.new_zeros(B, 1)
+            root = z.new_zeros(B, horizon, R)
+        else:
+            m = (torch.ones(B, dtype=torch.bool, device=z.device) if given is None else given).to(z.dtype)[:, None]
+        h, c = torch.tanh(self.init_h(z)), self.init_c(z)
+        y = first_input
+        outputs = []
+        for t in range(horizon):
+            r = root[:, t] * m  # (B, R)
+            h, c = self.cell(torch.cat([z, y, r, m], dim=-1), (h, c))
+            y = y + self.out(h)
+            y = torch.cat([y[:, :-R], m * root[:, t] + (1 - m) * y[:, -R:]], dim=-1)  # the given root wins
+            outputs.append(y)
+        return torch.stack(outputs, dim=1)
 
 
 @register_model("behavior", BehaviorConfig, kind="stochastic")
@@ -85,11 +166,15 @@ class BehaviorModel(LatentSampler, nn.Module):
         self.config = config
         c = config
         F, H, Z = c.feature_dim, c.hidden_dim, c.latent_dim
-        self.encoder = LSTMEncoder(F, H, layer_norm=c.layer_norm)
+        self.encoder = LSTMEncoder(2 * F if c.encoder_velocities else F, H, layer_norm=c.layer_norm)
         self.posterior_head = GaussianHead(H, Z)
-        self.decoder = LSTMDecoder(
-            feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=False
-        )
+        if c.root_trajectory:
+            self.decoder = RootTrajectoryDecoder(feature_dim=F, latent_dim=Z, hidden_dim=H, root_dims=c.root_dims,
+                                                 layer_norm=c.layer_norm)
+        else:
+            self.decoder = LSTMDecoder(
+                feature_dim=F, cond_dim=Z, hidden_dim=H, layer_norm=c.layer_norm, feed_condition=c.decoder_feeds_z
+            )
         self.regressor = nn.Sequential(
             nn.Linear(Z, c.regressor_dim),
             nn.ReLU(),
@@ -108,16 +193,26 @@ class BehaviorModel(LatentSampler, nn.Module):
         check_sequences(sequence, None, feature_dim=self.config.feature_dim)
         if sequence.shape[1] < 2:
             raise ValueError(f"a behaviour sequence needs >= 2 frames, got {sequence.shape[1]}")
+        if self.config.encoder_velocities:  # [x_t, x_t - x_{t-1}] (zero velocity at the start posture)
+            velocity = torch.diff(sequence, dim=1, prepend=sequence[:, :1])
+            sequence = torch.cat([sequence, velocity], dim=-1)  # (B, T, 2F)
         return self.posterior_head(self.encoder(sequence)[:, -1])
 
     def behavior_latent(self, sequence: torch.Tensor) -> torch.Tensor:
         """The behaviour representation (posterior mean) of sequence (B, T, F): (B, Z)."""
         return self.behavior_posterior(sequence).mu
 
-    def transfer(self, z: torch.Tensor, start_posture: torch.Tensor, horizon: int) -> torch.Tensor:
-        """Enact behaviour z (B, Z) from start_posture (B, F): (B, horizon, F) (the frames after the start)."""
+    def transfer(self, z: torch.Tensor, start_posture: torch.Tensor, horizon: int,
+                 root: torch.Tensor | None = None) -> torch.Tensor:
+        """Enact behaviour z (B, Z) from start_posture (B, F): (B, horizon, F) (the frames after the start).
+
+        ``root`` (B, horizon, root_dims): the behaviour's root trajectory for a ``root_trajectory`` model (the
+        generated root is then this one; None = the model generates its own); ignored by other models.
+        """
         if start_posture.ndim != 2 or start_posture.shape[-1] != self.config.feature_dim:
             raise ValueError(f"start_posture must be (B, {self.config.feature_dim}), got {tuple(start_posture.shape)}")
+        if self.config.root_trajectory:
+            return self.decoder(z, start_posture, horizon=horizon, root=root)
         return self.decoder(z, start_posture, horizon=horizon)
 
     # -- model protocol --------------------------------------------------------------------------
@@ -144,8 +239,14 @@ class BehaviorModel(LatentSampler, nn.Module):
         post = self.encode(obs, future)
         start = obs[:, -1]  # (B, F)
         z = reparameterize(post, torch.randn_like(post.mu))
-        pred = self.decoder(z, start, horizon=future.shape[1])  # (B, Tf, F)
-        recon = reconstruction_mse(pred, future)
+        if c.root_trajectory:  # the true root path given to a random share of the sequences
+            given = torch.rand(future.shape[0], device=future.device) < c.root_given_prob
+            pred = self.decoder(z, start, horizon=future.shape[1], root=future[..., -c.root_dims:], given=given)
+        else:
+            pred = self.decoder(z, start, horizon=future.shape[1])  # (B, Tf, F)
+        recon = self.reconstruction_error(pred, future)
+        if c.motion_stats_weight > 0:
+            recon = recon + c.motion_stats_weight * motion_stats_error(pred, future, start)
         kl = kl_std_normal(post).mean()
         reg_err = (self.regressor(z) - start).pow(2).sum(dim=-1).mean()
         gamma_kl = float(self.kl_multiplier)
@@ -160,6 +261,16 @@ class BehaviorModel(LatentSampler, nn.Module):
             "regressor_error": float(reg_err.detach()),
         }
         return LossOutput(total=total, terms=terms)
+
+    def reconstruction_error(self, pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+        """Summed squared error of (B, T, F) sequences, averaged over the batch, the last ``root_dims``
+        features weighted by ``root_weight`` (the plain :func:`reconstruction_mse` when it is 1)."""
+        c = self.config
+        if c.root_weight == 1.0 or c.root_dims <= 0:
+            return reconstruction_mse(pred, target)
+        weight = torch.ones(pred.shape[-1], dtype=pred.dtype, device=pred.device)
+        weight[-c.root_dims:] = c.root_weight
+        return ((pred - target).pow(2) * weight).sum(dim=(1, 2)).mean()
 
     def auxiliary_loss(self, obs: torch.Tensor, future: torch.Tensor) -> LossOutput:
         """Eq. 2 for the regressor: its start-posture error from a detached posterior sample."""

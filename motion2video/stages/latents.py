@@ -59,11 +59,55 @@ def behavior_latents(model: BehaviorModel, features: np.ndarray) -> np.ndarray:
     return model.behavior_latent(as_model_input(features, model)).cpu().numpy()
 
 
+def rigid_bones(layout: str, sequences: np.ndarray) -> np.ndarray:
+    """Re-enactments with the bone lengths of their start posture: (K, 1 + H, 17, 3) world joints, every
+    frame's bones rescaled along their own directions to frame 0's lengths (pelvis, root trajectory and joint
+    directions kept; :func:`motion2video.core.skeletons.with_bone_lengths`). The decoder predicts joint
+    positions, not rotations, so its bones stretch by several per cent without this. Other layouts (2D
+    pixels, faces) are returned as they are. The generated frames' ankles are then kept at or above the
+    start posture's lower ankle (:func:`motion2video.core.skeletons.feet_above`, leg IK): a pelvis that drops
+    bends the knees instead of pushing the feet into the ground."""
+    if layout != "body3d":
+        return sequences
+    from motion2video.core.skeletons import L_ANKLE, R_ANKLE, bone_lengths, feet_above, with_bone_lengths
+
+    seq = np.asarray(sequences)
+    out = []
+    for s in seq:
+        rigid = with_bone_lengths(s, bone_lengths(s[0]))
+        floor = float(min(s[0, R_ANKLE, 2], s[0, L_ANKLE, 2]))  # the start posture's lower ankle
+        out.append(np.concatenate([rigid[:1], feet_above(rigid[1:], floor)]))
+    return np.stack(out).astype(seq.dtype, copy=False)
+
+
+def behavior_root(model: BehaviorModel, source: np.ndarray, start: np.ndarray) -> np.ndarray | None:
+    """The root trajectory a ``root_trajectory`` behaviour model re-enacts along, or None for other models.
+
+    Args:
+        source: (N, 1 + H, F) normalised behaviour sequences (each anchored at its first frame).
+        start: (N, F) normalised start postures of the re-enactments.
+    Returns:
+        (N, H, R) the source's root features after its start (x, y relative to its start in its heading frame,
+        which is the same relative path in the target's heading frame), its height shifted by the difference
+        of the start heights (a jump rises as high above the target's start as above the source's).
+    """
+    c = model.config
+    if not getattr(c, "root_trajectory", False):
+        return None
+    r = c.root_dims
+    root = np.array(source[:, 1:, -r:], np.float32, copy=True)
+    root[..., -1] += (start[:, -1] - source[:, 0, -1])[:, None]
+    return root
+
+
 @torch.no_grad()
-def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int) -> np.ndarray:
-    """Enact behaviours z (N, Z) from normalised start postures (N, F): (N, horizon, F) float32."""
+def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int,
+            root: np.ndarray | None = None) -> np.ndarray:
+    """Enact behaviours z (N, Z) from normalised start postures (N, F): (N, horizon, F) float32, along the root
+    trajectory ``root`` (N, horizon, R) for a ``root_trajectory`` model (:func:`behavior_root`)."""
     model.eval()
-    return model.transfer(as_model_input(z, model), as_model_input(start, model), horizon).cpu().numpy()
+    r = None if root is None else as_model_input(root, model)
+    return model.transfer(as_model_input(z, model), as_model_input(start, model), horizon, root=r).cpu().numpy()
 
 
 def analogy_model(bundle: ModelBundle) -> torch.nn.Module:

@@ -1,0 +1,120 @@
+"""Behaviour signatures on real clips, and the known-answer transfer benchmark's parts (issue 13)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motion2video.core.rotations import rotation_z
+from motion2video.evaluation import signatures as S
+from motion2video.evaluation import transfer_benchmark as B
+
+
+@pytest.fixture(scope="module")
+def clip(mocap_dir):
+    cache = {}
+
+    def get(name: str) -> np.ndarray:
+        if name not in cache:
+            cache[name] = B.load_clip_25(str(mocap_dir), name)
+        return cache[name]
+
+    return get
+
+
+def moved(joints: np.ndarray, angle: float, shift) -> np.ndarray:
+    return joints @ rotation_z(np.asarray(angle)).T + np.asarray(shift)
+
+
+def test_a_jump_raises_the_pelvis_and_a_walk_does_not(clip):
+    jump = clip("cmu/02_04.bvh")[0:49]
+    walk = clip("cmu/07_01.bvh")[8:57]
+    assert S.pelvis_excursion(jump) > 0.5
+    assert S.pelvis_excursion(walk) < 0.15
+
+
+def test_running_is_faster_than_walking(clip):
+    run = S.root_speed(clip("cmu/02_03.bvh")[0:33], 25.0)
+    walk = S.root_speed(clip("cmu/07_01.bvh")[8:57], 25.0)
+    assert 2.0 < run < 3.5 and 0.9 < walk < 1.7
+
+
+def test_an_arabesque_lifts_the_ankle_higher_than_walking(clip):
+    dance = S.kick_height(clip("cmu/05_14.bvh")[64:113])
+    walk = S.kick_height(clip("cmu/07_01.bvh")[8:57])
+    assert dance > 0.55 and walk < 0.3 and dance > 2 * walk
+
+
+def test_a_spin_turns_a_full_circle_and_a_straight_walk_does_not(clip):
+    assert S.heading_change(clip("acrnn/indian_04.bvh")[432:481]) > 5.0
+    assert S.heading_change(clip("cmu/07_01.bvh")[8:57]) < 0.4
+
+
+def test_dance_moves_the_limbs_faster_than_standing(clip):
+    assert S.limb_speed(clip("cmu/05_14.bvh")[72:121], 25.0) > 2.0
+    assert S.limb_speed(clip("cmu/16_01.bvh")[8:57], 25.0) < 0.6
+
+
+def test_signatures_ignore_where_the_body_stands_and_faces(clip):
+    x = clip("cmu/131_03.bvh")[124:173]
+    y = moved(x, 1.1, (3.0, -2.0, 0.0))
+    for name in S.SIGNATURES:
+        assert S.signature(name, y, 25.0) == pytest.approx(S.signature(name, x, 25.0), rel=1e-9, abs=1e-9)
+    assert S.posture_error(y[:1], x[0]) < 1e-9
+    assert S.posture_error(x[20:21], x[0]) > 0.02
+
+
+def test_real_bones_keep_their_length_and_stretched_ones_do_not(clip):
+    x = clip("cmu/02_04.bvh")[0:49]
+    assert S.bone_length_spread(x) < 0.01
+    stretched = x.copy()
+    stretched[:, S.L_WRIST] += np.linspace(0, 0.1, len(x))[:, None]
+    assert S.bone_length_spread(stretched) > 0.05
+
+
+def test_bad_shapes_are_refused():
+    with pytest.raises(ValueError, match="17, 3"):
+        S.pelvis_excursion(np.zeros((5, 16, 3)))
+    with pytest.raises(ValueError, match="unknown signature"):
+        S.signature("wobble", np.zeros((5, 17, 3)), 25.0)
+
+
+def test_every_case_holds_its_behaviour_and_is_reenacted_from_other_subjects(clip):
+    for case in B.CASES:
+        data = clip(case.clip)
+        assert case.start + 1 + case.horizon <= len(data), case
+        targets = B.targets_for(case)
+        assert len(targets) >= 2 and all(t[2] != B.SUBJECT_OF[case.clip] for t in targets)
+    jumps = [c for c in B.CASES if c.behaviour == "jump"]
+    for case in jumps:
+        src = clip(case.clip)[case.start:case.start + 1 + case.horizon]
+        assert S.pelvis_excursion(src) > 0.25, case
+
+
+def test_copying_the_source_carries_every_signature_but_not_the_start_posture(mocap_dir):
+    case = B.CASES[0]
+    results = B.run_benchmark(str(mocap_dir), cases=(case,))
+    assert {r.method for r in results} == {"copy"}
+    for r in results:
+        assert r.ratio == pytest.approx(1.0, abs=1e-9)
+        assert r.start_error > 0.05 and r.bone_spread < 0.01
+
+
+
+def test_feet_above_bends_the_knees_of_a_sinking_body_and_keeps_its_bones(clip):
+    """A real standing posture pushed 0.25 m down: leg IK puts the ankles back on the floor, the knees bend
+    (the pelvis comes closer to the ankles by the drop), every bone keeps its length; a walk whose ankles
+    stay above the floor is unchanged."""
+    from motion2video.core.skeletons import L_ANKLE, R_ANKLE, feet_above
+
+    walk = clip("cmu/07_01.bvh")[8:57]
+    floor = float(walk[:, [R_ANKLE, L_ANKLE], 2].min())
+    np.testing.assert_array_equal(feet_above(walk, floor), walk)
+    stand = clip("cmu/02_04.bvh")[:1]
+    sunk = stand - np.array([0.0, 0.0, 0.25])
+    fixed = feet_above(sunk, float(stand[0, [R_ANKLE, L_ANKLE], 2].min()))
+    assert fixed[0, [R_ANKLE, L_ANKLE], 2].min() >= stand[0, [R_ANKLE, L_ANKLE], 2].min() - 1e-9
+    np.testing.assert_allclose(S.bone_lengths(fixed), S.bone_lengths(stand), atol=1e-9)
+    np.testing.assert_array_equal(fixed[0, 0], sunk[0, 0])  # the pelvis stays where it was put
+    drop = (stand[0, 0, 2] - stand[0, R_ANKLE, 2]) - (fixed[0, 0, 2] - fixed[0, R_ANKLE, 2])
+    assert drop == pytest.approx(0.25, abs=0.03)
