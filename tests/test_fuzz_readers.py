@@ -244,7 +244,8 @@ def _mutated(value, how: str, rng: np.random.Generator):
     elif how == "strings":
         a = a.astype(str)
     elif how == "huge":
-        a = a * 1e300 if a.dtype.kind == "f" else np.float64(1e300)
+        with np.errstate(over="ignore"):  # float32 * 1e300 is inf: one of the values wanted here
+            a = a * 1e300 if a.dtype.kind == "f" else np.float64(1e300)
     elif how == "negative":
         a = -np.abs(a) - 1 if a.dtype.kind in "fi" else a
     elif how == "zero":
