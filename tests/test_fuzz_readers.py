@@ -212,6 +212,14 @@ ARRAY_VALUES = st.sampled_from(["nan", "inf", "empty", "drop_axis", "add_axis", 
 
 
 def _mutate_array(value, how: str, rng: np.random.Generator):
+    """One array-level mutation of ``value`` (a mutation that does not apply to this array returns it as is)."""
+    try:
+        return _mutated(value, how, rng)
+    except ValueError:  # e.g. reshaping an empty array
+        return value
+
+
+def _mutated(value, how: str, rng: np.random.Generator):
     if isinstance(value, dict) or how == "missing":
         return value
     a = np.asarray(value)
@@ -225,8 +233,10 @@ def _mutate_array(value, how: str, rng: np.random.Generator):
         a.flat[rng.integers(a.size)] = -np.inf
     elif how == "empty":
         a = a.reshape(-1)[:0]
-    elif how == "drop_axis" and a.ndim:
-        a = a.reshape(a.shape[0], -1) if a.ndim > 1 else a[:1].reshape(())
+    elif how == "drop_axis" and a.ndim > 1:
+        a = a.reshape(a.shape[0], -1)
+    elif how == "drop_axis" and a.ndim == 1 and a.size:
+        a = a[:1].reshape(())
     elif how == "add_axis":
         a = a[None]
     elif how == "wrong_width" and a.ndim >= 2:
@@ -234,7 +244,8 @@ def _mutate_array(value, how: str, rng: np.random.Generator):
     elif how == "strings":
         a = a.astype(str)
     elif how == "huge":
-        a = a * 1e300 if a.dtype.kind == "f" else np.float64(1e300)
+        with np.errstate(over="ignore"):  # float32 * 1e300 is inf: one of the values wanted here
+            a = a * 1e300 if a.dtype.kind == "f" else np.float64(1e300)
     elif how == "negative":
         a = -np.abs(a) - 1 if a.dtype.kind in "fi" else a
     elif how == "zero":
