@@ -229,8 +229,10 @@ class VideoWriter:
             if self.gif:
                 even_h, even_w = self.height, self.width
             self._log = tempfile.TemporaryFile()
+            # Its own session: Ctrl-C reaches this process, which stops the encoder and removes the temporary
+            # file; an encoder interrupted on its own would fail the write before the interrupt is seen.
             self._proc = subprocess.Popen(self._command(even_w, even_h), stdin=subprocess.PIPE,
-                                          stdout=subprocess.DEVNULL, stderr=self._log)
+                                          stdout=subprocess.DEVNULL, stderr=self._log, start_new_session=True)
         elif clip.shape[1:3] != (self.height, self.width):
             raise ValueError(f"frame size changed from {self.width}x{self.height} to {clip.shape[2]}x{clip.shape[1]}")
         if not self.gif:

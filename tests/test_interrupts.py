@@ -25,10 +25,18 @@ def _temporaries(folder: Path) -> list[Path]:
     return [p for p in folder.rglob(".*") if p.is_file() and (".tmp" in p.name or ".partial" in p.name)]
 
 
+def _as_in_a_terminal() -> None:
+    """In the child: SIGINT as a terminal's foreground job gets it. A test runner started in the background of
+    a non-interactive shell (CI, `make test &`) passes SIGINT on as ignored, and Python then never raises
+    KeyboardInterrupt."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(argv: list[str], cwd: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(REPO), "TQDM_DISABLE": "1"}
     return subprocess.Popen([sys.executable, "-m", "motion2video.cli", *argv], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=_as_in_a_terminal)
 
 
 def _wait_until(proc: subprocess.Popen, ready, timeout: float = 240.0) -> None:
