@@ -26,7 +26,6 @@ import json
 import os
 import shlex
 import signal
-import subprocess
 import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -36,7 +35,7 @@ from pathlib import Path
 from typing import Callable, Iterable
 
 from motion2video.errors import InputError
-from motion2video.video import ENCODER_THREADS_ENV
+from motion2video.video import ENCODER_ENV, ENCODER_THREADS_ENV, video_frame_count
 
 ENGINES = ("local", "ray")
 COMMANDS = ("render", "sample", "synthesize", "transfer", "analogy")
@@ -276,36 +275,6 @@ def _drop_output_option(args: list[str], output: str) -> list[str]:
 
 # --- one job, in a worker -----------------------------------------------------------------------------
 
-def video_frame_count(path: str | Path, *, decode_first: bool = True) -> int | None:
-    """The number of frames of an mp4 / GIF that ffmpeg reads back completely (its packets, and, with
-    ``decode_first``, the first frame decoded), or None when the file is missing, truncated or not a video.
-    A job's own fresh output skips the decode (its encoder just finished without an error): one ffmpeg start
-    less per job, which is a visible share of short jobs."""
-    import imageio_ffmpeg
-
-    path = Path(path)
-    if not path.is_file() or path.stat().st_size == 0:
-        return None
-    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-xerror", "-i", str(path), "-map", "0:v:0",
-           "-c", "copy", "-f", "framecrc", "-"]
-    result = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    if result.returncode != 0 or result.stderr.strip():
-        return None
-    count = sum(1 for line in result.stdout.splitlines() if line and not line.startswith("#"))
-    if count == 0:
-        return None
-    if not decode_first:
-        return count
-    try:
-        reader = imageio_ffmpeg.read_frames(str(path))
-        next(reader)  # metadata
-        next(reader)  # the first frame decodes
-        reader.close()
-    except (RuntimeError, StopIteration, OSError):
-        return None
-    return count
-
-
 def temp_files_of(output: str | Path) -> list[Path]:
     """Temporary files the atomic writers leave for ``output`` when killed (``.STEM.*.tmpSUFFIX``)."""
     output = Path(output)
@@ -327,7 +296,10 @@ def init_worker() -> None:
     command modules) imported once, so every job after the first pays no import cost."""
     global _PARSER
     os.environ.setdefault("TQDM_DISABLE", "1")
-    os.environ.setdefault(ENCODER_THREADS_ENV, "1")  # one encoder thread per worker: the workers fill the cores
+    # A worker is one core: it encodes in its own process (no ffmpeg process beside it) with one x264 thread,
+    # and the workers together fill the cores.
+    os.environ.setdefault(ENCODER_ENV, "pyav")
+    os.environ.setdefault(ENCODER_THREADS_ENV, "1")
     if _PARSER is None:
         import cv2
 

@@ -65,6 +65,20 @@ def check_ffmpeg() -> Check:
     return Check("ffmpeg", True, f"{first[0] if first else '?'} ({exe})")
 
 
+def check_pyav() -> Check:
+    """PyAV and its libx264: the in-process mp4 encoder of batch workers and the read-back checks."""
+    try:
+        import av
+
+        has_x264 = "libx264" in av.codecs_available
+    except Exception as err:  # noqa: BLE001 - any failure here is the finding
+        return Check("PyAV", False, f"not usable ({type(err).__name__}: {err})", "pip install av")
+    if not has_x264:
+        return Check("PyAV", False, f"{av.__version__} has no libx264 encoder",
+                     "pip install a PyAV wheel from PyPI (they bundle libx264)")
+    return Check("PyAV", True, f"{av.__version__} with libx264 (libavcodec {'.'.join(map(str, av.library_versions['libavcodec']))})")
+
+
 def probe_gl(platform: str) -> Check:
     """Render one triangle with ``platform`` in a child process (see the module docstring)."""
     from renderers.mesh import GL_LIBRARIES, gl_unavailable_message
@@ -160,7 +174,7 @@ def check_checkpoints() -> list[Check]:
 
 
 def run_checks() -> list[Check]:
-    checks = [check_python(), check_torch(), check_ffmpeg(), check_gl_default()]
+    checks = [check_python(), check_torch(), check_ffmpeg(), check_pyav(), check_gl_default()]
     checks += [probe_gl(platform) for platform in ("osmesa", "egl")]
     checks.append(check_anny_cache())
     checks += check_checkpoints()

@@ -1,8 +1,16 @@
 """Video and image writing, plus the layouts used to show results (borders, labels, grids, contact sheets).
 
-- mp4: H.264 (libx264, yuv420p) by piping raw RGB frames into imageio-ffmpeg's ffmpeg binary (its exit
-  status is checked: a failed encode raises with ffmpeg's message), with the frame rate passed as an exact
-  fraction (``Fraction(fps).limit_denominator(100000)``: 30000/1001 stays 30000/1001). Odd frame sizes are
+- mp4: H.264 (libx264, yuv420p) with the frame rate passed as an exact fraction
+  (``Fraction(fps).limit_denominator(100000)``: 30000/1001 stays 30000/1001), by one of two encoders:
+
+  - ``"ffmpeg"`` (the default): raw RGB frames are piped into imageio-ffmpeg's ffmpeg binary, a separate
+    process, so rendering and encoding overlap on two cores (its exit status is checked: a failed encode
+    raises with ffmpeg's message);
+  - ``"pyav"``: the frames are encoded in this process by PyAV's libx264 (no second process, no pipe:
+    about a third less CPU per frame). ``motion2video batch`` workers use it: a worker is then exactly one
+    core, and N workers fill N cores.
+
+  Chosen per writer (``encoder=``) or for the process by ``$MOTION2VIDEO_ENCODER``. Odd frame sizes are
   padded to even by repeating the last row / column (yuv420p needs even sizes); nothing is rescaled.
 - GIF: by extension, through the same ffmpeg binary with a palette per frame (so it streams too). GIF
   stores frame delays in 1/100 s, so its rate is only approximate (30 fps is stored as 3/100 s per frame).
@@ -41,6 +49,9 @@ X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium"
 # Encoder threads of libx264 (default: ffmpeg's own choice, about one per core). `motion2video batch` sets 1
 # in its workers: the workers already fill the cores, and x264's extra threads only contend with them.
 ENCODER_THREADS_ENV = "MOTION2VIDEO_ENCODER_THREADS"
+# The mp4 encoder when a writer names none: "ffmpeg" (a separate process) or "pyav" (in this process).
+ENCODER_ENV = "MOTION2VIDEO_ENCODER"
+ENCODERS = ("ffmpeg", "pyav")
 GREEN = (0, 200, 0)  # observed frames
 RED = (220, 0, 0)  # predicted frames
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
@@ -137,6 +148,7 @@ def write_video(
     n_frames: int | None = None,
     crf: int = 18,
     preset: str = "medium",
+    encoder: str | None = None,
 ) -> Path:
     """Write an mp4 (H.264, yuv420p) or a GIF, chosen by the file extension; atomically and streaming.
 
@@ -144,17 +156,18 @@ def write_video(
         path: destination ``.mp4`` or ``.gif``.
         frames: a (T, H, W, 3) uint8 RGB array, or any iterable of (H, W, 3) frames and/or (t, H, W, 3)
             chunks (a generator is consumed once, chunk by chunk: only one chunk is in memory at a time).
-        fps: frames per second (float or Fraction), passed to ffmpeg as an exact fraction.
+        fps: frames per second (float or Fraction), passed to the encoder as an exact fraction.
         n_frames: the expected frame count, when known; a different count raises ValueError and writes
             nothing.
         crf: x264 constant rate factor (0 lossless .. 51 worst; mp4 only).
         preset: x264 preset (``"ultrafast"`` .. ``"veryslow"``; mp4 only).
+        encoder: ``"ffmpeg"`` or ``"pyav"`` (mp4 only; default ``$MOTION2VIDEO_ENCODER`` or ``"ffmpeg"``).
     Returns:
         The written path.
     """
     if isinstance(frames, np.ndarray):
         frames = [_check_clip(frames)]
-    with VideoWriter(path, fps, crf=crf, preset=preset) as writer:
+    with VideoWriter(path, fps, crf=crf, preset=preset, encoder=encoder) as writer:
         for chunk in frames:
             writer.write(chunk)
         if writer.num_frames == 0:
@@ -164,14 +177,119 @@ def write_video(
     return writer.path
 
 
+def _encoder_threads() -> int:
+    """libx264 threads from ``$MOTION2VIDEO_ENCODER_THREADS``; 0 = the encoder's own choice."""
+    threads = os.environ.get(ENCODER_THREADS_ENV, "").strip()
+    return int(threads) if threads.isdigit() else 0
+
+
+class _FFmpegProcess:
+    """Frames piped as raw RGB into a separate ffmpeg process writing ``tmp`` (mp4 or GIF)."""
+
+    def __init__(self, tmp: Path, path: Path, width: int, height: int, rate: Fraction, *, gif: bool,
+                 crf: int, preset: str):
+        self.path = path
+        head = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-hide_banner", "-loglevel", "error",
+                "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}",
+                "-r", f"{rate.numerator}/{rate.denominator}", "-i", "-", "-an"]
+        if gif:
+            cmd = head + ["-vf", "split[a][b];[a]palettegen=stats_mode=single:reserve_transparent=0[p];"
+                          "[b][p]paletteuse=new=1:dither=none", "-loop", "0", "-f", "gif", str(tmp)]
+        else:
+            threads = _encoder_threads()
+            cmd = head + ["-c:v", "libx264", *(["-threads", str(threads)] if threads else []), "-preset", preset,
+                          "-crf", str(crf), "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", str(tmp)]
+        self._log = tempfile.TemporaryFile()
+        # Its own session: Ctrl-C reaches this process, which stops the encoder and removes the temporary
+        # file; an encoder interrupted on its own would fail the write before the interrupt is seen.
+        self._proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=self._log,
+                                      start_new_session=True)
+
+    def write(self, clip: np.ndarray) -> None:
+        try:
+            self._proc.stdin.write(np.ascontiguousarray(clip).tobytes())
+        except BrokenPipeError:
+            pass  # ffmpeg quit early; its exit status and message are reported by finish()
+
+    def finish(self) -> None:
+        try:
+            self._proc.stdin.close()
+        except BrokenPipeError:
+            pass
+        code = self._proc.wait()
+        if code != 0:
+            self._log.seek(0)
+            message = " ".join(self._log.read().decode("utf-8", "replace").split())[-500:]
+            raise RuntimeError(f"ffmpeg failed writing {self.path} (exit {code}): ...{message}")
+
+    def close(self) -> None:
+        """Stop the encoder if it still runs (after a failure or an interrupt) and release its log."""
+        if self._proc.poll() is None:
+            self._proc.kill()
+            self._proc.wait()
+        self._log.close()
+
+
+class _PyAVEncoder:
+    """Frames encoded in this process by PyAV's libx264 into an mp4 at ``tmp``.
+
+    Frame i has pts i in a time base of 1 / rate (kept here: the stream's own time base becomes the mp4
+    track's once the header is written), so the muxer stores the exact rate, the same packet timestamps as
+    the ffmpeg process writes (:func:`probe_frame_rate` reads them back).
+    """
+
+    def __init__(self, tmp: Path, path: Path, width: int, height: int, rate: Fraction, *, crf: int, preset: str):
+        import av
+
+        self.path, self._av, self._next_pts, self._time_base = path, av, 0, Fraction(1) / rate
+        self._container = av.open(str(tmp), "w", format="mp4", options={"movflags": "+faststart"})
+        try:
+            self._stream = self._container.add_stream("libx264", rate=rate)
+            self._stream.width, self._stream.height, self._stream.pix_fmt = width, height, "yuv420p"
+            self._stream.time_base = self._time_base
+            self._stream.codec_context.thread_count = _encoder_threads()
+            self._stream.options = {"crf": str(crf), "preset": preset}
+        except self._av.FFmpegError as err:
+            self.close()
+            raise self._error(err) from None
+
+    def _error(self, err: Exception) -> RuntimeError:
+        return RuntimeError(f"libx264 (in-process) failed writing {self.path}: {' '.join(str(err).split())[:500]}")
+
+    def write(self, clip: np.ndarray) -> None:
+        try:
+            for image in clip:
+                frame = self._av.VideoFrame.from_ndarray(np.ascontiguousarray(image), format="rgb24")
+                frame.pts, frame.time_base = self._next_pts, self._time_base
+                self._next_pts += 1
+                self._container.mux(self._stream.encode(frame))
+        except self._av.FFmpegError as err:
+            raise self._error(err) from None
+
+    def finish(self) -> None:
+        try:
+            self._container.mux(self._stream.encode(None))  # flush the frames x264 still holds
+            self._container.close()
+        except self._av.FFmpegError as err:
+            raise self._error(err) from None
+
+    def close(self) -> None:
+        try:
+            self._container.close()
+        except self._av.FFmpegError:
+            pass  # closing after a failure: the temporary file is removed anyway
+
+
 class VideoWriter:
     """A streaming, atomic video writer: frames go to an encoder as they come, the file appears on success.
 
-    mp4 frames are piped into ffmpeg (libx264, yuv420p; odd sizes padded to even by repeating the last row /
-    column). GIF frames are piped into ffmpeg's GIF encoder with a palette computed per frame
-    (``palettegen=stats_mode=single``), so GIF output streams too. The output goes to a temporary file in
-    the destination's folder and is renamed onto ``path`` when the ``with`` block ends normally; on an
-    exception or interrupt the encoder is killed and the temporary file removed.
+    mp4 frames go to libx264 (yuv420p; odd sizes padded to even by repeating the last row / column), either
+    piped into a separate ffmpeg process (``encoder="ffmpeg"``, the default) or encoded in this process by
+    PyAV (``encoder="pyav"``; see the module docstring for when each is the better choice). GIF frames are
+    piped into ffmpeg's GIF encoder with a palette computed per frame (``palettegen=stats_mode=single``), so
+    GIF output streams too. The output goes to a temporary file in the destination's folder and is renamed
+    onto ``path`` when the ``with`` block ends normally; on an exception or interrupt the encoder is stopped
+    and the temporary file removed.
 
     Usage::
 
@@ -180,11 +298,12 @@ class VideoWriter:
                 writer.write(chunk)
         writer.num_frames, writer.width, writer.height
 
-    Raises InputError (naming the path) on a bad extension, fps, crf, preset or an unwritable folder, before
-    anything is encoded; RuntimeError with ffmpeg's message when the encode fails.
+    Raises InputError (naming the path) on a bad extension, fps, crf, preset, encoder or an unwritable
+    folder, before anything is encoded; RuntimeError with the encoder's message when the encode fails.
     """
 
-    def __init__(self, path: str | Path, fps: float | Fraction, *, crf: int = 18, preset: str = "medium"):
+    def __init__(self, path: str | Path, fps: float | Fraction, *, crf: int = 18, preset: str = "medium",
+                 encoder: str | None = None):
         self.path = Path(path)
         suffix = self.path.suffix.lower()
         if suffix not in VIDEO_SUFFIXES:
@@ -195,83 +314,57 @@ class VideoWriter:
             raise InputError(f"crf must be in 0..51, got {crf}", self.path)
         if suffix == ".mp4" and preset not in X264_PRESETS:
             raise InputError(f"unknown x264 preset {preset!r}; choose one of {', '.join(X264_PRESETS)}", self.path)
+        encoder = encoder or os.environ.get(ENCODER_ENV, "").strip() or "ffmpeg"
+        if encoder not in ENCODERS:
+            raise InputError(f"unknown encoder {encoder!r} (from the argument or ${ENCODER_ENV}); choose one of "
+                             f"{', '.join(ENCODERS)}", self.path)
         self.crf, self.preset, self.gif = int(crf), str(preset), suffix == ".gif"
+        self.encoder = "ffmpeg" if self.gif else encoder
         self.num_frames = 0
         self.width = self.height = 0
         self._tmp: Path | None = None
-        self._proc: subprocess.Popen | None = None
-        self._log = None
+        self._sink: _FFmpegProcess | _PyAVEncoder | None = None
 
     def __enter__(self) -> "VideoWriter":
         self._tmp = _open_temp(self.path)
         return self
 
-    def _command(self, width: int, height: int) -> list[str]:
-        rate = f"{self.rate.numerator}/{self.rate.denominator}"
-        head = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-hide_banner", "-loglevel", "error",
-                "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", rate, "-i", "-", "-an"]
-        if self.gif:
-            return head + ["-vf", "split[a][b];[a]palettegen=stats_mode=single:reserve_transparent=0[p];"
-                           "[b][p]paletteuse=new=1:dither=none", "-loop", "0", "-f", "gif", str(self._tmp)]
-        threads = os.environ.get(ENCODER_THREADS_ENV, "").strip()
-        threading = ["-threads", threads] if threads.isdigit() and int(threads) > 0 else []
-        return head + ["-c:v", "libx264", *threading, "-preset", self.preset, "-crf", str(self.crf),
-                       "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", str(self._tmp)]
+    def _open_sink(self, width: int, height: int) -> _FFmpegProcess | _PyAVEncoder:
+        if self.encoder == "pyav":
+            return _PyAVEncoder(self._tmp, self.path, width, height, self.rate, crf=self.crf, preset=self.preset)
+        return _FFmpegProcess(self._tmp, self.path, width, height, self.rate, gif=self.gif, crf=self.crf,
+                              preset=self.preset)
 
     def write(self, frames: np.ndarray) -> None:
         """Encode one (H, W, 3) frame or a (t, H, W, 3) chunk of uint8 RGB frames (all the same size)."""
         if self._tmp is None:
             raise RuntimeError("VideoWriter.write outside its with-block")
         clip, _ = _clip_or_image(frames)
-        if self._proc is None:
+        if self._sink is None:
             self.height, self.width = clip.shape[1:3]
-            even_h, even_w = self.height + self.height % 2, self.width + self.width % 2
             if self.gif:
-                even_h, even_w = self.height, self.width
-            self._log = tempfile.TemporaryFile()
-            # Its own session: Ctrl-C reaches this process, which stops the encoder and removes the temporary
-            # file; an encoder interrupted on its own would fail the write before the interrupt is seen.
-            self._proc = subprocess.Popen(self._command(even_w, even_h), stdin=subprocess.PIPE,
-                                          stdout=subprocess.DEVNULL, stderr=self._log, start_new_session=True)
+                self._sink = self._open_sink(self.width, self.height)
+            else:
+                self._sink = self._open_sink(self.width + self.width % 2, self.height + self.height % 2)
         elif clip.shape[1:3] != (self.height, self.width):
             raise ValueError(f"frame size changed from {self.width}x{self.height} to {clip.shape[2]}x{clip.shape[1]}")
-        if not self.gif:
-            clip = pad_to_even(clip)
-        try:
-            self._proc.stdin.write(np.ascontiguousarray(clip).tobytes())
-        except BrokenPipeError:
-            pass  # ffmpeg quit early; its exit status and message are reported on close
+        self._sink.write(clip if self.gif else pad_to_even(clip))
         self.num_frames += len(clip)
-
-    def _finish(self) -> None:
-        proc, log = self._proc, self._log
-        try:
-            proc.stdin.close()
-        except BrokenPipeError:
-            pass
-        code = proc.wait()
-        if code != 0:
-            log.seek(0)
-            message = " ".join(log.read().decode("utf-8", "replace").split())[-500:]
-            raise RuntimeError(f"ffmpeg failed writing {self.path} (exit {code}): ...{message}")
 
     def __exit__(self, exc_type, exc, tb) -> None:
         tmp, self._tmp = self._tmp, None
         try:
             if exc_type is None:
-                if self._proc is None:
+                if self._sink is None:
                     raise ValueError("frames must have shape (T, H, W, 3) with T >= 1, got no frames")
-                self._finish()
+                self._sink.finish()
                 os.replace(tmp, self.path)
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
         finally:
-            if self._proc is not None and self._proc.poll() is None:
-                self._proc.kill()
-                self._proc.wait()
-            if self._log is not None:
-                self._log.close()
+            if self._sink is not None:
+                self._sink.close()
             if exc_type is not None:
                 tmp.unlink(missing_ok=True)
 
@@ -299,6 +392,40 @@ def probe_frame_rate(path: str | Path) -> Fraction:
             duration = int(line.split(",")[3])
             return 1 / (time_base * duration)
     raise InputError("the video has no frames", path)
+
+
+def video_frame_count(path: str | Path, *, decode_first: bool = True) -> int | None:
+    """The number of frames of an mp4 / GIF that reads back completely, or None when the file is missing,
+    empty, truncated, not of the container its extension says, or has no video.
+
+    Read in this process through PyAV: every packet of the first video stream is demuxed (none may be
+    corrupt), and with ``decode_first`` the first frame is decoded too. ``motion2video batch`` checks a job's
+    own fresh output without the decode (its encoder just finished without an error) and an existing output
+    it would skip with it.
+    """
+    import av
+
+    path = Path(path)
+    container_of = {".mp4": "mp4", ".gif": "gif"}
+    wanted = container_of.get(path.suffix.lower())
+    if wanted is None or not path.is_file() or path.stat().st_size == 0:
+        return None
+    count, decoded = 0, not decode_first
+    try:
+        with av.open(str(path)) as container:
+            if wanted not in container.format.name.split(",") or not container.streams.video:
+                return None
+            for packet in container.demux(container.streams.video[0]):
+                if packet.size == 0:
+                    continue  # the demuxer's end-of-stream marker
+                if packet.is_corrupt:
+                    return None
+                count += 1
+                if not decoded and packet.decode():
+                    decoded = True
+    except (av.FFmpegError, OSError, ValueError):
+        return None
+    return count if count and decoded else None
 
 
 def read_video(path: str | Path) -> tuple[np.ndarray, float]:

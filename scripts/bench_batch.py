@@ -5,8 +5,11 @@
 The same jobs (``render CLIP --style skeleton --size 256 --fps 30 --frames F`` for the first ``--clips``
 BVH clips of ``../shared/data/mocap/cmu``, every output written, ``--force``) run on:
 
-- the local pool with 1 worker and with 2 workers,
+- the local pool with 1 worker and with 2 workers, as ``motion2video batch`` runs them (each worker encodes
+  in its own process through PyAV, with one x264 thread),
 - Ray (a local instance with 2 CPUs) with 2 workers,
+- for comparison, the local pool with 1 and 2 workers whose encoder is a separate ffmpeg process per job
+  (``MOTION2VIDEO_ENCODER=ffmpeg``, what interactive commands use, and what batch used before),
 
 alternating, ``--repeats`` times each; the median wall time is kept. Every engine is started, its
 workers warmed up (processes started, commands imported) and one untimed round of 4 real jobs run before
@@ -17,6 +20,8 @@ Keys:
 - ``workers2_vs_1``: wall(1 local worker) / wall(2 local workers); target >= 1.7 on an idle 2-core machine.
 - ``ray_vs_local``: wall(Ray, 2 workers) / wall(local pool, 2 workers); target <= 1.25.
 - ``clips_per_core_hour``: clips / (wall x 2 cores) of the 2-worker local run, in clips per core-hour.
+- ``encoders``: ``workers2_vs_1`` and ``clips_per_core_hour`` for each encoder (``pyav``: the keys above;
+  ``ffmpeg``: the separate-process encoder), measured in the same run.
 - ``capacity``: skeleton (the jobs above) and mesh (``--mesh-clips`` jobs of ``--mesh-frames`` frames,
   1 worker) video seconds rendered per core-second, and the core-hours for 10,000 clips of 10 s at 30 fps
   and 256x256 in each style.
@@ -36,6 +41,7 @@ from pathlib import Path
 
 from motion2video.atomic import write_json
 from motion2video.batch import (BatchConfig, Job, LocalPool, init_ray, jobs_from_template, run_ray, warm_ray)
+from motion2video.video import ENCODER_ENV
 
 MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
 FPS = 30
@@ -79,25 +85,31 @@ def main(argv: list[str] | None = None) -> int:
     record = {"config": {"clips": len(clips), "frames": args.frames, "fps": FPS, "size": 256, "style": "skeleton",
                          "repeats": args.repeats, "cpu_count": os.cpu_count(),
                          "python": sys.version.split()[0]}}
-    walls: dict[str, list[float]] = {"local1": [], "local2": [], "ray2": []}
+    walls: dict[str, list[float]] = {"local1": [], "local2": [], "ray2": [], "local1_ffmpeg": [], "local2_ffmpeg": []}
     startup = {}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         pools = {}
-        for workers in (1, 2):
-            start = time.perf_counter()
-            pools[workers] = LocalPool(workers)
-            pools[workers].warm()
-            startup[f"local{workers}_s"] = time.perf_counter() - start
+        # Workers read the encoder from the environment they are started with: the ffmpeg-process pools
+        # first, then the batch default (PyAV) for the others, Ray included.
+        for encoder in ("ffmpeg", None):
+            if encoder:
+                os.environ[ENCODER_ENV] = encoder
+            else:
+                os.environ.pop(ENCODER_ENV, None)
+            for workers in (1, 2):
+                name = f"local{workers}" + (f"_{encoder}" if encoder else "")
+                start = time.perf_counter()
+                pools[name] = LocalPool(workers)
+                pools[name].warm()
+                startup[f"{name}_s"] = time.perf_counter() - start
         if not args.no_ray:
             start = time.perf_counter()
             init_ray(2)
             warm_ray(2)
             startup["ray2_s"] = time.perf_counter() - start
-        engines = {
-            "local1": lambda jobs, cb: pools[1].run(jobs, retries=0, on_result=cb),
-            "local2": lambda jobs, cb: pools[2].run(jobs, retries=0, on_result=cb),
-        }
+        engines = {name: (lambda jobs, cb, pool=pool: pool.run(jobs, retries=0, on_result=cb))
+                   for name, pool in pools.items()}
         if not args.no_ray:
             engines["ray2"] = lambda jobs, cb: run_ray(jobs, workers=2, retries=0, address=None, on_result=cb)
         try:
@@ -124,10 +136,16 @@ def main(argv: list[str] | None = None) -> int:
     skeleton_rate = len(clips) * args.frames / FPS / (median["local2"] * 2)  # video s per core-second
     mesh_rate = args.mesh_clips * args.mesh_frames / FPS / mesh_s
     corpus_video_s = 10_000 * 10.0
+    per_hour = {k: len(clips) / (median[k] * 2 / 3600.0) for k in ("local2", "local2_ffmpeg")}
     record.update({
         "workers2_vs_1": median["local1"] / median["local2"],
         "ray_vs_local": median["ray2"] / median["local2"] if "ray2" in median else None,
-        "clips_per_core_hour": len(clips) / (median["local2"] * 2 / 3600.0),
+        "clips_per_core_hour": per_hour["local2"],
+        "encoders": {
+            "pyav": {"workers2_vs_1": median["local1"] / median["local2"], "clips_per_core_hour": per_hour["local2"]},
+            "ffmpeg": {"workers2_vs_1": median["local1_ffmpeg"] / median["local2_ffmpeg"],
+                       "clips_per_core_hour": per_hour["local2_ffmpeg"]},
+        },
         "capacity": {
             "skeleton_video_s_per_core_s": skeleton_rate,
             "mesh_video_s_per_core_s": mesh_rate,
@@ -141,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
                 "jobs are depressed by their load (load_average)",
     })
     write_json(args.json, record)
-    print(f"workers2_vs_1 {record['workers2_vs_1']:.2f}, ray_vs_local "
+    print(f"workers2_vs_1 {record['workers2_vs_1']:.2f} (ffmpeg-process encoder "
+          f"{record['encoders']['ffmpeg']['workers2_vs_1']:.2f}), ray_vs_local "
           f"{record['ray_vs_local'] if record['ray_vs_local'] is None else round(record['ray_vs_local'], 2)}, "
           f"{record['clips_per_core_hour']:.0f} clips/core-hour; load {load_before[0]:.1f} -> {os.getloadavg()[0]:.1f}")
     print(f"wrote {args.json}")

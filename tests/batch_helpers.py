@@ -29,18 +29,29 @@ def clip_folder(mocap_dir: Path, folder: Path) -> Path:
 
 
 def temp_writers(output: Path) -> list[int]:
-    """PIDs of ffmpeg processes writing a temporary file of ``output`` (``.STEM.*.tmpSUFFIX``)."""
+    """PIDs of processes that hold a temporary file of ``output`` (``.STEM.*.tmpSUFFIX``) open for writing:
+    the worker itself when it encodes in-process (PyAV), or its ffmpeg child."""
+    prefix = str(output.parent / f".{output.stem}.")
     found = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
         try:
-            argv = (entry / "cmdline").read_bytes().split(b"\0")
+            targets = [os.readlink(fd) for fd in (entry / "fd").iterdir()]
         except OSError:
             continue
-        if any(a.startswith(str(output.parent / f".{output.stem}.").encode()) and b".tmp" in a for a in argv):
+        if any(t.startswith(prefix) and ".tmp" in t for t in targets):
             found.append(int(entry.name))
     return found
+
+
+def worker_of(writer: int) -> int:
+    """The batch worker behind a process writing an output: an ffmpeg encoder's parent, else itself."""
+    try:
+        argv0 = Path(f"/proc/{writer}/cmdline").read_bytes().split(b"\0")[0]
+    except OSError:
+        return writer
+    return parent_pid(writer) if b"ffmpeg" in Path(argv0.decode(errors="replace")).name.encode() else writer
 
 
 def parent_pid(pid: int) -> int:
@@ -50,7 +61,7 @@ def parent_pid(pid: int) -> int:
 
 class WorkerKiller(threading.Thread):
     """Waits until ``output``'s encoder is running with some frames written, then SIGKILLs the worker
-    process that feeds it (the encoder's parent). ``killed`` holds the worker's pid."""
+    process that writes it (see :func:`worker_of`). ``killed`` holds the worker's pid."""
 
     def __init__(self, output: Path, *, timeout: float = 300.0, min_bytes: int = 1) -> None:
         super().__init__(daemon=True)
@@ -65,7 +76,7 @@ class WorkerKiller(threading.Thread):
                 temps = list(self.output.parent.glob(f".{self.output.stem}.*.tmp{self.output.suffix}"))
                 if not temps or temps[0].stat().st_size < self.min_bytes:
                     continue
-                worker = parent_pid(pid)
+                worker = worker_of(pid)
                 self.saw_temp = [t.name for t in temps]
                 os.kill(worker, signal.SIGKILL)
                 self.killed = worker

@@ -48,7 +48,7 @@ def test_doctor_on_this_machine(tmp_path):
     run = _cli(["doctor", "--json", str(tmp_path / "doctor.json")], tmp_path, without_osmesa=False)
     assert run.returncode == 0, run.stdout + run.stderr
     out = run.stdout
-    for line in ("ok      torch:", "ok      ffmpeg:", "ok      GL osmesa (libOSMesa): renders",
+    for line in ("ok      torch:", "ok      ffmpeg:", "ok      PyAV:", "ok      GL osmesa (libOSMesa): renders",
                  "ok      Anny body model:", "ok      checkpoint mtvae-add: loads", "ok      checkpoint frames-body-128",
                  "mesh and face styles: available"):
         assert line in out, out

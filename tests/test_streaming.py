@@ -46,10 +46,11 @@ def test_write_video_from_a_generator_with_and_without_count(shared_dir, tmp_pat
     assert not [p for p in tmp_path.iterdir() if ".tmp" in p.name]
 
 
-def test_video_writer_removes_its_temp_file_when_interrupted(tmp_path):
+@pytest.mark.parametrize("encoder", ["ffmpeg", "pyav"])
+def test_video_writer_removes_its_temp_file_when_interrupted(tmp_path, encoder):
     path = tmp_path / "cut.mp4"
     with pytest.raises(KeyboardInterrupt):
-        with VideoWriter(path, 25) as writer:
+        with VideoWriter(path, 25, encoder=encoder) as writer:
             writer.write(np.zeros((4, 16, 16, 3), np.uint8))
             raise KeyboardInterrupt
     assert list(tmp_path.iterdir()) == []

@@ -10,6 +10,8 @@ import pytest
 
 from motion2video.errors import InputError
 from motion2video.video import (
+    ENCODER_ENV,
+    ENCODERS,
     GREEN,
     RED,
     add_border,
@@ -20,9 +22,17 @@ from motion2video.video import (
     probe_frame_rate,
     read_image,
     read_video,
+    video_frame_count,
     write_image,
     write_video,
 )
+
+
+@pytest.fixture(params=ENCODERS)
+def encoder(request, monkeypatch):
+    """Run an mp4 test once per encoder (a separate ffmpeg process, and PyAV in this process)."""
+    monkeypatch.setenv(ENCODER_ENV, request.param)
+    return request.param
 
 
 def _clip(frames: int, height: int, width: int, seed: int = 0) -> np.ndarray:
@@ -41,7 +51,7 @@ def _no_temp_files(directory) -> bool:
 
 
 @pytest.mark.parametrize("fps", [30000 / 1001, 12.5, 7.3])
-def test_mp4_roundtrip_exact_fps(tmp_path, fps):
+def test_mp4_roundtrip_exact_fps(tmp_path, fps, encoder):
     frames = _clip(8, 48, 64)
     path = write_video(tmp_path / "clip.mp4", frames, fps)
     assert path == tmp_path / "clip.mp4" and _no_temp_files(tmp_path)
@@ -55,7 +65,7 @@ def test_mp4_roundtrip_exact_fps(tmp_path, fps):
     assert np.abs(back.astype(int) - frames.astype(int)).mean() < 4.0
 
 
-def test_mp4_odd_size_is_padded_not_scaled(tmp_path):
+def test_mp4_odd_size_is_padded_not_scaled(tmp_path, encoder):
     frames = _clip(3, 47, 63)
     back, _ = read_video(write_video(tmp_path / "odd.mp4", frames, 25, preset="ultrafast"))
     assert back.shape == (3, 48, 64, 3)
@@ -71,7 +81,7 @@ def test_gif_roundtrip(tmp_path):
     assert _no_temp_files(tmp_path)
 
 
-def test_failed_encode_leaves_nothing_and_keeps_old_file(tmp_path):
+def test_failed_encode_leaves_nothing_and_keeps_old_file(tmp_path, encoder):
     path = tmp_path / "keep.mp4"
     write_video(path, _clip(2, 16, 16), 10)
     before = path.read_bytes()
@@ -82,7 +92,7 @@ def test_failed_encode_leaves_nothing_and_keeps_old_file(tmp_path):
     assert _no_temp_files(tmp_path)
 
 
-def test_unwritable_destination_raises_input_error_before_encoding(tmp_path):
+def test_unwritable_destination_raises_input_error_before_encoding(tmp_path, encoder):
     blocker = tmp_path / "not_a_dir"
     blocker.write_text("x")
     target = blocker / "out.mp4"
@@ -95,9 +105,41 @@ def test_unwritable_destination_raises_input_error_before_encoding(tmp_path):
         write_video(tmp_path / "clip.mp4", _clip(1, 8, 8), 0.0)
     with pytest.raises(InputError, match="preset"):
         write_video(tmp_path / "clip.mp4", _clip(1, 8, 8), 10, preset="warp")
+    with pytest.raises(InputError, match="encoder"):
+        write_video(tmp_path / "clip.mp4", _clip(1, 8, 8), 10, encoder="gstreamer")
     with pytest.raises(InputError):
         write_image(blocker / "x.png", _clip(1, 8, 8)[0])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["not_a_dir"]
+
+
+def test_both_encoders_write_the_same_video(tmp_path):
+    """Same frame count, exact rate and fidelity from either encoder (their pixels differ by compression
+    noise: two builds of libx264); a long clip checks that the in-process encoder's timestamps stay right
+    after the muxer has started."""
+    frames = _clip(120, 48, 64)
+    back = {}
+    for name in ENCODERS:
+        path = write_video(tmp_path / f"{name}.mp4", frames, 30000 / 1001, encoder=name)
+        assert video_frame_count(path) == 120 and probe_frame_rate(path) == Fraction(30000, 1001)
+        back[name], _ = read_video(path)
+    error = {name: np.abs(clip.astype(int) - frames.astype(int)).mean() for name, clip in back.items()}
+    assert max(error.values()) < 4.0 and abs(error["pyav"] - error["ffmpeg"]) < 0.3, error
+
+
+def test_video_frame_count_refuses_what_does_not_read_back(tmp_path, encoder):
+    path = write_video(tmp_path / "clip.mp4", _clip(30, 32, 32), 25)
+    assert video_frame_count(path) == 30 and video_frame_count(path, decode_first=False) == 30
+    data = path.read_bytes()
+    for cut in (0, 100, len(data) // 2, len(data) - 50):
+        truncated = tmp_path / f"cut{cut}.mp4"
+        truncated.write_bytes(data[:cut])
+        assert video_frame_count(truncated) is None, cut
+    text = tmp_path / "notes.mp4"
+    text.write_text("not a video\n" * 50)  # ffmpeg would read this as an ANSI-art "video"
+    assert video_frame_count(text) is None
+    assert video_frame_count(tmp_path / "missing.mp4") is None
+    gif = write_video(tmp_path / "clip.gif", _clip(4, 16, 16), 10)
+    assert video_frame_count(gif) == 4
 
 
 def test_missing_parent_directories_are_created(tmp_path):
