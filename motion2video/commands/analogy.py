@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import add_threads_argument, check_video_and_npz, set_threads
+from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
 from motion2video.errors import InputError
+
+HELP = "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D"
+
+DESCRIPTION = """\
+Analogy-based motion transfer (MT-VAE, Sec. 4.2): the transformation latent of A followed by B, decoded from
+C's context, gives D. Body and face models.
+"""
 
 EXAMPLES = """\
 examples:
@@ -27,14 +34,7 @@ model's rate.
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "analogy",
-        help="transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D",
-        description="Analogy-based motion transfer (MT-VAE, Sec. 4.2): the transformation latent of A "
-        "followed by B, decoded from C's context, gives D. Body and face models.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "analogy", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="latent model checkpoint or shipped name (mtvae-add, ...)")
     p.add_argument("a", metavar="A", help="clip of the window before the transition")
     p.add_argument("b", metavar="B", help="clip of the window after it (often A's file)")
@@ -47,11 +47,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--horizon", type=int, default=None, help="frames of B and D (default: the model's, 48)")
     p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
                    help="skeleton maps or Anny bodies (body models; face models draw the Anny face)")
-    p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
-    p.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
-    p.add_argument("--npz", default=None, help="also write A->B, C->D and z to this .npz")
-    add_threads_argument(p)
-    p.set_defaults(run=run)
+    add_video_output_arguments(p, npz_help="also write A->B, C->D and z to this .npz")
 
 
 def run(args: argparse.Namespace) -> int:

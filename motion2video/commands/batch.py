@@ -5,7 +5,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from motion2video.commands.common import add_command
 from motion2video.errors import InputError
+
+HELP = ("run many render/sample/synthesize jobs (JSONL job file, or a folder/glob and a template) on a process "
+        "pool or Ray, resumable, with results.jsonl and an HTML gallery")
+
+DESCRIPTION = """\
+Run independent jobs in parallel: each is one sub-command with its own arguments and output. Bad inputs fail
+their own row and never stop the batch; outputs are written atomically.
+"""
 
 EXAMPLES = """\
 examples:
@@ -28,15 +37,7 @@ Exit status: 0 when no job failed, 1 when some failed, 2 for a bad batch (no job
 def add_parser(sub: argparse._SubParsersAction) -> None:
     from motion2video.batch import ENGINES
 
-    p = sub.add_parser(
-        "batch",
-        help="run many render/sample/synthesize jobs (JSONL job file, or a folder/glob and a template) "
-        "on a process pool or Ray, resumable, with results.jsonl and an HTML gallery",
-        description="Run independent jobs in parallel: each is one sub-command with its own arguments and "
-        "output. Bad inputs fail their own row and never stop the batch; outputs are written atomically.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "batch", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("jobs", help="a .jsonl job file, or a folder of motion files / a glob pattern (with --template)")
     p.add_argument("--template", help='command for each input, e.g. "render {input} -o {output} --style skeleton" '
                    "(fields {input} {output} {stem} {name})")
@@ -51,7 +52,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--force", action="store_true", help="redo jobs whose output already exists")
     p.add_argument("--dry-run", action="store_true", help="list the jobs and exit")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,14 +1,46 @@
-"""Options several sub-commands share."""
+"""What several sub-commands share: registering a sub-command, common options, and argument checks."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Callable
 
 from motion2video.errors import InputError
 
 THREADS_HELP = ("torch CPU threads (default 1: the small recurrent models and the frame generator ran 3-40x faster "
                 "single-threaded on 2 shared cores)")
+
+
+def add_command(sub: argparse._SubParsersAction, name: str, run: Callable[[argparse.Namespace], int], *,
+                help: str, description: str, examples: str) -> argparse.ArgumentParser:
+    """Register the sub-command ``name`` and return its parser, for the caller to add its arguments.
+
+    ``help`` is its line in ``motion2video --help``. ``description`` is the paragraph at the top of its own
+    ``--help``: a module writes it wrapped in a triple-quoted string, and its line breaks and indentation are
+    joined into single spaces here (``--help`` prints it as one line, which the terminal wraps). ``examples``
+    is the block after the options, printed exactly as written. ``run(args)`` is what
+    :func:`motion2video.cli.main` calls with the parsed arguments.
+    """
+    parser = sub.add_parser(name, help=help, description=" ".join(description.split()), epilog=examples,
+                            formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.set_defaults(run=run)
+    return parser
+
+
+def add_video_output_arguments(parser: argparse.ArgumentParser, *, npz_help: str) -> None:
+    """``--size`` (cell size, default 256), ``-o/--output`` (the video), ``--npz`` (``npz_help`` says what it
+    holds) and ``--threads``: the output options of the commands that write a grid of motion cells."""
+    parser.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
+    parser.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
+    parser.add_argument("--npz", default=None, help=npz_help)
+    add_threads_argument(parser)
+
+
+def check_at_least(option: str, value: int, minimum: int = 1) -> None:
+    """InputError ``"--option must be >= minimum, got value"`` when ``value`` is below ``minimum``."""
+    if value < minimum:
+        raise InputError(f"{option} must be >= {minimum}, got {value}")
 
 
 def check_video_and_npz(output: str | Path, npz: str | Path | None) -> Path:
@@ -31,6 +63,5 @@ def set_threads(threads: int) -> None:
     """Check ``--threads`` and apply it to torch (InputError when below 1)."""
     import torch
 
-    if threads < 1:
-        raise InputError(f"--threads must be >= 1, got {threads}")
+    check_at_least("--threads", threads)
     torch.set_num_threads(threads)

@@ -6,7 +6,16 @@ import argparse
 from pathlib import Path
 
 from motion2video.atomic import write_json
+from motion2video.commands.common import add_command
 from motion2video.errors import InputError
+
+HELP = "print minutes per source, action and split of a mocap folder as the trainer uses it"
+
+DESCRIPTION = """\
+Load every clip of a mocap folder as the dataset builder does (all formats, true frame rates, duplicate copies
+of one trial dropped, the subject-disjoint split) and print Markdown tables: minutes per source, per split and
+per action, and the held-out groups.
+"""
 
 EXAMPLES = """\
 examples:
@@ -20,22 +29,13 @@ the default data config (25 fps, 16 observed + 48 future frames).
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "corpus-stats",
-        help="print minutes per source, action and split of a mocap folder as the trainer uses it",
-        description="Load every clip of a mocap folder as the dataset builder does (all formats, true frame "
-        "rates, duplicate copies of one trial dropped, the subject-disjoint split) and print Markdown tables: "
-        "minutes per source, per split and per action, and the held-out groups.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "corpus-stats", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--data", required=True, help="mocap folder (with manifest.csv)")
     p.add_argument("--json", default=None, help="also write the statistics as JSON here")
     p.add_argument("--held-out", choices=("corpus", "hash"), default="corpus",
                    help="split rule (default corpus: the pinned held-out subjects and sources)")
     p.add_argument("--keep-duplicates", action="store_true",
                    help="keep every copy of a trial found in several folders")
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:

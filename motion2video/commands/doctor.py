@@ -5,6 +5,14 @@ from __future__ import annotations
 import argparse
 import json
 
+from motion2video.commands.common import add_command
+
+HELP = "check the installation: torch, ffmpeg, GL backends, the Anny cache, the shipped checkpoints"
+
+DESCRIPTION = """\
+Print what is available and what is missing, each missing thing with its fix.
+"""
+
 EXAMPLES = """\
 examples:
   motion2video doctor
@@ -17,15 +25,8 @@ everything essential works (GL is not essential: skeleton and heatmap styles nee
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "doctor",
-        help="check the installation: torch, ffmpeg, GL backends, the Anny cache, the shipped checkpoints",
-        description="Print what is available and what is missing, each missing thing with its fix.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "doctor", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--json", default=None, help="also write the checks as JSON here")
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:

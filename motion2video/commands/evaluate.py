@@ -6,8 +6,16 @@ import argparse
 from pathlib import Path
 
 from motion2video.atomic import write_json
-from motion2video.commands.common import add_threads_argument, set_threads
+from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
 from motion2video.errors import InputError
+
+HELP = "score a motion model and the zero-velocity / last-step / sequence-motion baselines"
+
+DESCRIPTION = """\
+Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
+MMFDE (DLow protocol). Prints a table; --json writes {"protocol": {...}, "results": {"<method>": {"ade": ..,
+"fde": .., "mmade": .., "mmfde": .., "apd": ..}}}.
+"""
 
 EXAMPLES = """\
 examples:
@@ -25,15 +33,7 @@ Metrics (best of K for ADE/FDE) on root-relative poses, metres (face models: par
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "evaluate",
-        help="score a motion model and the zero-velocity / last-step / sequence-motion baselines",
-        description="Evaluate a motion model against the three data-driven baselines on the same windows: "
-        "APD, ADE, FDE, MMADE, MMFDE (DLow protocol). Prints a table; --json writes "
-        '{"protocol": {...}, "results": {"<method>": {"ade": .., "fde": .., "mmade": .., "mmfde": .., "apd": ..}}}.',
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "evaluate", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, action="append",
                    help="checkpoint path or shipped model name; repeat to compare models on the same windows "
                    "(they must share the layout and data settings; the first one's split picks the windows)")
@@ -51,7 +51,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--extended", action="store_true",
                    help="also report S-MSE, R-MSE and the Parzen conditional log-likelihood (MT-VAE metrics)")
     add_threads_argument(p)
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,10 +60,8 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.models.baselines import BASELINES
 
     set_threads(args.threads)
-    if args.samples < 1:
-        raise InputError(f"--samples must be >= 1, got {args.samples}")
-    if args.stride < 1:
-        raise InputError(f"--stride must be >= 1, got {args.stride}")
+    check_at_least("--samples", args.samples)
+    check_at_least("--stride", args.stride)
     for option in ("json", "plot"):
         target = getattr(args, option)
         if target is not None:

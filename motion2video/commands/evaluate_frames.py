@@ -6,6 +6,17 @@ import argparse
 import json
 from pathlib import Path
 
+from motion2video.commands.common import add_command, check_at_least
+
+HELP = "score a frame generator against copy-reference and limb-warp on held-out pairs"
+
+DESCRIPTION = """\
+Render (or reuse from the cache) the held-out split (held-out identities and clips) for the model's domain and
+size, and report whole-frame PSNR and SSIM (scikit-image) and person metrics (PSNR, SSIM and sharpness ratio
+inside the target's silhouette, PSNR and sharpness where the person moved) for the generator, copy-reference,
+limb-warp and the previous generator on the same pairs.
+"""
+
 EXAMPLES = """\
 examples:
   motion2video evaluate-frames --model frames-body-128 --json out/eval_frames_body.json
@@ -14,16 +25,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "evaluate-frames",
-        help="score a frame generator against copy-reference and limb-warp on held-out pairs",
-        description="Render (or reuse from the cache) the held-out split (held-out identities and clips) "
-        "for the model's domain and size, and report whole-frame PSNR and SSIM (scikit-image) and person "
-        "metrics (PSNR, SSIM and sharpness ratio inside the target's silhouette, PSNR and sharpness where the "
-        "person moved) for the generator, copy-reference, limb-warp and the previous generator on the same pairs.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "evaluate-frames", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="a checkpoint file or a shipped name (frames-body-128)")
     p.add_argument("--json", default=None, help="write the results here as JSON")
     p.add_argument("--cache", default=None,
@@ -39,7 +41,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="also score this generator (checkpoint or shipped name) as a named baseline on the same "
                    "pairs; repeatable (default for body models: the previous generator frames-body-128-v1)")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
-    p.set_defaults(run=run)
 
 
 DEFAULT_BASELINE = {"body": "frames-body-128-v1"}  # the previous body generator, scored next to every new one
@@ -55,14 +56,13 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
     from motion2video.frames.evaluate import evaluate_sequences, evaluation_contact_sheet, write_json
 
-    if args.pairs is not None and args.pairs < 1:
-        raise InputError(f"--pairs must be >= 1, got {args.pairs}")
+    if args.pairs is not None:
+        check_at_least("--pairs", args.pairs)
     loaded = load_frame_model(args.model)
     cfg = loaded.config
     spec = default_spec(cfg.domain, "test", cfg.image_size)
     if args.test_sequences is not None:
-        if args.test_sequences < 1:
-            raise InputError(f"--test-sequences must be >= 1, got {args.test_sequences}")
+        check_at_least("--test-sequences", args.test_sequences)
         spec = replace(spec, num_sequences=args.test_sequences,
                        num_identities=min(spec.num_identities, args.test_sequences))
     cache = Path(args.cache) if args.cache else default_cache_dir()

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import argparse
 
+from motion2video.commands.common import add_command
 from motion2video.render import STYLES, RenderRequest, render_file
+
+HELP = ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) to "
+        "mp4/GIF")
+
+DESCRIPTION = """\
+Render a motion clip offscreen: skeleton maps, Gaussian heatmaps, the Anny body mesh, or the Anny face. Body
+inputs are converted to the canonical H36M-17 skeleton first.
+"""
 
 EXAMPLES = """\
 examples:
@@ -19,15 +28,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "render",
-        help="render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) "
-        "to mp4/GIF",
-        description="Render a motion clip offscreen: skeleton maps, Gaussian heatmaps, the Anny body mesh, "
-        "or the Anny face. Body inputs are converted to the canonical H36M-17 skeleton first.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "render", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("input", help="a .bvh, DeepMimic motion file (.txt/.json with \"Frames\"), exp-map text file "
                    "(.txt with a skeleton.json beside or above it), .npz (Motion or FaceMotion), OpenPose JSON "
                    "folder, or .csv face capture")
@@ -41,7 +42,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--palette", choices=("leftright", "openpose"), default="leftright",
                    help="skeleton colours: left green / right red / spine blue, or the OpenPose (ControlNet) palette")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:

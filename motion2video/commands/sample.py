@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import add_threads_argument, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.commands.common import (add_command, add_threads_argument, check_at_least, check_video_and_npz,
+                                          set_threads)
+
+HELP = "sample K futures of a clip from a motion model and render them as a grid video"
+
+DESCRIPTION = """\
+Observe the first --observed frames of a clip (from --start), sample K futures from a checkpoint or shipped
+model, and write the grid video (observed frames framed green, futures red) and optionally the samples as npz.
+"""
 
 EXAMPLES = """\
 examples:
@@ -22,15 +29,7 @@ Every cell of the grid plays the observed frames framed in green, then one sampl
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "sample",
-        help="sample K futures of a clip from a motion model and render them as a grid video",
-        description="Observe the first --observed frames of a clip (from --start), sample K futures from a "
-        "checkpoint or shipped model, and write the grid video (observed frames framed green, futures red) "
-        "and optionally the samples as npz.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "sample", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="checkpoint path, shipped model name, or a baseline name")
     p.add_argument("input", help="observed clip: .bvh / motion .npz (body models), .csv / FaceMotion .npz (face)")
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
@@ -44,7 +43,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="skeleton maps or the Anny body mesh (body models; face models draw the Anny face)")
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
     add_threads_argument(p)
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -56,8 +54,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.video import VideoWriter
 
     set_threads(args.threads)
-    if args.samples < 1:
-        raise InputError(f"--samples must be >= 1, got {args.samples}")
+    check_at_least("--samples", args.samples)
     check_cell_size(args.size)
     out = check_video_and_npz(args.output, args.npz)
     if args.model in BASELINES:

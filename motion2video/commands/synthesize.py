@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 
+from motion2video.commands.common import add_command, check_at_least
 from motion2video.errors import InputError
+
+HELP = "sample K futures of a clip and render them as RGB video of a reference person"
+
+DESCRIPTION = """\
+Observe the first --observed frames of a clip, sample K futures with a motion model, render their structure
+and turn it into frames of the reference person with a frame generator.
+"""
 
 EXAMPLES = """\
 examples:
@@ -28,14 +36,7 @@ when that exists (or --reference-pose); otherwise the image is assumed to show t
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "synthesize",
-        help="sample K futures of a clip and render them as RGB video of a reference person",
-        description="Observe the first --observed frames of a clip, sample K futures with a motion model, "
-        "render their structure and turn it into frames of the reference person with a frame generator.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "synthesize", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--motion-model", required=True, help="motion checkpoint path or shipped name (mtvae-add, ...)")
     p.add_argument("--frame-model", required=True,
                    help="frame-generator checkpoint path or shipped name (frames-body-128, frames-face-128)")
@@ -55,24 +56,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "keeps the reference background at this size and generates the person at its own size")
     p.add_argument("--threads", type=int, default=None,
                    help="torch threads for the frame generator (default: half the cores, 1 to 4; sampling uses 1)")
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from motion2video.apps.synthesize import SynthesisConfig, synthesize
 
-    if args.samples < 1:
-        raise InputError(f"--samples must be >= 1, got {args.samples}")
-    if args.batch_size < 1:
-        raise InputError(f"--batch-size must be >= 1, got {args.batch_size}")
+    check_at_least("--samples", args.samples)
+    check_at_least("--batch-size", args.batch_size)
     if args.size is not None and not 32 <= args.size <= 1024:
         raise InputError(f"--size must be in 32..1024, got {args.size}")
-    if args.threads is not None and args.threads < 1:
-        raise InputError(f"--threads must be >= 1, got {args.threads}")
-    for name in ("observed", "horizon"):
-        value = getattr(args, name)
-        if value is not None and value < (2 if name == "observed" else 1):
-            raise InputError(f"--{name} must be >= {2 if name == 'observed' else 1}, got {value}")
+    if args.threads is not None:
+        check_at_least("--threads", args.threads)
+    if args.observed is not None:
+        check_at_least("--observed", args.observed, minimum=2)
+    if args.horizon is not None:
+        check_at_least("--horizon", args.horizon)
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
                              size=args.size)

@@ -7,8 +7,16 @@ import dataclasses
 import json
 from pathlib import Path
 
-from motion2video.commands.common import add_threads_argument, set_threads
+from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
 from motion2video.errors import InputError
+
+HELP = "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)"
+
+DESCRIPTION = """\
+Train a stochastic motion model on real motion capture. Writes a safetensors checkpoint with the model config,
+normalisation statistics and data split in its metadata; periodic checkpoints (OUT.last.safetensors +
+OUT.last.optim.safetensors) make the run resumable.
+"""
 
 EXAMPLES = """\
 examples:
@@ -27,15 +35,7 @@ and "train" (TrainConfig: batch_size, lr, weight_decay, grad_clip, checkpoint_ev
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "train",
-        help="train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)",
-        description="Train a stochastic motion model on real motion capture. Writes a safetensors checkpoint "
-        "with the model config, normalisation statistics and data split in its metadata; periodic checkpoints "
-        "(OUT.last.safetensors + OUT.last.optim.safetensors) make the run resumable.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "train", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="registered model name, e.g. mtvae-add")
     p.add_argument("--data", required=True, help="folder of BVH files (with manifest.csv), or face captures")
     p.add_argument("-o", "--output", required=True, help="final checkpoint (.safetensors)")
@@ -50,7 +50,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT's last periodic checkpoint")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     add_threads_argument(p)
-    p.set_defaults(run=run)
 
 
 def parse_config(text: str | None) -> dict:
@@ -137,8 +136,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{args.model!r} is a baseline: it has no parameters to train")
     if not Path(args.output).name.endswith(".safetensors"):
         raise InputError("the output must be a .safetensors file", args.output)
-    if args.steps is not None and args.steps < 1:
-        raise InputError(f"--steps must be >= 1, got {args.steps}")
+    if args.steps is not None:
+        check_at_least("--steps", args.steps)
     cfg = parse_config(args.config)
     init_state = None
     if args.model == "dlow":

@@ -6,7 +6,15 @@ import argparse
 import json
 from pathlib import Path
 
-from motion2video.commands.common import add_threads_argument, set_threads
+from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
+
+HELP = "train the keypoint-conditioned frame generator (body or face)"
+
+DESCRIPTION = """\
+Render (or reuse from the cache) a synthetic appearance dataset with the Anny body or face renderer, posed by
+real captures, then train the frame generator with L1 + SSIM. Checkpoints (safetensors) are written
+periodically; --resume continues an interrupted run.
+"""
 
 EXAMPLES = """\
 examples:
@@ -17,15 +25,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "train-frames",
-        help="train the keypoint-conditioned frame generator (body or face)",
-        description="Render (or reuse from the cache) a synthetic appearance dataset with the Anny body or "
-        "face renderer, posed by real captures, then train the frame generator with L1 + SSIM. Checkpoints "
-        "(safetensors) are written periodically; --resume continues an interrupted run.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "train-frames", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--domain", choices=("body", "face"), required=True, help="body or face frames")
     p.add_argument("-o", "--output", required=True, help="checkpoint to write (.safetensors)")
     p.add_argument("--steps", type=int, default=3000, help="optimisation steps (default 3000)")
@@ -58,7 +58,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
     add_threads_argument(p)
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
-    p.set_defaults(run=run)
 
 
 def default_crop(domain: str, size: int) -> int:
@@ -75,19 +74,16 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.frames.train import TrainFramesConfig, train_frames
 
     set_threads(args.threads)
-    if args.steps < 1:
-        raise InputError(f"--steps must be >= 1, got {args.steps}")
+    check_at_least("--steps", args.steps)
     if args.model_kind == "warp" and args.domain != "body":
         raise InputError("--model-kind warp makes body frames only (use --domain body)")
-    if args.batch_size < 1:
-        raise InputError(f"--batch-size must be >= 1, got {args.batch_size}")
+    check_at_least("--batch-size", args.batch_size)
     output = Path(args.output)
     if output.suffix != ".safetensors":
         raise InputError("the checkpoint name must end in .safetensors", output)
     spec = default_spec(args.domain, "train", args.size, seed=args.seed)
     if args.train_sequences is not None:
-        if args.train_sequences < 1:
-            raise InputError(f"--train-sequences must be >= 1, got {args.train_sequences}")
+        check_at_least("--train-sequences", args.train_sequences)
         spec = replace(spec, num_sequences=args.train_sequences,
                        num_identities=min(spec.num_identities, args.train_sequences))
     crop = default_crop(args.domain, args.size) if args.crop is None else args.crop

@@ -6,8 +6,16 @@ import argparse
 import sys
 
 from motion2video.atomic import save_npz
-from motion2video.commands.common import add_threads_argument, check_video_and_npz, set_threads
+from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
 from motion2video.errors import InputError
+
+HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
+
+DESCRIPTION = """\
+Behaviour transfer (Blattmann et al. 2021): extract the behaviour of SOURCE with the behaviour model's
+encoder, re-enact it from TARGET's posture at --target-frame, and write the side-by-side video; --sample N
+draws N new behaviours through the normalizing flow instead.
+"""
 
 EXAMPLES = """\
 examples:
@@ -31,15 +39,7 @@ position and heading. Clips at other frame rates are resampled to the model's ra
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "transfer",
-        help="re-enact the behaviour of one clip from another clip's posture (behaviour model)",
-        description="Behaviour transfer (Blattmann et al. 2021): extract the behaviour of SOURCE with the "
-        "behaviour model's encoder, re-enact it from TARGET's posture at --target-frame, and write the "
-        "side-by-side video; --sample N draws N new behaviours through the normalizing flow instead.",
-        epilog=EXAMPLES,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = add_command(sub, "transfer", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="behaviour checkpoint path or shipped model name")
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--behavior", metavar="SOURCE", help="clip whose behaviour is transferred")
@@ -58,11 +58,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="frame-generator checkpoint or shipped name for --style frames (default frames-body-128, "
                    "or frames-face-128 for face models)")
     p.add_argument("--seed", type=int, default=0, help="seed of the flow samples (default 0)")
-    p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
-    p.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
-    p.add_argument("--npz", default=None, help="also write source, re-enactments and latents to this .npz")
-    add_threads_argument(p)
-    p.set_defaults(run=run)
+    add_video_output_arguments(p, npz_help="also write source, re-enactments and latents to this .npz")
 
 
 def run(args: argparse.Namespace) -> int:
