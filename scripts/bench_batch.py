@@ -35,7 +35,6 @@ Keys:
 
 from __future__ import annotations
 
-import argparse
 import csv
 import os
 import statistics
@@ -46,6 +45,7 @@ from pathlib import Path
 
 from motion2video.atomic import write_json
 from motion2video.batch import (BatchConfig, Job, LocalPool, init_ray, jobs_from_template, run_ray, warm_ray)
+from motion2video.benchtools import bench_parser, report
 from motion2video.video import ENCODER_ENV
 
 MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
@@ -83,8 +83,7 @@ def timed(run, jobs: list[Job]) -> tuple[float, list]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--json", type=Path, required=True, help="output JSON file")
+    parser = bench_parser(__doc__)
     parser.add_argument("--clips", type=int, default=24, help="skeleton jobs (default 24)")
     parser.add_argument("--frames", type=int, default=300, help="frames per skeleton job at 30 fps (default 300: the 10-s clips of the capacity plan)")
     parser.add_argument("--repeats", type=int, default=5, help="runs per engine, alternating (median kept)")
@@ -184,11 +183,11 @@ def main(argv: list[str] | None = None) -> int:
                 "jobs are depressed by their load (load_average)",
     })
     write_json(args.json, record)
-    print(f"workers2_vs_1 {record['workers2_vs_1']:.2f} (ffmpeg-process encoder "
-          f"{record['encoders']['ffmpeg']['workers2_vs_1']:.2f}), ray_vs_local "
-          f"{record['ray_vs_local'] if record['ray_vs_local'] is None else round(record['ray_vs_local'], 2)}, "
-          f"{record['clips_per_core_hour']:.0f} clips/core-hour; load {load_before[0]:.1f} -> {os.getloadavg()[0]:.1f}")
-    print(f"wrote {args.json}")
+    report(args.json, f"workers2_vs_1 {record['workers2_vs_1']:.2f} (ffmpeg-process encoder "
+           f"{record['encoders']['ffmpeg']['workers2_vs_1']:.2f}), ray_vs_local "
+           f"{record['ray_vs_local'] if record['ray_vs_local'] is None else round(record['ray_vs_local'], 2)}, "
+           f"{record['clips_per_core_hour']:.0f} clips/core-hour; "
+           f"load {load_before[0]:.1f} -> {os.getloadavg()[0]:.1f}")
     return 0
 
 

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.benchtools import median_seconds
+from motion2video.benchtools import bench_parser, median_seconds, report
 from motion2video.motion import Motion
 from motion2video.skeletons import H36M_17
 from motion2video.atomic import write_json
@@ -239,8 +239,7 @@ def _rounded(value):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--json", type=Path, required=True, help="output JSON file")
+    parser = bench_parser(__doc__)
     parser.add_argument("--frames", type=int, default=120, help="frames per skeleton / mp4 measurement")
     parser.add_argument("--repeats", type=int, default=5, help="timed repeats (the median is kept)")
     parser.add_argument("--warmup", type=int, default=1, help="untimed warm-up calls")
@@ -300,15 +299,16 @@ def main(argv: list[str] | None = None) -> int:
         write_json(args.json, _rounded(record))
 
     skel = details["skeleton"]
-    print(f"skeleton maps {SIZE}x{SIZE}: OpenCV {skel['opencv_fps']:.0f} fps, matplotlib {skel['matplotlib_fps']:.0f} "
-          f"fps (x{skel['opencv_over_matplotlib']:.1f}); heatmaps {details['heatmaps_fps']:.0f} fps; mp4 "
-          f"{details['mp4']['medium_fps']:.0f} fps (ultrafast {details['mp4']['ultrafast_fps']:.0f})")
+    lines = [f"skeleton maps {SIZE}x{SIZE}: OpenCV {skel['opencv_fps']:.0f} fps, "
+             f"matplotlib {skel['matplotlib_fps']:.0f} fps (x{skel['opencv_over_matplotlib']:.1f}); "
+             f"heatmaps {details['heatmaps_fps']:.0f} fps; mp4 "
+             f"{details['mp4']['medium_fps']:.0f} fps (ultrafast {details['mp4']['ultrafast_fps']:.0f})"]
     if args.mesh:
         mesh = details["mesh_reuse_vs_recreate"]
-        print(f"mesh {SIZE}x{SIZE}: reused renderer {mesh['reuse_fps']:.1f} fps, new BodyRenderer per frame "
-              f"{mesh['recreate_fps']:.1f} fps, new GL context per frame "
-              f"{mesh['recreate_with_new_gl_context_fps']:.1f} fps (x{record['mesh_reuse_vs_recreate']:.1f})")
-    print(f"wrote {args.json}")
+        lines.append(f"mesh {SIZE}x{SIZE}: reused renderer {mesh['reuse_fps']:.1f} fps, new BodyRenderer per frame "
+                     f"{mesh['recreate_fps']:.1f} fps, new GL context per frame "
+                     f"{mesh['recreate_with_new_gl_context_fps']:.1f} fps (x{record['mesh_reuse_vs_recreate']:.1f})")
+    report(args.json, *lines)
     return 0
 
 
