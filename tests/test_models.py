@@ -261,6 +261,24 @@ def test_motion_stats_error_penalises_sluggish_motion_and_not_a_phase_shift() ->
     assert torch.isfinite(model.loss(obs, future, step=0).total)
 
 
+@pytest.mark.parametrize("name", ["mtvae-add", "lcpvae"])
+def test_liveliness_term_adds_weight_times_motion_stats_error_to_the_loss(name: str) -> None:
+    """``motion_stats_weight`` adds exactly weight x the liveliness term of the reconstruction to the loss
+    (same seed, same noise: every other term is unchanged), and 0 leaves the paper's loss as it was."""
+    obs, future = _batch()
+    losses = {}
+    for w in (0.0, 7.0):
+        model = _tiny(name, motion_stats_weight=w).train()
+        torch.manual_seed(5)
+        losses[w] = model.loss(obs, future, step=2000)
+    assert losses[0.0].terms["lively"] == 0.0
+    lively = losses[7.0].terms["lively"]
+    assert lively > 0.0
+    torch.testing.assert_close(float(losses[7.0].total.detach()), float(losses[0.0].total.detach()) + 7.0 * lively,
+                               rtol=1e-5, atol=1e-3)
+    losses[7.0].total.backward()
+
+
 def test_behavior_root_trajectory_decoder_follows_a_given_path_or_makes_its_own() -> None:
     """With ``root_trajectory`` the re-enactment's root features are exactly the given path; without a path
     the decoder generates its own root; training mixes both (its loss backpropagates)."""

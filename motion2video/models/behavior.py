@@ -47,18 +47,9 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
-from motion2video.models.blocks import (
-    GaussianHead,
-    LSTMCell,
-    LSTMDecoder,
-    LSTMEncoder,
-    check_sequences,
-    kl_std_normal,
-    randn,
-    reconstruction_mse,
-    repeat_batch,
-    reparameterize,
-)
+from motion2video.models.blocks import (GaussianHead, LSTMCell, LSTMDecoder, LSTMEncoder, check_sequences,
+                                        kl_std_normal, motion_stats_error, randn, reconstruction_mse,
+                                        repeat_batch, reparameterize)
 from motion2video.models.flow import Flow, FlowFitResult, fit_flow
 
 
@@ -105,18 +96,6 @@ class BehaviorConfig:
     # generated and the true sequence's mean absolute velocity and acceleration per feature (summed over
     # features, times the sequence length). The squared error alone is minimised by smooth, slow motion.
     motion_stats_weight: float = 0.0
-
-
-def motion_stats_error(pred: torch.Tensor, target: torch.Tensor, start: torch.Tensor) -> torch.Tensor:
-    """How much livelier or more sluggish ``pred`` is than ``target`` (both (B, T, F), after start (B, F)):
-    per sequence and feature, the squared difference of the mean absolute velocity plus that of the mean
-    absolute acceleration, summed over features, times T, averaged over the batch."""
-    p = torch.cat([start[:, None], pred], dim=1)
-    t = torch.cat([start[:, None], target], dim=1)
-    vp, vt = torch.diff(p, dim=1), torch.diff(t, dim=1)
-    ap, at = torch.diff(vp, dim=1), torch.diff(vt, dim=1)
-    err = (vp.abs().mean(1) - vt.abs().mean(1)).pow(2) + (ap.abs().mean(1) - at.abs().mean(1)).pow(2)  # (B, F)
-    return err.sum(-1).mean() * pred.shape[1]
 
 
 class RootTrajectoryDecoder(nn.Module):

@@ -76,6 +76,18 @@ def reconstruction_mse(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor
     return (pred - target).pow(2).sum(dim=(1, 2)).mean()
 
 
+def motion_stats_error(pred: torch.Tensor, target: torch.Tensor, start: torch.Tensor) -> torch.Tensor:
+    """How much livelier or more sluggish ``pred`` is than ``target`` (both (B, T, F), after start (B, F)):
+    per sequence and feature, the squared difference of the mean absolute velocity plus that of the mean
+    absolute acceleration, summed over features, times T, averaged over the batch."""
+    p = torch.cat([start[:, None], pred], dim=1)
+    t = torch.cat([start[:, None], target], dim=1)
+    vp, vt = torch.diff(p, dim=1), torch.diff(t, dim=1)
+    ap, at = torch.diff(vp, dim=1), torch.diff(vt, dim=1)
+    err = (vp.abs().mean(1) - vt.abs().mean(1)).pow(2) + (ap.abs().mean(1) - at.abs().mean(1)).pow(2)  # (B, F)
+    return err.sum(-1).mean() * pred.shape[1]
+
+
 # --------------------------------------------------------------------------------------------------
 # Schedules (pure functions of the step)
 

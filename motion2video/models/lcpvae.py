@@ -27,20 +27,9 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
-from motion2video.models.blocks import (
-    GaussianHead,
-    GRUDecoder,
-    GRUEncoder,
-    check_sequences,
-    kl_diag_gaussians,
-    kl_std_normal,
-    logistic_ramp,
-    randn,
-    reconstruction_mse,
-    repeat_batch,
-    reparameterize,
-    teacher_forcing_probability,
-)
+from motion2video.models.blocks import (GaussianHead, GRUDecoder, GRUEncoder, check_sequences, kl_diag_gaussians,
+                                        kl_std_normal, logistic_ramp, motion_stats_error, randn, reconstruction_mse,
+                                        repeat_batch, reparameterize, teacher_forcing_probability)
 
 
 def lcp_posterior(data: LatentPosterior, cond: LatentPosterior) -> LatentPosterior:
@@ -73,6 +62,9 @@ class LCPVAEConfig:
     # 16 frames x 51 features) outweighs it and q(z_c | obs) shrinks to sigma_c ~ 0.3: a collapsed sampler
     # (docs/results.md, "Why LCP-VAE collapsed"). A larger weight keeps the prior wide.
     cs_kl_weight: float = 1.0
+    # Liveliness (issue 13): weight of :func:`~motion2video.models.blocks.motion_stats_error` on the future
+    # reconstruction (0 = the paper's loss, whose summed MSE favours slow, smooth futures).
+    motion_stats_weight: float = 0.0
 
 
 def _mlp(in_dim: int, hidden_dim: int, out_dim: int) -> nn.Sequential:
@@ -147,11 +139,14 @@ class LCPVAE(LatentSampler, nn.Module):
         )
         rec_obs = reconstruction_mse(obs_rec, obs)
         rec_future = reconstruction_mse(fut_rec, future)
+        lively = motion_stats_error(fut_rec, future, obs[:, -1]) if c.motion_stats_weight > 0 else fut_rec.new_zeros(())
         kl_cs, kl_lcp = self.prior_kl(cond, data)
         lam = c.kl_weight * logistic_ramp(step, midpoint=c.kl_midpoint, width=c.kl_width)
         total = lam * (c.cs_kl_weight * kl_cs + kl_lcp) + rec_obs + rec_future  # Eq. 9 (cs_kl_weight 1)
+        total = total + c.motion_stats_weight * lively
         terms = {
             "recon": float(rec_future.detach()),
+            "lively": float(lively.detach()),
             "recon_obs": float(rec_obs.detach()),
             "kl_cs": float(kl_cs.detach()),
             "kl": float(kl_lcp.detach()),

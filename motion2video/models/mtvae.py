@@ -26,18 +26,9 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
-from motion2video.models.blocks import (
-    LSTMDecoder,
-    LSTMEncoder,
-    SkipMLP,
-    check_sequences,
-    kl_std_normal,
-    linear_ramp,
-    randn,
-    reconstruction_l1,
-    repeat_batch,
-    reparameterize,
-)
+from motion2video.models.blocks import (LSTMDecoder, LSTMEncoder, SkipMLP, check_sequences, kl_std_normal,
+                                        linear_ramp, motion_stats_error, randn, reconstruction_l1, repeat_batch,
+                                        reparameterize)
 
 
 def cycle_consistency(z_star: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
@@ -75,6 +66,10 @@ class MTVAEConfig:
     lambda_cycle: float = 5.0
     lambda_motion: float = 5.0
     coherence_steps: int = 8
+    # Liveliness (issue 13): weight of :func:`~motion2video.models.blocks.motion_stats_error` on the
+    # reconstruction (generated vs true mean absolute velocity and acceleration per feature). 0 = the paper's
+    # loss; the L1 reconstruction alone is minimised by futures slower and smoother than real motion.
+    motion_stats_weight: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -146,6 +141,7 @@ class MTVAE(LatentSampler, nn.Module):
         z = reparameterize(post, torch.randn_like(post.mu))
         pred = self.decoder(self._future_feature(e_a, z), last, horizon=Tf)  # (B, Tf, F)
         recon = reconstruction_l1(pred, future)
+        lively = motion_stats_error(pred, future, last) if c.motion_stats_weight > 0 else pred.new_zeros(())
         kl = kl_std_normal(post).mean()
         w = c.kl_weight * linear_ramp(step, length=c.kl_anneal_steps)
 
@@ -159,9 +155,10 @@ class MTVAE(LatentSampler, nn.Module):
         pred_prior = self.decoder(self._future_feature(e_a, z_motion), last, horizon=k)  # (B, K, F)
         motion = motion_coherence(pred_prior, future, last_obs=last, steps=k)
 
-        total = recon + w * kl + c.lambda_cycle * cycle + c.lambda_motion * motion
+        total = recon + w * kl + c.lambda_cycle * cycle + c.lambda_motion * motion + c.motion_stats_weight * lively
         terms = {
             "recon": float(recon.detach()),
+            "lively": float(lively.detach()),
             "kl": float(kl.detach()),
             "kl_weight": w,
             "cycle": float(cycle.detach()),
