@@ -132,6 +132,18 @@ def test_bad_references_are_refused(change, message):
         model.encode_reference(seqs.images[0, 0], change(seqs.points[0, 0].astype(np.float64)))
 
 
+def test_a_uniform_reference_image_shows_no_person():
+    """Joints that are fine on an image that is one colour along every limb: no person to move."""
+    seqs = toy_sequences("body", num_sequences=1, frames_per_sequence=1, image_size=64)
+    model = WarpGenerator(WarpGeneratorConfig(image_size=32))
+    image = seqs.images[0, 0]
+    blank = np.empty_like(image)
+    blank[:] = image[0, 0]  # the backdrop's colour everywhere
+    with pytest.raises(InputError, match="no visible person where its pose is"):
+        model.encode_reference(blank, seqs.points[0, 0])
+    model.encode_reference(image, seqs.points[0, 0])  # the same pose on the real image is accepted
+
+
 def test_an_empty_crop_is_refused():
     seqs = toy_sequences("body", num_sequences=1, frames_per_sequence=1, image_size=64)
     model = WarpGenerator(WarpGeneratorConfig(image_size=32))

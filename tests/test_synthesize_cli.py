@@ -168,3 +168,18 @@ def test_bad_reference_poses_are_refused(body_args, tmp_path, capsys, points, me
     err = _fails(body_args + ["--reference", str(DEMO / "reference_body_128.png"), "--reference-pose", str(bad),
                               "--samples", "1", "-o", str(out)], capsys, out)
     assert message in err and "bad.pose.npz" in err
+
+
+def test_a_reference_image_without_a_person_is_refused(body_args, tmp_path, capsys):
+    """A uniform image with a valid pose file beside it: one line naming the image, exit 2, nothing written."""
+    import shutil
+
+    from motion2video.video import read_image, write_image
+
+    image = read_image(DEMO / "reference_body_128.png")
+    blank = tmp_path / "blank.png"
+    write_image(blank, np.broadcast_to(image[0, 0], image.shape).copy())
+    shutil.copy(DEMO / "reference_body_128.pose.npz", tmp_path / "blank.pose.npz")
+    out = tmp_path / "x.mp4"
+    err = _fails(body_args + ["--reference", str(blank), "--samples", "1", "-o", str(out)], capsys, out)
+    assert "blank.png" in err and "no visible person" in err

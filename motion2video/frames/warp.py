@@ -416,8 +416,8 @@ class WarpGenerator(nn.Module):
         """Check and hold a reference: (H, W, 3) uint8 image, (17, 2) joints in its pixels.
 
         Raises:
-            InputError: joints outside the image, or no visible person (joints not finite, or all within
-                two pixels of each other).
+            InputError: joints outside the image, or no visible person (joints not finite, all within
+                two pixels of each other, or a uniform image along the pose's limbs).
         """
         image = np.asarray(ref_image)
         points = np.asarray(ref_keypoints, np.float64)
@@ -425,7 +425,7 @@ class WarpGenerator(nn.Module):
             raise ValueError(f"reference image must be (H, W, 3) uint8, got {image.shape} {image.dtype}")
         if points.shape != (NUM_JOINTS, 2):
             raise ValueError(f"reference keypoints must be (17, 2), got {points.shape}")
-        check_reference_points(points, width=image.shape[1], height=image.shape[0])
+        check_reference_person(image, points)
         return ReferenceState(image=np.ascontiguousarray(image), points=points.astype(np.float32))
 
     @torch.inference_mode()
@@ -509,6 +509,42 @@ def check_reference_points(points: np.ndarray, *, width: int, height: int, path=
     extent = points.max(0) - points.min(0)
     if float(extent.max()) < 2.0:
         raise InputError("the reference pose shows no visible person (all joints within 2 pixels)", path)
+
+
+# Below this grey-level spread along the pose's limbs the reference shows nothing there (a uniform
+# image or an empty backdrop under the pose): a person, even in clothes of the backdrop's colour, leaves
+# edges along the limbs. A uniform fill measures 0; the demo references 72 and 77.
+MIN_PERSON_CONTRAST = 4.0
+
+
+def limb_region(points: np.ndarray, *, width: int, height: int) -> np.ndarray:
+    """(height, width) bool mask of the pose's 16 limbs drawn as thick lines (about 8 % of the pose's height,
+    at least 3 pixels): where the reference person must be, given joints (17, 2) in pixels."""
+    import cv2
+
+    from motion2video.core.skeletons import H36M_17
+
+    pts = np.asarray(points, np.float64)
+    thickness = max(3, int(round(0.08 * float(np.ptp(pts[:, 1])))))
+    mask = np.zeros((height, width), np.uint8)
+    for child, parent in enumerate(H36M_17.parents):
+        if parent >= 0:
+            a, b = np.rint(pts[child]).astype(int), np.rint(pts[parent]).astype(int)
+            cv2.line(mask, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), 1, thickness)
+    return mask.astype(bool)
+
+
+def check_reference_person(image: np.ndarray, points: np.ndarray, path=None) -> None:
+    """:func:`check_reference_points`, then InputError (naming ``path``) when the image (H, W, 3) uint8
+    shows nothing along the pose's limbs (grey-level standard deviation there below
+    :data:`MIN_PERSON_CONTRAST`): a blank or uniform reference has no person to move."""
+    height, width = image.shape[:2]
+    check_reference_points(points, width=width, height=height, path=path)
+    region = limb_region(points, width=width, height=height)
+    grey = np.asarray(image, np.float64).mean(axis=2)
+    if not region.any() or float(grey[region].std()) < MIN_PERSON_CONTRAST:
+        raise InputError("the reference image shows no visible person where its pose is (the image is uniform "
+                         "along the pose's limbs)", path)
 
 
 def person_crop(ref_points: np.ndarray, tgt_points: np.ndarray, *, width: int, height: int,
