@@ -243,6 +243,22 @@ def test_the_table1_protocol_runs_on_tiny_models(ckpts, small_data):
     assert "flow" in evaluate_transfer(bundle, windows, windows, pairs=pairs).realism
 
 
+def test_sample_realism_measures_every_sample_and_one_per_window(ckpts, small_data):
+    """Liveliness over all K samples per window, the ground truth's from the windows themselves (the same
+    for every model), classifier accuracies in [0, 1]."""
+    from motion2video.evaluation.transfer import motion_liveliness, sample_realism
+
+    for ckpt in (ckpts["behavior"], ckpts["mtvae"]):
+        bundle = load_model(ckpt)
+        dataset = build_dataset(small_data, bundle.data_config, split=bundle.meta.split, stats=bundle.stats)
+        windows = dataset.windows("train", stride=32)
+        r = sample_realism(bundle, windows, samples=3, seed=0)
+        assert (r.windows, r.samples_per_window) == (len(windows.features), 3)
+        assert r.real == pytest.approx(motion_liveliness(bundle.stats.denormalize(windows.future)))
+        assert all(v > 0 for v in r.samples) and 0.0 <= r.realism <= 1.0 and 0.0 <= r.realism_poses <= 1.0
+        assert sample_realism(bundle, windows, samples=3, seed=0) == r  # seeded
+
+
 def test_regression_error_is_zero_for_linear_postures():
     rng = np.random.default_rng(0)
     z = rng.normal(size=(200, 5))

@@ -110,6 +110,45 @@ def motion_liveliness(seq: np.ndarray) -> tuple[float, float]:
     return float(np.abs(np.diff(s, 1, axis=1)).mean()), float(np.abs(np.diff(s, 2, axis=1)).mean())
 
 
+@dataclass(frozen=True)
+class SampleRealism:
+    """How lively and how realistic a model's sampled futures are, on held-out windows.
+
+    Attributes:
+        real, samples: (mean |velocity|, mean |acceleration|) of the feature vector per frame of the
+            ground-truth futures and of all K samples per window (:func:`motion_liveliness`).
+        realism, realism_poses: real/fake classifier accuracy (full descriptor / poses alone) between the
+            ground truth and one sample per window (sample ``i mod K`` for window i, so that a sampler whose
+            K outputs differ in kind, DLow's maps, is seen whole).
+        windows, samples_per_window: N and K.
+    """
+
+    real: tuple[float, float]
+    samples: tuple[float, float]
+    realism: float
+    realism_poses: float
+    windows: int
+    samples_per_window: int
+
+
+def sample_realism(bundle: ModelBundle, test: WindowSet, *, samples: int = 10, seed: int = 0) -> SampleRealism:
+    """:class:`SampleRealism` of any sampling model (``model.sample``) on the windows ``test``."""
+    from motion2video.stages.sampling import sample_futures
+
+    to = test.observed
+    horizon = test.features.shape[1] - to
+    futures = sample_futures(bundle.model, test.obs, num_samples=samples, horizon=horizon, seed=seed)  # (N, K, T, F)
+    fake_all = bundle.stats.denormalize(futures)
+    real = bundle.stats.denormalize(test.future)  # (N, T, F)
+    rows = np.arange(len(real))
+    one = fake_all[rows, rows % samples]  # (N, T, F)
+    every = fake_all.reshape(-1, horizon, real.shape[-1])  # (N*K, T, F)
+    return SampleRealism(real=motion_liveliness(real), samples=motion_liveliness(every),
+                         realism=M.quality(real, one),
+                         realism_poses=classifier_accuracy(pose_descriptor(real), pose_descriptor(one)),
+                         windows=len(real), samples_per_window=samples)
+
+
 def _posture(bundle: ModelBundle, features: np.ndarray) -> np.ndarray:
     """Normalised features (..., F) -> root-relative posture vectors (..., M), metres."""
     return W.metric_vectors(bundle.stats.denormalize(features), bundle.layout)
