@@ -227,7 +227,8 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         domain: ``"body"`` or ``"face"`` (the pose file must be of this kind).
         pose_path: the reference pose file; None looks for ``IMAGE.pose.npz`` beside the image.
     Raises:
-        InputError: unreadable image, or a pose file that is malformed or of the other domain.
+        InputError: unreadable image, a pose file that is malformed or of the other domain, or (body) a pose
+        with joints outside the image or no person, or an image that shows nothing along the pose's limbs.
     """
     path = Path(path)
     image, notes = read_reference_image(path)
@@ -246,6 +247,11 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             raise InputError(f"this reference pose is a {pose.kind} pose, but the frame model makes {domain} "
                              "frames", pose_path)
         pose = _fit_pose(pose, fit, size, (h, w))
+        if domain == "body":  # a person to move: joints inside the image, and the image shows them
+            from motion2video.frames.warp import check_reference_person, check_reference_points
+
+            check_reference_points(pose.points, width=size, height=size, path=pose_path)
+            check_reference_person(fitted, pose.points, path=path)
     else:
         notes.append(f"no reference pose file ({pose_path.name}): assuming the reference image shows the first "
                      "observed pose, framed like the default renderer")

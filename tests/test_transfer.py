@@ -4,6 +4,7 @@ its bad-input errors (one line, exit code 2, no output file)."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -325,6 +326,25 @@ def test_bad_input(case, ckpts, clips, face_dir, other_skeleton, tmp_path, capsy
                 "other-skeleton": "coco-17", "reference-without-frames": "--style frames", "no-flow": "flow",
                 "zero-samples": "--sample must be >= 1", "bad-suffix": "extension"}[case]
     assert expected in err
+
+
+def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys):
+    """--style frames with a uniform reference image (a valid pose file beside it): one line naming the
+    image, exit 2, no video and no npz."""
+    import shutil
+
+    from motion2video.video import read_image
+
+    demo = Path(__file__).resolve().parents[1] / "demo_inputs"
+    image = read_image(demo / "reference_body_128.png")
+    blank = tmp_path / "blank.png"
+    write_image(blank, np.broadcast_to(image[0, 0], image.shape).copy())
+    shutil.copy(demo / "reference_body_128.pose.npz", tmp_path / "blank.pose.npz")
+    out, npz = tmp_path / "out.mp4", tmp_path / "out.npz"
+    err = _fails(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
+                  clips["target"], "--style", "frames", "--reference", str(blank), "-o", str(out), "--npz", str(npz)],
+                 capsys, out, npz)
+    assert "blank.png" in err and "no visible person" in err
 
 
 def test_shipped_behavior_carries_held_out_jumps_and_speeds(mocap_dir, tmp_path, capsys):

@@ -329,13 +329,6 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
                          f"{gen_config.image_size} px frames only)")
     clip = load_clip(bundle, input_path).data
     ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
-    if domain == "body" and ref.pose is not None:
-        from motion2video.frames.warp import check_reference_points, check_reference_person
-        from motion2video.reference import reference_pose_path
-
-        check_reference_points(ref.pose.points, width=size, height=size,
-                               path=reference_pose if reference_pose is not None else reference_pose_path(reference))
-        check_reference_person(ref.image, ref.pose.points, path=reference)
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
