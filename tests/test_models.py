@@ -279,6 +279,25 @@ def test_liveliness_term_adds_weight_times_motion_stats_error_to_the_loss(name: 
     losses[7.0].total.backward()
 
 
+def test_velocity_input_decoder_reads_the_observed_velocity() -> None:
+    """MT-VAE's ``velocity_input``: the decoder's first step depends on the second-to-last observed frame (the
+    observed velocity), the default decoder's does not; loss and sampling run with it."""
+    obs, future = _batch()
+    moved = obs.clone()
+    moved[:, -2] += 1.0  # same last frame, other observed velocity
+    for velocity, differs in ((True, True), (False, False)):
+        model = _tiny("mtvae-add", velocity_input=velocity).eval()
+        z = torch.randn(3, model.config.latent_dim, generator=torch.Generator().manual_seed(1))
+        with torch.no_grad():
+            e_a = model.encoder(obs)[:, -1]
+            a = model._decode_sequence(model._future_feature(e_a, z), obs, 4)
+            b = model._decode_sequence(model._future_feature(e_a, z), moved, 4)
+        assert (not torch.allclose(a, b)) == differs
+    model = _tiny("mtvae-add", velocity_input=True).train()
+    model.loss(obs, future, step=10).total.backward()
+    assert _sample(model.eval(), obs, k=2, horizon=5, seed=0).shape == (3, 2, 5, F)
+
+
 def test_behavior_root_trajectory_decoder_follows_a_given_path_or_makes_its_own() -> None:
     """With ``root_trajectory`` the re-enactment's root features are exactly the given path; without a path
     the decoder generates its own root; training mixes both (its loss backpropagates)."""

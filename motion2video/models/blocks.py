@@ -209,28 +209,39 @@ class LSTMDecoder(nn.Module):
 
     The state starts at (tanh(A cond), A' cond); at each step the input is [cond, y_{t-1}] (or only y_{t-1}
     when ``feed_condition`` is False), and ``y_t = y_{t-1} + W h_t`` with ``y_0 = first_input``.
-    cond (B, C), first_input (B, F) -> (B, horizon, F).
+    With ``velocity_input`` the input also holds the last step's velocity ``y_{t-1} - y_{t-2}``, starting from
+    the observed one (``first_input - previous_input``), so the first generated frames can continue the
+    motion instead of having to recover its speed from ``cond``.
+    cond (B, C), first_input (B, F), previous_input (B, F) (velocity_input only) -> (B, horizon, F).
     """
 
     def __init__(
-        self, *, feature_dim: int, cond_dim: int, hidden_dim: int, layer_norm: bool, feed_condition: bool = True
+        self, *, feature_dim: int, cond_dim: int, hidden_dim: int, layer_norm: bool, feed_condition: bool = True,
+        velocity_input: bool = False,
     ) -> None:
         super().__init__()
         self.feed_condition = feed_condition
-        in_dim = feature_dim + (cond_dim if feed_condition else 0)
+        self.velocity_input = velocity_input
+        in_dim = feature_dim * (2 if velocity_input else 1) + (cond_dim if feed_condition else 0)
         self.init_h = nn.Linear(cond_dim, hidden_dim)
         self.init_c = nn.Linear(cond_dim, hidden_dim)
         self.cell = LSTMCell(in_dim, hidden_dim, layer_norm=layer_norm)
         self.out = nn.Linear(hidden_dim, feature_dim)
 
-    def forward(self, cond: torch.Tensor, first_input: torch.Tensor, *, horizon: int) -> torch.Tensor:
+    def forward(self, cond: torch.Tensor, first_input: torch.Tensor, *, horizon: int,
+                previous_input: torch.Tensor | None = None) -> torch.Tensor:
+        if self.velocity_input and previous_input is None:
+            raise ValueError("a velocity_input decoder needs previous_input (the second-to-last observed frame)")
         h, c = torch.tanh(self.init_h(cond)), self.init_c(cond)  # (B, H) each
         y = first_input  # (B, F)
+        v = first_input - previous_input if self.velocity_input else None  # (B, F)
         outputs = []
         for _ in range(horizon):
-            x = torch.cat([cond, y], dim=-1) if self.feed_condition else y  # (B, C+F) or (B, F)
-            h, c = self.cell(x, (h, c))
-            y = y + self.out(h)  # residual pose update
+            parts = ([cond] if self.feed_condition else []) + [y] + ([v] if self.velocity_input else [])
+            h, c = self.cell(torch.cat(parts, dim=-1), (h, c))
+            step = self.out(h)
+            y = y + step  # residual pose update
+            v = step
             outputs.append(y)
         return torch.stack(outputs, dim=1)  # (B, horizon, F)
 

@@ -70,6 +70,9 @@ class MTVAEConfig:
     # reconstruction (generated vs true mean absolute velocity and acceleration per feature). 0 = the paper's
     # loss; the L1 reconstruction alone is minimised by futures slower and smoother than real motion.
     motion_stats_weight: float = 0.0
+    # The sequence decoder also reads the last step's velocity, from the observed one on (issue 8: without it
+    # the first future frames were as far off as standing still). False = the paper's decoder input.
+    velocity_input: bool = False
 
 
 @dataclass(frozen=True)
@@ -93,7 +96,8 @@ class MTVAE(LatentSampler, nn.Module):
         dec_in = Z if c.context_free_decoder else Z + H
         self.latent_encoder = SkipMLP(enc_in, 2 * Z, hidden_dim=c.mlp_dim)
         self.latent_decoder = SkipMLP(dec_in, H, hidden_dim=c.mlp_dim)
-        self.decoder = LSTMDecoder(feature_dim=c.feature_dim, cond_dim=H, hidden_dim=H, layer_norm=c.layer_norm)
+        self.decoder = LSTMDecoder(feature_dim=c.feature_dim, cond_dim=H, hidden_dim=H, layer_norm=c.layer_norm,
+                                   velocity_input=c.velocity_input)
 
     # -- latent mappings -------------------------------------------------------------------------
 
@@ -107,6 +111,11 @@ class MTVAE(LatentSampler, nn.Module):
         x = z if self.config.context_free_decoder else torch.cat([z, e_a], dim=-1)
         out = self.latent_decoder(x)  # (B, H)
         return e_a + out if self.config.transform == "add" else out
+
+    def _decode_sequence(self, e_b_star: torch.Tensor, obs: torch.Tensor, horizon: int) -> torch.Tensor:
+        """The sequence decoder g from e*_B (B, H), seeded with the last observed frames of obs (B, To, F)."""
+        previous = obs[:, -2] if obs.shape[1] > 1 else obs[:, -1]  # one observed frame: velocity 0
+        return self.decoder(e_b_star, obs[:, -1], horizon=horizon, previous_input=previous)
 
     def _cycle_latent(self, e_a: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
         """z* of Eq. 2/3: the latent-encoder mean of the transformation decoded from z."""
@@ -129,7 +138,7 @@ class MTVAE(LatentSampler, nn.Module):
         """The future of ``obs`` under transformation z: obs (B, To, F), z (B, Z) -> (B, horizon, F)."""
         check_sequences(obs, None, feature_dim=self.config.feature_dim)
         e_a = self.encoder(obs)[:, -1]  # (B, H)
-        return self.decoder(self._future_feature(e_a, z), obs[:, -1], horizon=horizon)
+        return self._decode_sequence(self._future_feature(e_a, z), obs, horizon)
 
     def loss(self, obs: torch.Tensor, future: torch.Tensor, *, step: int) -> LossOutput:
         c = self.config
@@ -139,7 +148,7 @@ class MTVAE(LatentSampler, nn.Module):
         e_a, e_b = self.features(obs, future)
         post = self._posterior_from_features(e_a, e_b)
         z = reparameterize(post, torch.randn_like(post.mu))
-        pred = self.decoder(self._future_feature(e_a, z), last, horizon=Tf)  # (B, Tf, F)
+        pred = self._decode_sequence(self._future_feature(e_a, z), obs, Tf)  # (B, Tf, F)
         recon = reconstruction_l1(pred, future)
         lively = motion_stats_error(pred, future, last) if c.motion_stats_weight > 0 else pred.new_zeros(())
         kl = kl_std_normal(post).mean()
@@ -152,7 +161,7 @@ class MTVAE(LatentSampler, nn.Module):
         # motion coherence (Eq. 4): decode only the first K steps of another prior sample
         k = min(c.coherence_steps, Tf)
         z_motion = torch.randn(B, c.latent_dim, dtype=obs.dtype, device=obs.device)
-        pred_prior = self.decoder(self._future_feature(e_a, z_motion), last, horizon=k)  # (B, K, F)
+        pred_prior = self._decode_sequence(self._future_feature(e_a, z_motion), obs, k)  # (B, K, F)
         motion = motion_coherence(pred_prior, future, last_obs=last, steps=k)
 
         total = recon + w * kl + c.lambda_cycle * cycle + c.lambda_motion * motion + c.motion_stats_weight * lively
@@ -171,9 +180,8 @@ class MTVAE(LatentSampler, nn.Module):
         """z ~ N(0, I): (B*K, horizon, F) (see :class:`~motion2video.models.base.LatentSampler`)."""
         B, K = obs.shape[0], num_samples
         e_a = repeat_batch(self.encoder(obs)[:, -1], K)  # (B*K, H)
-        last = repeat_batch(obs[:, -1], K)  # (B*K, F)
         z = randn((B * K, self.config.latent_dim), like=obs, generator=generator)  # (B*K, Z)
-        return self.decoder(self._future_feature(e_a, z), last, horizon=horizon)  # (B*K, horizon, F)
+        return self._decode_sequence(self._future_feature(e_a, z), repeat_batch(obs[:, -2:], K), horizon)
 
 
 @register_model("mtvae-add", MTVAEConfig, kind="stochastic")
