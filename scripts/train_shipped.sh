@@ -7,11 +7,11 @@
 #   ONLY="mtvae-add lcpvae" scripts/train_shipped.sh
 #
 # These step counts are the ones the shipped checkpoints were trained with (their model cards record the
-# exact commands). Two lanes side by side, one torch thread each. Measured on the shared 2-core machine while
-# other jobs ran (wall time per model, training + held-out evaluation): lane A mtvae-add 4000 steps 23 min,
-# mtvae-add-dlow 600 steps 10 min, behavior 3000 steps 9 min; lane B lcpvae 3000 steps 11 min, mtvae-add-2d
-# 2500 steps 14 min, mtvae-add-face 1200 steps. About 45 minutes in all. Logs and evaluation JSON go to
-# out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
+# exact commands). Two lanes side by side, one torch thread each. Measured on the shared 2-core machine
+# (2026-11-25, wall time per model, training + held-out evaluation + card): lane A mtvae-add 4000 steps 14 min,
+# mtvae-add-dlow 600 steps 7 min, behavior 4000 steps 14 min; lane B lcpvae 3000 steps 7 min, mtvae-add-2d
+# 2500 steps 8 min, mtvae-add-face 1200 steps about 5 min. About 35 minutes in all. Logs and evaluation JSON go
+# to out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
 # Afterwards: python scripts/make_results_corpus.py (docs/results.md, issue 8).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -31,10 +31,13 @@ mkdir -p "$WEIGHTS" "$LOGS"
 # walking, 131, 140, 94 (Indian dance); validation = 3, 85, benchmark basketball, MASS.
 BODY_DATA='"data": {"held_out": "corpus"}'
 MTVAE='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128}'
+# The body models add a liveliness term (issue 13, motion_stats_weight: generated vs true mean |velocity| and
+# |acceleration| per feature); without it their futures moved at 0.2-0.5x the speed of real motion.
+MTVAE_BODY='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128, "motion_stats_weight": 100.0}'
 TRAIN='"train": {"batch_size": 64, "lr": 0.001, "checkpoint_every": 500, "val_every": 500}'
 # LCP-VAE: a wide learned prior (cs_kl_weight, see models/lcpvae.py) and a short teacher-forcing phase
 # (sampling decodes free-running; a long teacher-forced phase left the validation loss 8x above training).
-LCP='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128, "cs_kl_weight": 4.0, "teacher_forcing_steps": 300}'
+LCP='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128, "cs_kl_weight": 4.0, "teacher_forcing_steps": 300, "motion_stats_weight": 60.0}'
 # DLow on top of the trained mtvae-add: K = 50 affine maps of one noise, the base model frozen.
 DLOW='"model": {"num_samples": 50}, "train": {"batch_size": 16, "lr": 0.0005, "checkpoint_every": 200, "val_every": 200, "augment": true}'
 
@@ -59,7 +62,7 @@ train_one() {
 }
 
 lane_a() {
-  train_one mtvae-add mtvae-add "$MOCAP" 4000 "{$MTVAE, $BODY_DATA, $TRAIN}"
+  train_one mtvae-add mtvae-add "$MOCAP" 4000 "{$MTVAE_BODY, $BODY_DATA, $TRAIN}"
   train_one mtvae-add-dlow dlow "$MOCAP" 600 "{$DLOW}" --base "$WEIGHTS/mtvae-add.safetensors"
   # behaviour model with root-trajectory access (issue 13; see weights/behavior.md): 4000 steps, 10-13 min
   train_one behavior behavior "$MOCAP" 4000 \
@@ -68,7 +71,7 @@ lane_a() {
 
 lane_b() {
   train_one lcpvae lcpvae "$MOCAP" 3000 "{$LCP, $BODY_DATA, $TRAIN}"
-  train_one mtvae-add-2d mtvae-add "$MOCAP" 2500 "{$MTVAE, $BODY_DATA, $TRAIN}" --layout body2d
+  train_one mtvae-add-2d mtvae-add "$MOCAP" 2500 "{$MTVAE_BODY, $BODY_DATA, $TRAIN}" --layout body2d
   train_one mtvae-add-face mtvae-add "$FACE" 1200 "{$MTVAE, $TRAIN}" --layout face
 }
 
