@@ -17,6 +17,7 @@ import argparse
 import datetime
 import json
 import platform
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -206,13 +207,15 @@ def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: 
               f"What `sample` and `synthesize` draw: {first['samples_per_window']} futures per held-out window "
               f"({first['windows']} windows; behavior: flow samples). Mean absolute velocity / acceleration of "
               f"the features per frame over all samples (held-out ground truth **{real_v:.4f} / {real_a:.4f}**) "
-              "and their ratio to it (target 0.8-1.2); the real/fake classifier on one sample per window. "
+              "and their ratio to it (target 0.8-1.2; the 2D model's in virtual-camera image heights, against its "
+              "own ground truth); the real/fake classifier on one sample per window. "
               "'before' = the checkpoints shipped before the liveliness term (git 96e5d78), 'after' = shipped now.",
               "", "| model | velocity / acceleration | vs real | classifier (full) | classifier (poses) |",
               "| --- | ---: | ---: | ---: | ---: |"]
         for label, d in samplers.items():
             v, a = d["samples"]
-            L.append(f"| {label} | {v:.4f} / {a:.4f} | {v / real_v:.2f} / {a / real_a:.2f} | "
+            rv, ra = d["real"]  # each model's own ground truth (a 2D model's is in image units)
+            L.append(f"| {label} | {v:.4f} / {a:.4f} | {v / rv:.2f} / {a / ra:.2f} | "
                      f"{d['realism']:.2f} | {d['realism_poses']:.2f} |")
         L.append("")
     if controls:
@@ -264,7 +267,7 @@ def main(argv: list[str] | None = None) -> int:
     command = "python scripts/make_results_transfer_benchmark.py " + " ".join(
         [f"--behavior {label}={path}" for label, path in behaviors]
         + ([f"--analogy {args.analogy}"] if args.analogy != "mtvae-add" else [])
-        + [f"--sampler {v}" for v in args.sampler])
+        + [f"--sampler {shlex.quote(v)}" for v in args.sampler])
     from motion2video.core.atomic import write_section
 
     section = render(bench, live, samplers, controls, command=command, seconds=time.time() - t0)
