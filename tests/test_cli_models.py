@@ -83,6 +83,24 @@ def test_sample_writes_video_and_npz_deterministically(trained, mocap_dir, tmp_p
     assert np.linalg.norm(a["futures"][:, 0, 0] - a["observed"][-1, 0], axis=-1).max() < 0.5
 
 
+def test_sample_rigid_bones_keeps_the_observed_bone_lengths(mocap_dir, tmp_path):
+    """--rigid-bones: every future frame of the shipped model has the last observed frame's bone lengths (the
+    raw futures do not), the pelvis and the bone directions stay, and the npz says which it is."""
+    from motion2video.core.skeletons import bone_lengths
+
+    clip = mocap_dir / "cmu" / "02_01.bvh"
+    args = ["sample", "--model", "mtvae-add", str(clip), "--samples", "3", "--size", "64"]
+    assert main(args + ["-o", str(tmp_path / "raw.mp4"), "--npz", str(tmp_path / "raw.npz")]) == 0
+    assert main(args + ["--rigid-bones", "-o", str(tmp_path / "rigid.mp4"), "--npz", str(tmp_path / "rigid.npz")]) == 0
+    raw, rigid = np.load(tmp_path / "raw.npz"), np.load(tmp_path / "rigid.npz")
+    assert not bool(raw["rigid_bones"]) and bool(rigid["rigid_bones"])
+    observed = bone_lengths(rigid["observed"][-1])[1:]
+    np.testing.assert_allclose(bone_lengths(rigid["futures"])[..., 1:], np.broadcast_to(observed, (3, 48, 16)),
+                               rtol=1e-4)
+    assert np.abs(bone_lengths(raw["futures"])[..., 1:] / observed - 1).max() > 0.02
+    np.testing.assert_allclose(rigid["futures"][:, :, 0], raw["futures"][:, :, 0], atol=1e-6)  # pelvis
+
+
 def test_sample_with_a_baseline_name(mocap_dir, tmp_path):
     out = tmp_path / "zv.mp4"
     assert main(["sample", "--model", "zero-velocity", str(mocap_dir / "cmu" / "131_02.bvh"), "--samples", "1",

@@ -53,6 +53,18 @@ def test_body_videos_sheet_and_same_seed_same_frames(body_args, tmp_path, capsys
     assert diff[:6].max() < 0.5 and diff[6:].min() > 4 * diff[:6].max() + 0.1, diff
 
 
+def test_rigid_bones_changes_only_the_futures(body_args, tmp_path):
+    """--rigid-bones reaches the sampling stage: the observed frames are drawn the same, the futures not."""
+    videos = {}
+    for name, extra in (("raw", []), ("rigid", ["--rigid-bones"])):
+        out = tmp_path / f"{name}.mp4"
+        assert main(body_args + ["--reference", str(DEMO / "reference_body_128.png"), "--samples", "2",
+                                 "-o", str(out)] + extra) == 0
+        videos[name] = read_video(output_paths(out)[1])[0].astype(float)  # the structure video
+    diff = np.abs(videos["raw"] - videos["rigid"]).mean(axis=(1, 2, 3))  # (T,)
+    assert diff[:6].max() < 0.5 and diff[6:].max() > 1.0, diff
+
+
 def test_converted_references_get_a_note(body_args, tmp_path, capsys):
     ref = cv2.imread(str(DEMO / "reference_body_128.png"))
     grey = tmp_path / "grey.png"

@@ -81,10 +81,11 @@ def _shared_placement(fc: Forecast, r, size: int) -> dict:
 
 
 def save_forecast_npz(fc: Forecast, path: str | Path) -> Path:
-    """Write ``observed``, ``futures``, ``fps``, ``layout``, ``model``, ``seed`` (and ``skeleton`` for body
-    layouts) to an .npz, atomically."""
+    """Write ``observed``, ``futures``, ``fps``, ``layout``, ``model``, ``seed``, ``rigid_bones`` (and
+    ``skeleton`` for body layouts) to an .npz, atomically."""
     arrays = {"observed": fc.observed, "futures": fc.futures, "fps": np.float64(fc.fps),
-              "layout": np.str_(fc.layout), "model": np.str_(fc.model), "seed": np.int64(fc.seed)}
+              "layout": np.str_(fc.layout), "model": np.str_(fc.model), "seed": np.int64(fc.seed),
+              "rigid_bones": np.bool_(fc.rigid_bones)}
     if fc.layout != "face":
         arrays["skeleton"] = np.str_("h36m-17")
     return save_npz(path, arrays)

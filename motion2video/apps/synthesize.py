@@ -211,6 +211,8 @@ class SynthesisConfig:
         crf, preset: x264 settings of the two videos.
         size: output frame size (None: the generator's size); another size needs a warp generator, which
             keeps the reference's background at this size and generates the person at its own size.
+        rigid_bones: give the futures the observed bone lengths (3D body models;
+            :func:`motion2video.stages.sampling.forecast`).
     """
 
     samples: int = 5
@@ -224,6 +226,7 @@ class SynthesisConfig:
     crf: int = 18
     preset: str = "medium"
     size: int | None = None
+    rigid_bones: bool = False
 
 
 @dataclass
@@ -333,7 +336,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
 
     t0 = time.perf_counter()
     fc = sample_futures(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
-                        start=config.start, seed=config.seed, threads=config.motion_threads, source=str(input_path))
+                        start=config.start, seed=config.seed, threads=config.motion_threads, source=str(input_path),
+                        rigid_bones=config.rigid_bones)
     timings["sampling"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -8,6 +8,8 @@ from typing import Callable
 
 from motion2video.errors import InputError
 
+RIGID_BONES_HELP = ("keep the observed bone lengths in every future frame (3D body models: the models' own futures "
+                    "stretch and shrink limbs by several per cent; rigid ones are about 3%% further from the truth)")
 THREADS_HELP = ("torch CPU threads (default 1: the small recurrent models and the frame generator ran 3-40x faster "
                 "single-threaded on 2 shared cores)")
 

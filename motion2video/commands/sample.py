@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import (add_command, add_threads_argument, check_at_least, check_video_and_npz,
-                                          set_threads)
+from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_threads_argument, check_at_least,
+                                          check_video_and_npz, set_threads)
 
 HELP = "sample K futures of a clip from a motion model and render them as a grid video"
 
@@ -37,6 +37,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--horizon", type=int, default=None, help="future frames (default: the model's, 48)")
     p.add_argument("--start", type=int, default=0, help="first observed frame of the clip (default 0)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    p.add_argument("--rigid-bones", action="store_true", help=RIGID_BONES_HELP)
     p.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
     p.add_argument("--npz", default=None, help="also write observed + futures to this .npz")
     p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
         bundle = load_model(args.model)
     clip = load_clip_for(bundle, args.input)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
-                  start=args.start, seed=args.seed, source=args.input)
+                  start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
     chunks = iter_forecast(fc, style=args.style, size=args.size)
     with VideoWriter(out, fc.fps) as writer:
         for chunk in chunks:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.commands.common import add_command, check_at_least
+from motion2video.commands.common import RIGID_BONES_HELP, add_command, check_at_least
 from motion2video.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"
@@ -50,6 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--observed", type=int, default=None, help="observed frames (default: the motion model's)")
     p.add_argument("--horizon", type=int, default=None, help="future frames (default: the motion model's)")
     p.add_argument("--start", type=int, default=0, help="first observed frame of the clip (default 0)")
+    p.add_argument("--rigid-bones", action="store_true", help=RIGID_BONES_HELP)
     p.add_argument("--batch-size", type=int, default=4, help="generator frames per forward pass (default 4)")
     p.add_argument("--size", type=int, default=None,
                    help="output frame size (default: the frame model's); a warp body model (frames-body-128) "
@@ -73,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         check_at_least("--horizon", args.horizon)
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
-                             size=args.size)
+                             size=args.size, rigid_bones=args.rigid_bones)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

@@ -69,6 +69,7 @@ class Forecast:
         layout: the model's feature layout.
         model: the model's registry name.
         seed: the sampling seed.
+        rigid_bones: whether the futures were given the observed bone lengths (:func:`keep_bone_lengths`).
     """
 
     observed: np.ndarray
@@ -77,10 +78,12 @@ class Forecast:
     layout: str
     model: str
     seed: int
+    rigid_bones: bool = False
 
 
 def forecast(bundle: ModelBundle, clip: np.ndarray, *, num_samples: int, observed: int | None = None,
-             horizon: int | None = None, start: int = 0, seed: int = 0, source: str | None = None) -> Forecast:
+             horizon: int | None = None, start: int = 0, seed: int = 0, source: str | None = None,
+             rigid_bones: bool = False) -> Forecast:
     """Sample K futures of ``clip[start:start + observed]``.
 
     Args:
@@ -92,6 +95,10 @@ def forecast(bundle: ModelBundle, clip: np.ndarray, *, num_samples: int, observe
         start: first observed frame.
         seed: sampling seed (the same seed gives the same futures).
         source: the clip's path, for error messages.
+        rigid_bones: 3D body models: every future frame's bones rescaled along their own directions to the
+            last observed frame's lengths (:func:`keep_bone_lengths`). The models predict joint positions, and
+            their futures' bones vary by 5-15% (they shrink limbs where unsure); rigid futures look like the
+            observed person but are about 3% further from the truth (best-of-50 ADE, docs/results.md).
     Returns:
         A :class:`Forecast`.
     """
@@ -114,14 +121,25 @@ def forecast(bundle: ModelBundle, clip: np.ndarray, *, num_samples: int, observe
     samples = sample_futures(bundle.model, features, num_samples=num_samples, horizon=horizon,
                              seed=int(seed))  # (1, K, horizon, F)
     futures = decode_samples(samples, config=cfg, stats=bundle.stats, frame=frame)[0]
+    rigid = bool(rigid_bones) and cfg.layout == "body3d"
+    if rigid:
+        futures = keep_bone_lengths(futures, np.asarray(obs[-1]))
     return Forecast(observed=observed_in_layout(obs, config=cfg).astype(np.float32),
                     futures=futures.astype(np.float32), fps=cfg.fps, layout=cfg.layout, model=bundle.name,
-                    seed=int(seed))
+                    seed=int(seed), rigid_bones=rigid)
+
+
+def keep_bone_lengths(futures: np.ndarray, posture: np.ndarray) -> np.ndarray:
+    """Futures (K, T, 17, 3) with every frame's bones rescaled along their own directions to the lengths of
+    ``posture`` (17, 3), the pelvis kept where it is (:func:`motion2video.core.skeletons.with_bone_lengths`)."""
+    from motion2video.core.skeletons import bone_lengths, with_bone_lengths
+
+    return with_bone_lengths(futures, bone_lengths(posture)).astype(futures.dtype, copy=False)
 
 
 def sample_forecast(bundle, clip: np.ndarray, *, samples: int, observed: int | None = None,
                     horizon: int | None = None, start: int = 0, seed: int = 0, threads: int | None = 1,
-                    source: str | None = None) -> "Forecast":
+                    source: str | None = None, rigid_bones: bool = False) -> "Forecast":
     """K futures of ``clip[start:start + observed]`` from a motion model.
 
     Args:
@@ -130,6 +148,7 @@ def sample_forecast(bundle, clip: np.ndarray, *, samples: int, observed: int | N
             (:func:`motion2video.stages.clips.load_clip`).
         samples: K >= 1.
         threads: torch threads while sampling (1 is fastest for the small recurrent models here).
+        rigid_bones: keep the observed bone lengths in the futures (3D body models; see :func:`forecast`).
     Returns:
         A :class:`Forecast`: observed (To, ...) and futures (K, Tf, ...).
     """
@@ -137,4 +156,4 @@ def sample_forecast(bundle, clip: np.ndarray, *, samples: int, observed: int | N
         raise InputError(f"the number of samples must be in 1..{MAX_SAMPLES}, got {samples}")
     with torch_threads(threads):
         return forecast(bundle, clip, num_samples=int(samples), observed=observed, horizon=horizon, start=start,
-                        seed=seed, source=source)
+                        seed=seed, source=source, rigid_bones=rigid_bones)
