@@ -425,6 +425,7 @@ class WarpGenerator(nn.Module):
             raise ValueError(f"reference image must be (H, W, 3) uint8, got {image.shape} {image.dtype}")
         if points.shape != (NUM_JOINTS, 2):
             raise ValueError(f"reference keypoints must be (17, 2), got {points.shape}")
+        check_reference_points(points, width=image.shape[1], height=image.shape[0])
         check_reference_person(image, points)
         return ReferenceState(image=np.ascontiguousarray(image), points=points.astype(np.float32))
 
@@ -535,11 +536,10 @@ def limb_region(points: np.ndarray, *, width: int, height: int) -> np.ndarray:
 
 
 def check_reference_person(image: np.ndarray, points: np.ndarray, path=None) -> None:
-    """:func:`check_reference_points`, then InputError (naming ``path``) when the image (H, W, 3) uint8
-    shows nothing along the pose's limbs (grey-level standard deviation there below
-    :data:`MIN_PERSON_CONTRAST`): a blank or uniform reference has no person to move."""
+    """InputError (naming ``path``) when the image (H, W, 3) uint8 shows nothing along the limbs of the pose
+    ``points`` (17, 2), already checked by :func:`check_reference_points` (grey-level standard deviation there
+    below :data:`MIN_PERSON_CONTRAST`): a blank or uniform reference has no person to move."""
     height, width = image.shape[:2]
-    check_reference_points(points, width=width, height=height, path=path)
     region = limb_region(points, width=width, height=height)
     grey = np.asarray(image, np.float64).mean(axis=2)
     if not region.any() or float(grey[region].std()) < MIN_PERSON_CONTRAST:

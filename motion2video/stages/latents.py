@@ -18,7 +18,7 @@ from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import DatasetConfig, decode_samples, encode_windows
 from motion2video.models.behavior import BehaviorModel
-from motion2video.stages.sampling import as_model_input
+from motion2video.stages.sampling import as_model_input, keep_bone_lengths
 
 
 def encode_sequences(bundle: ModelBundle, sequences: np.ndarray) -> tuple[np.ndarray, W.WindowFrame | None]:
@@ -69,12 +69,12 @@ def rigid_bones(layout: str, sequences: np.ndarray) -> np.ndarray:
     bends the knees instead of pushing the feet into the ground."""
     if layout != "body3d":
         return sequences
-    from motion2video.core.skeletons import L_ANKLE, R_ANKLE, bone_lengths, feet_above, with_bone_lengths
+    from motion2video.core.skeletons import L_ANKLE, R_ANKLE, feet_above
 
     seq = np.asarray(sequences)
     out = []
     for s in seq:
-        rigid = with_bone_lengths(s, bone_lengths(s[0]))
+        rigid = keep_bone_lengths(s, s[0])
         floor = float(min(s[0, R_ANKLE, 2], s[0, L_ANKLE, 2]))  # the start posture's lower ankle
         out.append(np.concatenate([rigid[:1], feet_above(rigid[1:], floor)]))
     return np.stack(out).astype(seq.dtype, copy=False)

@@ -130,11 +130,12 @@ def forecast(bundle: ModelBundle, clip: np.ndarray, *, num_samples: int, observe
 
 
 def keep_bone_lengths(futures: np.ndarray, posture: np.ndarray) -> np.ndarray:
-    """Futures (K, T, 17, 3) with every frame's bones rescaled along their own directions to the lengths of
-    ``posture`` (17, 3), the pelvis kept where it is (:func:`motion2video.core.skeletons.with_bone_lengths`)."""
+    """Joints (..., 17, 3) (futures (K, T, 17, 3), or one sequence (T, 17, 3)) with every frame's bones rescaled
+    along their own directions to the lengths of ``posture`` (17, 3), the pelvis kept where it is
+    (:func:`motion2video.core.skeletons.with_bone_lengths`), float64."""
     from motion2video.core.skeletons import bone_lengths, with_bone_lengths
 
-    return with_bone_lengths(futures, bone_lengths(posture)).astype(futures.dtype, copy=False)
+    return with_bone_lengths(futures, bone_lengths(posture))
 
 
 def sample_forecast(bundle, clip: np.ndarray, *, samples: int, observed: int | None = None,
