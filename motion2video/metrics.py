@@ -266,6 +266,13 @@ def diversity(pred: np.ndarray) -> float:
     return float(dist[:, iu[0], iu[1]].mean())
 
 
+def liveliness(seq: np.ndarray) -> tuple[float, float]:
+    """How lively motion is: (mean |velocity|, mean |acceleration|) over every feature of (..., T, F)
+    sequences, per frame (units of the features per frame, per frame^2)."""
+    s = _f64(seq)
+    return float(np.abs(np.diff(s, 1, axis=-2)).mean()), float(np.abs(np.diff(s, 2, axis=-2)).mean())
+
+
 def sequence_descriptor(seq: np.ndarray) -> np.ndarray:
     """A fixed-length description of sequences for the classifiers: positions at every 4th frame, and the
     mean absolute velocity and acceleration and the standard deviation of each coordinate.

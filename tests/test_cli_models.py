@@ -66,7 +66,32 @@ def test_evaluate_writes_the_json_table(trained, small_data, tmp_path, capsys):
         assert all(np.isfinite(v) for v in row.values())
     assert result["results"]["zero-velocity"]["apd"] == 0.0
     assert result["protocol"]["samples"] == 3 and result["protocol"]["windows"] > 0
+    assert result["protocol"]["rigid_bones"] is False
+    assert result["results"]["zero-velocity"]["velocity_ratio"] == 0.0  # standing still
+    assert result["results"]["cvae"]["velocity_ratio"] > 0.0
     assert "zero-velocity" in capsys.readouterr().out
+
+
+def test_evaluate_rigid_bones_scores_futures_with_the_observed_bone_lengths(trained, small_data, tmp_path):
+    """--rigid-bones changes the learned model's scores, not the baselines' (zero-velocity repeats the last
+    observed frame, whose bones already have those lengths), and the projection keeps the observed lengths."""
+    from motion2video.core.skeletons import bone_lengths
+    from motion2video.evaluation.forecasting import rigid_vectors
+
+    runs = {}
+    for name, extra in (("raw", []), ("rigid", ["--rigid-bones"])):
+        out = tmp_path / f"{name}.json"
+        assert main(["evaluate", "--model", str(trained), "--data", str(small_data), "--samples", "3",
+                     "--stride", "32", "--json", str(out)] + extra) == 0
+        runs[name] = json.loads(out.read_text())
+    assert runs["rigid"]["protocol"]["rigid_bones"] is True
+    assert runs["rigid"]["results"]["cvae"]["ade"] != runs["raw"]["results"]["cvae"]["ade"]
+    assert runs["rigid"]["results"]["zero-velocity"]["ade"] == pytest.approx(runs["raw"]["results"]["zero-velocity"]["ade"])
+    rng = np.random.default_rng(0)
+    last, pred = rng.normal(size=(2, 48)), rng.normal(size=(2, 3, 4, 48))
+    joints = np.concatenate([np.zeros((2, 3, 4, 1, 3)), rigid_vectors(pred, last).reshape(2, 3, 4, 16, 3)], axis=-2)
+    want = bone_lengths(np.concatenate([np.zeros((2, 1, 3)), last.reshape(2, 16, 3)], axis=1))  # (2, 17)
+    np.testing.assert_allclose(bone_lengths(joints)[..., 1:], np.broadcast_to(want[:, None, None, 1:], (2, 3, 4, 16)))
 
 
 def test_sample_writes_video_and_npz_deterministically(trained, mocap_dir, tmp_path):

@@ -14,7 +14,8 @@ HELP = "score a motion model and the zero-velocity / last-step / sequence-motion
 DESCRIPTION = """\
 Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
 MMFDE (DLow protocol). Prints a table; --json writes {"protocol": {...}, "results": {"<method>": {"ade": ..,
-"fde": .., "mmade": .., "mmfde": .., "apd": ..}}}.
+"fde": .., "mmade": .., "mmfde": .., "apd": .., "velocity_ratio": .., "acceleration_ratio": ..}}}, the last two
+how lively the samples are (mean absolute velocity / acceleration of all features over the true futures').
 """
 
 EXAMPLES = """\
@@ -48,6 +49,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--recorded-only", action="store_true",
                    help="only the clips the checkpoint's recorded split names (reproduces results measured on "
                    "the folder it was trained on, e.g. the 72-clip models on the grown folder)")
+    p.add_argument("--rigid-bones", action="store_true",
+                   help="score 3D body futures with the last observed frame's bone lengths, as sample --rigid-bones "
+                   "draws them")
     p.add_argument("--extended", action="store_true",
                    help="also report S-MSE, R-MSE and the Parzen conditional log-likelihood (MT-VAE metrics)")
     add_threads_argument(p)
@@ -87,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
                          f"at {cfg.fps:g} fps ({cfg.observed} observed + {cfg.future} future), the longest has "
                          f"{longest}", args.data)
     bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in BASELINES]
-    protocol = EvalProtocol(samples=args.samples, stride=args.stride, split=args.split, seed=args.seed)
+    protocol = EvalProtocol(samples=args.samples, stride=args.stride, split=args.split, seed=args.seed,
+                            rigid_bones=args.rigid_bones)
     val = dataset.windows("val", stride=args.stride) if args.extended else None
     result = evaluate_bundles(bundles, windows, protocol=protocol, extended=args.extended, val_windows=val)
     result.protocol["checkpoint"] = str(bundle.path)

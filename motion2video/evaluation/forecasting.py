@@ -18,7 +18,7 @@ from motion2video import metrics as M
 from motion2video.checkpoint import ModelBundle
 from motion2video.data.dataset import WindowSet
 from motion2video.data.windows import FeatureLayout, metric_vectors
-from motion2video.stages.sampling import as_model_input
+from motion2video.stages.sampling import as_model_input, keep_bone_lengths
 from motion2video.stages.sampling import sample_futures  # noqa: F401 (public name of this module)
 
 # DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
@@ -39,6 +39,8 @@ class EvalProtocol:
         mm_threshold: multimodal ground-truth threshold on the last observed frame vector (None: the
             layout default of :data:`MM_THRESHOLDS`).
         batch_size: windows per model call.
+        rigid_bones: 3D body models: score the futures with the last observed frame's bone lengths, as
+            ``sample --rigid-bones`` draws them (:func:`rigid_vectors`).
     """
 
     samples: int = 50
@@ -47,6 +49,7 @@ class EvalProtocol:
     seed: int = 0
     mm_threshold: float | None = None
     batch_size: int = 32
+    rigid_bones: bool = False
 
     def threshold(self, layout: FeatureLayout) -> float:
         return MM_THRESHOLDS[layout.kind] if self.mm_threshold is None else float(self.mm_threshold)
@@ -102,6 +105,19 @@ def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarra
         rec = model.decode(o.repeat_interleave(num_samples, 0), z.reshape(b * num_samples, z_dim), horizon=horizon)
         out.append(rec.reshape(b, num_samples, horizon, -1).float().cpu().numpy())
     return np.concatenate(out)
+
+
+def rigid_vectors(pred: np.ndarray, last_observed: np.ndarray) -> np.ndarray:
+    """Body3d metric vectors (root-relative non-root joints) of samples pred (N, K, T, 48) with every frame's
+    bones set to the lengths of the window's last observed frame last_observed (N, 48), directions kept
+    (:func:`motion2video.stages.sampling.keep_bone_lengths`; bone lengths do not depend on the root)."""
+    def joints(v: np.ndarray) -> np.ndarray:  # (..., 48) -> (..., 17, 3), the root at the origin
+        j = v.reshape(*v.shape[:-1], -1, 3)
+        return np.concatenate([np.zeros_like(j[..., :1, :]), j], axis=-2)
+
+    out = [keep_bone_lengths(joints(p), joints(last))[..., 1:, :].reshape(p.shape)
+           for p, last in zip(np.asarray(pred, np.float64), np.asarray(last_observed, np.float64))]
+    return np.stack(out)
 
 
 def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *, threshold: float) -> dict[str, float]:
@@ -165,7 +181,12 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
         samples = sample_futures(bundle.model, renorm(windows.obs), num_samples=protocol.samples,
                                  horizon=horizon, seed=protocol.seed, batch_size=protocol.batch_size)
         pred = to_metric(samples)
+        if protocol.rigid_bones and layout.kind == "body3d":
+            pred = rigid_vectors(pred, last)
         row = dlow_metrics(pred, gt, last, threshold=threshold)
+        # how lively the samples are against the true futures (all features, root included; before rigid_bones)
+        (v, a), (v_true, a_true) = M.liveliness(own.denormalize(samples)), M.liveliness(windows.raw[:, obs_len:])
+        row["velocity_ratio"], row["acceleration_ratio"] = v / v_true, a / a_true
         result.ade_per_frame[bundle.label] = [float(v) for v in M.ade_per_frame(pred, gt)]
         if extended:
             row["s_mse"] = M.best_of_k_mse(pred, gt)

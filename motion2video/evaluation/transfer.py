@@ -26,7 +26,7 @@ from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import WindowSet
 from motion2video.models.behavior import BehaviorModel
-from motion2video.stages.sampling import as_model_input
+from motion2video.stages.sampling import as_model_input, sample_futures
 
 TABLE1_TIMESTEPS = (1, 10, 20, 30, 40)
 CM2 = 1.0e4  # m^2 -> cm^2
@@ -104,10 +104,7 @@ def classifier_accuracy(real: np.ndarray, fake: np.ndarray, *, l2: float = 1.0) 
     return float(np.mean(clf.predict(x[~train]) == y[~train]))
 
 
-def motion_liveliness(seq: np.ndarray) -> tuple[float, float]:
-    """(mean |velocity|, mean |acceleration|) over every feature of (N, T, F) sequences, per frame."""
-    s = np.asarray(seq, np.float64)
-    return float(np.abs(np.diff(s, 1, axis=1)).mean()), float(np.abs(np.diff(s, 2, axis=1)).mean())
+motion_liveliness = M.liveliness  # (mean |velocity|, mean |acceleration|) of (N, T, F) sequences, per frame
 
 
 @dataclass(frozen=True)
@@ -133,8 +130,6 @@ class SampleRealism:
 
 def sample_realism(bundle: ModelBundle, test: WindowSet, *, samples: int = 10, seed: int = 0) -> SampleRealism:
     """:class:`SampleRealism` of any sampling model (``model.sample``) on the windows ``test``."""
-    from motion2video.stages.sampling import sample_futures
-
     to = test.observed
     horizon = test.features.shape[1] - to
     futures = sample_futures(bundle.model, test.obs, num_samples=samples, horizon=horizon, seed=seed)  # (N, K, T, F)
