@@ -405,21 +405,26 @@ def tried_section(record: dict) -> str:
         f"{res['mtvae-add-dlow']['apd']:.2f} m"
         + (f"; known-answer coverage {ka['mtvae-add']['coverage']:.2f} -> {ka['mtvae-add + dlow']['coverage']:.2f} at "
            f"precision {ka['mtvae-add + dlow']['precision']:.2f}." if "mtvae-add + dlow" in ka else ".")
-        + " Trained 1500 instead of 600 steps (measured on the validation subjects, best of 50): ADE 0.976 -> "
-        "0.962 m, FDE 0.997 -> 1.006 m; a doubled diversity weight: ADE 0.977 m; neither shipped.",
+        + " Trained 1500 instead of 600 steps (`motion2video evaluate --split val` on the validation subjects, best "
+        "of 50): ADE 0.976 -> 0.962 m, FDE 0.997 -> 1.006 m; a doubled diversity weight (`lambda_div` 400): ADE "
+        "0.977 m; neither shipped.",
         "- **A liveliness term** (issue 13; `motion_stats_weight`: the generated vs the true mean absolute velocity "
         "and acceleration per feature, on the reconstruction): the models without it drew futures at 0.36-0.57x the "
         "speed of the held-out motion (docs/results_transfer.md). Measured on these windows against the checkpoints "
         "shipped before it (git 96e5d78), best of 50: mtvae-add ADE 0.649 -> 0.655 m, FDE 0.662 -> 0.677 m, APD "
         "4.10 -> 3.58 m; lcpvae ADE 0.680 -> 0.689 m, FDE 0.698 -> 0.698 m, APD 2.84 -> 3.17 m. A slightly "
         "higher best-of-50 error buys futures that move like people (velocity 0.45x -> 0.84x of the ground truth "
-        "for mtvae-add); best of 10 it is lower (mtvae-add 0.704 -> 0.692 m). On the known-answer benchmark "
+        "for mtvae-add); best of 10 it is lower (mtvae-add 0.704 -> 0.692 m; `motion2video evaluate --samples 10` on "
+        "the checkpoint of git 96e5d78 and the shipped one, whose `velocity_ratio` is 0.45 -> 0.84). On the "
+        "known-answer benchmark "
         "(shipped configs, so with the term): mtvae-add coverage / precision 0.82 / 0.97 -> 0.82 / 0.96, lcpvae "
         "0.66 / 0.70 -> 0.55 / 0.64, mtvae-add + DLow 1.00 / 0.97 -> 1.00 / 0.92.",
         "- **Rigid bones** (`sample` / `synthesize --rigid-bones`): the decoders predict joint positions, and their "
-        "futures change a bone's length by up to 64% (a held-out walk; they shrink limbs where unsure, which lowers "
-        "the L2 error). Projecting every future frame onto the last observed frame's bone lengths, measured on these "
-        "windows: mtvae-add best-of-50 ADE 0.655 -> 0.675 m, FDE 0.677 -> 0.687 m, APD 3.58 -> 4.03 m; lcpvae ADE "
+        "futures change a bone's length by up to 64% (the bone lengths of `futures` against the last `observed` "
+        "frame in `motion2video sample --model mtvae-add ../shared/data/mocap/cmu/02_01.bvh --samples 4 --npz`, a "
+        "held-out walk; they shrink limbs where unsure, which lowers the L2 error). Projecting every future frame onto the last observed frame's bone lengths, measured on these "
+        "windows (`motion2video evaluate --model mtvae-add --model lcpvae --data ../shared/data/mocap --rigid-bones`): "
+        "mtvae-add best-of-50 ADE 0.655 -> 0.675 m, FDE 0.677 -> 0.687 m, APD 3.58 -> 4.03 m; lcpvae ADE "
         "0.689 -> 0.705 m. An option for renders, off by default, so that `sample --npz` gives what `evaluate` scores.",
         "",
         "Where the remaining error is:",
@@ -433,8 +438,9 @@ def tried_section(record: dict) -> str:
         + ". The field's ratios in the issue were measured on Human3.6M, whose test actions all occur in training.",
         "- In the first 0.2 s the models' error is zero-velocity's, above last-step's (plot): the decoders do not "
         "carry the observed velocity into the first frames. Feeding the decoder the last step's velocity, starting "
-        "from the observed one (`velocity_input`), did not change that: 800-step pilots with and without it on the "
-        "validation subjects, best of 10: ADE 0.935x against 0.931x zero-velocity, first-frame error 0.179 against "
+        "from the observed one (`velocity_input`), did not change that: 800-step pilots with and without it (the "
+        "shipped mtvae-add command with `--steps 800` and `\"velocity_input\": true` / false in the model config), "
+        "scored by `motion2video evaluate --split val --samples 10` (ADE and the first frame of `ade_per_frame`): ADE 0.935x against 0.931x zero-velocity, first-frame error 0.179 against "
         "0.167 m (zero-velocity 0.150 m); not shipped.",
         "- LCP-VAE's future decoder sees the observation only through z. A prior wide enough for diversity carries "
         "less of the context, so about a third of its samples leave the modes the context allows (known-answer "
