@@ -46,6 +46,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "person along per-limb transforms (body only)")
     p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
                    help="warp model: its network works at 1/NET_SCALE of the resolution (default 4)")
+    p.add_argument("--flow-correction", action="store_true",
+                   help="warp model: the network also predicts a dense residual of the person's flow")
+    p.add_argument("--sample-mode", choices=("bilinear", "bicubic"), default=None,
+                   help="warp model: how the reference is sampled by the flow (default bilinear; bicubic is sharper)")
     p.add_argument("--init-from", default=None,
                    help="start from this checkpoint's weights (same kind), with a fresh optimiser and schedule")
     p.add_argument("--edge-weight", type=float, default=None,
@@ -103,9 +107,10 @@ def run(args: argparse.Namespace) -> int:
         from motion2video.frames.warp import WarpGeneratorConfig
 
         model_config = WarpGeneratorConfig(image_size=args.size, structure_channels=structure_channels("body"),
-                                           net_scale=args.net_scale or 4)
-    elif args.net_scale is not None:
-        raise InputError("--net-scale is a setting of --model-kind warp")
+                                           net_scale=args.net_scale or 4, flow_correction=args.flow_correction,
+                                           sample_mode=args.sample_mode or "bilinear")
+    elif args.net_scale is not None or args.flow_correction or args.sample_mode is not None:
+        raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp")
     result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
                           progress=not args.no_progress, init_from=args.init_from,
                           extra_metadata={"dataset_spec": spec.key()})

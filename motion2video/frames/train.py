@@ -121,6 +121,28 @@ def person_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -
     return l1, edge
 
 
+def grown_state(source: dict[str, torch.Tensor], target: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """``source`` weights fitted to a model whose layers may have *more output channels* (a head that
+    gained outputs): such a tensor keeps its trained leading rows and takes the new model's initial values
+    for the added ones; every other tensor is the source's (a mismatch of any other kind is left for
+    ``load_state_dict`` to report).
+
+    Args:
+        source: the trained state dict; target: the new model's state dict (its initial values).
+    Returns:
+        a state dict with the target's shapes where only the first dimension grew.
+    """
+    out = dict(source)
+    for name, new in target.items():
+        old = source.get(name)
+        if old is not None and old.dim() == new.dim() and old.shape[1:] == new.shape[1:] \
+                and old.shape[0] < new.shape[0]:
+            grown = new.clone()
+            grown[: old.shape[0]] = old
+            out[name] = grown
+    return out
+
+
 def train_frames(
     seqs: FrameSequences,
     *,
@@ -144,7 +166,8 @@ def train_frames(
         progress: show a tqdm progress bar.
         extra_metadata: merged into the checkpoint's ``train`` summary.
         init_from: start from the weights of this checkpoint (same kind, same parameter shapes; its
-            config may differ in settings without weights, e.g. the warp network's ``net_scale``), with a
+            config may differ in settings without weights, e.g. the warp network's ``net_scale``, or add
+            output channels, e.g. the warp network's ``flow_correction``: see :func:`grown_state`), with a
             fresh optimiser and schedule. Ignored when resuming.
     """
     output = Path(output)
@@ -184,7 +207,7 @@ def train_frames(
             raise InputError(f"cannot start from a {source.kind} model when training a {config.model_kind} model",
                              init_from)
         try:
-            model.load_state_dict(source.model.state_dict())
+            model.load_state_dict(grown_state(source.model.state_dict(), model.state_dict()))
         except RuntimeError as err:
             raise InputError(f"its weights do not fit the model being trained ({str(err).splitlines()[0]})",
                              init_from) from None

@@ -63,6 +63,8 @@ BACKGROUND_LOGIT = -2.0  # -0.5 (d / sigma)^2 with sigma = radius / 2 equals thi
 MASK_SHARPNESS = 3.0
 CROP_MARGIN = 0.25  # the crop is the two poses' box grown by this fraction of its side
 PLATE_GROW = 0.08  # the person region removed from the background plate is grown by this x torso length
+SAMPLE_MODES = ("bilinear", "bicubic")
+FLOW_UNIT = 1.0 / 32.0  # the flow residual's unit, as a fraction of the image side
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,12 @@ class WarpGeneratorConfig:
             it corrects the part masks and predicts visibility and an inpainting; the warped reference is
             composited at full resolution.
         net_scale: the network's level 0 works at 1 / net_scale of the image size (2 or 4).
+        flow_correction: the network also predicts a dense residual of the person's flow (2 channels, in
+            units of image_size / 32 pixels, zero at initialisation), added to the mask-weighted part flow:
+            it moves what the rigid part transforms put a few pixels off (loose clothing, a limb turning
+            out of the image plane).
+        sample_mode: how the reference is sampled by the final flow, ``"bilinear"`` or ``"bicubic"``
+            (sharper: bilinear sampling at sub-pixel offsets low-passes the texture it moves).
     """
 
     domain: str = "body"
@@ -86,6 +94,8 @@ class WarpGeneratorConfig:
     channels: tuple[int, ...] = (16, 32, 64)
     motion_channels: tuple[int, ...] = (16, 32, 64)
     net_scale: int = 4
+    flow_correction: bool = False
+    sample_mode: str = "bilinear"
 
     def __post_init__(self) -> None:
         if self.domain != "body":
@@ -95,6 +105,8 @@ class WarpGeneratorConfig:
                 raise ValueError(f"{name} needs at least two levels")
         if self.net_scale not in (1, 2, 4):
             raise ValueError(f"net_scale must be 1, 2 or 4, got {self.net_scale}")
+        if self.sample_mode not in SAMPLE_MODES:
+            raise ValueError(f"sample_mode must be one of {SAMPLE_MODES}, got {self.sample_mode!r}")
         factor = self.net_scale * 2 ** (len(self.motion_channels) - 1)
         if self.image_size < factor or self.image_size % factor:
             raise ValueError(f"image_size {self.image_size} must be a positive multiple of {factor}")
@@ -220,15 +232,16 @@ def to_grid(coords: torch.Tensor, height: int, width: int) -> torch.Tensor:
     return torch.stack([2.0 * coords[..., 0] / width - 1.0, 2.0 * coords[..., 1] / height - 1.0], dim=-1)
 
 
-def warp_image(image: torch.Tensor, flow_px: torch.Tensor) -> torch.Tensor:
+def warp_image(image: torch.Tensor, flow_px: torch.Tensor, mode: str = "bilinear") -> torch.Tensor:
     """Sample ``image`` (B, C, h, w) at reference pixel coordinates ``flow_px`` (B, H, W, 2) given in the
-    pixels of a (H, W) frame; features at a coarser level are sampled at the same relative places."""
+    pixels of a (H, W) frame; features at a coarser level are sampled at the same relative places.
+    ``mode``: ``"bilinear"`` or ``"bicubic"`` (``grid_sample``'s interpolation)."""
     h, w = flow_px.shape[1:3]
     grid = to_grid(flow_px, h, w)
     if image.shape[-2:] != (h, w):  # a coarser level: resample the grid to its size
         grid = F.interpolate(grid.permute(0, 3, 1, 2), size=image.shape[-2:], mode="bilinear",
                              align_corners=False).permute(0, 2, 3, 1)
-    return F.grid_sample(image, grid, mode="bilinear", padding_mode="border", align_corners=False)
+    return F.grid_sample(image, grid, mode=mode, padding_mode="border", align_corners=False)
 
 
 def background_plate(ref_image: torch.Tensor, ref_points: torch.Tensor,
@@ -259,20 +272,35 @@ def background_plate(ref_image: torch.Tensor, ref_points: torch.Tensor,
     return torch.from_numpy(out).permute(0, 3, 1, 2).to(ref_image.dtype).div(255.0)
 
 
-def composite(ref_image: torch.Tensor, plate: torch.Tensor, masks: torch.Tensor, maps: torch.Tensor) -> torch.Tensor:
+def person_flow(masks: torch.Tensor, maps: torch.Tensor, residual: torch.Tensor | None = None) -> torch.Tensor:
+    """The person's backward flow: the parts' maps weighted by their masks (normalised over the parts),
+    plus the learned ``residual`` (B, H, W, 2) pixels when given.
+
+    Args:
+        masks: (B, K, H, W) softmax over the components (background last); maps: (B, K, H, W, 2).
+    Returns:
+        (B, H, W, 2) reference pixel coordinates.
+    """
+    person = masks[:, :-1]  # (B, P, H, W)
+    weight = person.sum(1)[..., None].clamp_min(1e-4)  # (B, H, W, 1)
+    flow = (person[..., None] * maps[:, :-1]).sum(1) / weight
+    return flow if residual is None else flow + residual
+
+
+def composite(ref_image: torch.Tensor, plate: torch.Tensor, masks: torch.Tensor, maps: torch.Tensor,
+              residual: torch.Tensor | None = None, mode: str = "bilinear") -> torch.Tensor:
     """The reference's parts warped by their maps, over the background plate.
 
     Args:
         ref_image, plate: (B, 3, H, W); masks: (B, K, H, W) softmax over the components (background last);
-        maps: (B, K, H, W, 2) backward maps in reference pixels.
+        maps: (B, K, H, W, 2) backward maps in reference pixels; residual: (B, H, W, 2) pixels added to the
+        person's flow (:func:`person_flow`); mode: the sampling of :func:`warp_image`.
     Returns:
-        (B, 3, H, W): sum over parts of mask * reference sampled by the parts' mask-weighted map, plus
-        background mask * plate.
+        (B, 3, H, W): the person's mask x the reference sampled by the person's flow, plus the background
+        mask x the plate.
     """
-    person = masks[:, :-1]  # (B, P, H, W)
-    weight = person.sum(1, keepdim=True)  # (B, 1, H, W)
-    flow = (person[..., None] * maps[:, :-1]).sum(1) / weight[..., None].clamp_min(1e-4)[:, 0]
-    return weight * warp_image(ref_image, flow) + masks[:, -1:] * plate
+    weight = masks[:, :-1].sum(1, keepdim=True)  # (B, 1, H, W)
+    return weight * warp_image(ref_image, person_flow(masks, maps, residual), mode) + masks[:, -1:] * plate
 
 
 # --- networks ---------------------------------------------------------------------------------------------
@@ -330,7 +358,7 @@ class WarpOutput:
         inpainting: the painted RGB.
         visibility: (B, 1, H, W) weight of ``warped`` in the output.
         masks: (B, NUM_COMPONENTS, H, W) part masks (softmax).
-        flow: (B, H, W, 2) backward flow in reference pixels.
+        flow: (B, H, W, 2) the person's backward flow in reference pixels (:func:`person_flow`).
         person: (B, 1, H, W) soft region of the two people (reference and target poses), for pasting.
     """
 
@@ -369,7 +397,7 @@ class WarpGenerator(nn.Module):
         self.image_encoder = Pyramid(3, ch)
         self.encoder = Pyramid(3 + 3 + config.structure_channels + k + 1, ch)
         self.fuse = nn.ModuleList([_conv(2 * c, c) for c in ch])
-        self.decoder = UpDecoder(ch, k + 1 + 3)
+        self.decoder = UpDecoder(ch, k + 1 + 3 + (2 if config.flow_correction else 0))
         nn.init.zeros_(self.decoder.head.weight)
         nn.init.zeros_(self.decoder.head.bias)
         with torch.no_grad():  # start from the prior masks, copying the composite everywhere
@@ -397,10 +425,13 @@ class WarpGenerator(nn.Module):
         feats = [fuse(torch.cat([a, f], dim=1)) for fuse, a, f in zip(self.fuse, self.encoder(net_in), img_feats)]
         out = F.interpolate(self.decoder(feats), size=(h, w), mode="bilinear", align_corners=False)
         masks = torch.softmax(prior + out[:, :k], dim=1)
-        flow = (masks[..., None] * maps).sum(1)  # (B, H, W, 2)
-        warped = composite(ref_image, plate, masks, maps)
+        residual = None
+        if self.config.flow_correction:  # (B, H, W, 2) pixels
+            residual = out[:, k + 4:k + 6].permute(0, 2, 3, 1) * (FLOW_UNIT * w)
+        flow = person_flow(masks, maps, residual)  # (B, H, W, 2)
+        warped = composite(ref_image, plate, masks, maps, residual, self.config.sample_mode)
         visibility = torch.sigmoid(out[:, k:k + 1])
-        inpainting = torch.sigmoid(out[:, k + 1:] + torch.logit(plate.clamp(0.02, 0.98)))
+        inpainting = torch.sigmoid(out[:, k + 1:k + 4] + torch.logit(plate.clamp(0.02, 0.98)))
         image = visibility * warped + (1.0 - visibility) * inpainting
         person = torch.maximum(ref_person, 1.0 - masks[:, -1:])
         return WarpOutput(image=image, warped=warped, inpainting=inpainting, visibility=visibility, masks=masks,
