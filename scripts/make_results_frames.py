@@ -72,7 +72,46 @@ def speed_line(bench: dict | None) -> str:
             f"the person crop and its paste back into the full-size reference.\n")
 
 
-def section(evaluation: dict, model: str, command: str, minutes: float, bench: dict | None = None) -> str:
+def analysis_text(a: dict | None) -> str:
+    """The error analysis of ``scripts/frames_error_analysis.py`` (its JSON) as a markdown subsection."""
+    if not a:
+        return ""
+    gap_rows = "\n".join(f"| {g} ({0.15 * int(g):.2f} s) | {v['mean_joint_motion_px']:.1f} | {v['generator']:.2f} "
+                         f"| {v['limb-warp']:.2f} | {v['copy-reference']:.2f} |"
+                         for g, v in a["person_psnr_by_gap"].items())
+    sh = a["person_psnr_of_the_flow_shifted"]
+    worst = min(v for k, v in sh.items() if k != "none")
+    share = a["whole_frame_error_share"]
+    whole = a["whole_psnr"]
+    oracle = a["oracle_residual_flow"]
+    fits = "; ".join(f"a {k.split('_')[-1]} field: {v['person_psnr']:.2f} dB, mean length {v['mean_residual_px']:.2f} px"
+                     for k, v in oracle.items() if k.startswith("fitted"))
+    return f"""### Where the person's error is
+
+`python scripts/frames_error_analysis.py --model {a['model']}` (same pairs; the generator on whole frames):
+
+| time from the reference | mean joint motion (px) | person PSNR, generator | limb-warp | copy-reference |
+| --- | ---: | ---: | ---: | ---: |
+{gap_rows}
+
+- **Sub-pixel alignment decides the person PSNR.** The reference sampled by the generator's own person flow
+  scores {sh['none']:.2f} dB; the same flow shifted by half a pixel scores {worst:.2f} to
+  {max(v for k, v in sh.items() if k != 'none'):.2f} dB. The people are {a['person_height_px']:.0f} pixels tall on average ({a['person_pixels']} pixels), with stripes and
+  checks a few pixels wide, so where a limb twists about its bone or a garment slides (neither is in 2D keypoints)
+  the texture lands out of phase. Even one frame after the reference (0.15 s, about 4 pixels of joint motion) the
+  person PSNR is {a['person_psnr_by_gap']['1']['generator']:.2f} dB.
+- **The flow is close, not right.** A smooth residual flow fitted to the truth on {oracle['pairs']} pairs (an
+  oracle, from {oracle['its_flow']:.2f} dB): {fits}.
+- **The whole frame.** Of its squared error, {100 * share['target_person']:.0f}% is on the target person,
+  {100 * share['uncovered_background']:.0f}% on the background the reference person uncovered (never seen:
+  filled by OpenCV's Telea inpainting) and {100 * share['rest']:.0f}% elsewhere (the soft masks and the plate's
+  margin). With the true silhouette and the true background, this flow would give {whole['its_flow_true_silhouette_true_background']:.2f} dB
+  ({whole['generator']:.2f} dB as generated).
+"""
+
+
+def section(evaluation: dict, model: str, command: str, minutes: float, bench: dict | None = None,
+            analysis: dict | None = None) -> str:
     res = evaluation["results"]
     gen = res["generator"]
     margins = ", ".join(f"{gen['person_psnr'] - res[k]['person_psnr']:+.2f} dB over {k}"
@@ -99,10 +138,15 @@ What was tried, in order (each stage starts from the previous weights; the model
 warp design with its network at 1/4 resolution, 1800 steps: person PSNR 17.15 dB, sharpness 0.77 (the untrained
 model, which warps by the part transforms alone, is at limb-warp's level); its network at 1/2 resolution
 (`--net-scale 2`), 3000 more steps: 17.35 dB, sharpness 0.78; a third stage at a lower learning rate with the
-edge loss doubled: 17.45 dB, the shipped model. The two missed person targets need more than training time: the part transforms are rigid per
-bone, so loose clothing and foreshortened limbs land a few pixels off, and the visibility mask then blends
-rather than copies.
+edge loss doubled: 17.45 dB, sharpness 0.78 (the model shipped until 2026-11-25). Bilinear sampling at
+sub-pixel offsets low-passes the texture it moves, so a fourth stage samples the reference bicubically
+(`--sample-mode bicubic`, 6500 steps, 36 min): the shipped model above, at about 0.2 dB of person PSNR for the
+sharpness (sharp texture a fraction of a pixel off costs more than a blur). Beside it, the same stage with a
+learned dense residual of the person's flow (`--flow-correction`), scored by the same command on its
+checkpoint: person PSNR 17.49 dB, sharpness 0.86, whole frame 26.80 dB (the residual learns to smear where it
+is unsure); 2200 more steps of it with the edge loss at 4: 17.49 dB, sharpness 0.81. The missed targets need more than training time: see below.
 
+{analysis_text(analysis)}
 {speed_line(bench)}
 Reference | target | new | old | copy-reference | limb-warp, on held-out pairs:
 
@@ -119,6 +163,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames.json"))
     parser.add_argument("--bench", default=None, help="a bench_pipeline.py JSON: adds the generators' speed")
+    parser.add_argument("--no-analysis", action="store_true",
+                        help="leave out scripts/frames_error_analysis.py (a few minutes: it fits oracle flows)")
     args = parser.parse_args(argv)
 
     start = time.perf_counter()
@@ -132,8 +178,14 @@ def main(argv: list[str] | None = None) -> int:
     evaluation = json.loads(Path(args.json).read_text())
     shown = f"motion2video evaluate-frames --model {args.model} --json out/results_frames.json"
     bench = json.loads(Path(args.bench).read_text()) if args.bench else None
+    analysis = None
+    if not args.no_analysis:
+        analysis_json = Path(args.json).with_name("frames_error_analysis.json")
+        subprocess.run([sys.executable, str(ROOT / "scripts" / "frames_error_analysis.py"), "--model", args.model,
+                        "--json", str(analysis_json), *(["--cache", args.cache] if args.cache else [])], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+        analysis = json.loads(analysis_json.read_text())
     write_section(args.doc, BEGIN, END, section(evaluation, args.model, shown, (time.perf_counter() - start) / 60,
-                                                bench))
+                                                bench, analysis))
     print(f"wrote {args.doc}, {sheet} and {args.json}")
     return 0
 
