@@ -61,6 +61,19 @@ def table(results: dict, model: str) -> str:
     return head + "\n" + "\n".join(rows)
 
 
+# The bench's third generator, when measured: the shipped model before its bicubic stage (--compare-frame-model FILE).
+STAGE3_NOTE = (" `frames-body-128-stage3` is the third-stage (bilinear) checkpoint, measured with "
+               "`--compare-frame-model` on `git show 7587fa5:motion2video/weights/frames-body-128.safetensors`.")
+
+
+def stage3_note(side: dict) -> str:
+    """:data:`STAGE3_NOTE` and the speed bicubic sampling costs, when the bench measured the third stage."""
+    stage3 = [fps for name, fps in side.items() if name.endswith("stage3")]
+    if not stage3 or "frames-body-128" not in side:
+        return ""
+    return f"{STAGE3_NOTE} Bicubic sampling costs {100 * (1 - side['frames-body-128'] / stage3[0]):.0f}% of the speed."
+
+
 def speed_line(bench: dict | None) -> str:
     if not bench or not bench.get("generators_side_by_side"):
         return ""
@@ -69,7 +82,7 @@ def speed_line(bench: dict | None) -> str:
     shown = ", ".join(f"`{name}` {fps:.1f}" for name, fps in side.items())
     return (f"Speed at 128x128 (`python scripts/bench_pipeline.py`, same run, load average "
             f"{machine.get('load_average_1min', float('nan')):.1f}): {shown} frames/s. The warp generator pays for "
-            f"the person crop and its paste back into the full-size reference.\n")
+            f"the person crop and its paste back into the full-size reference.{stage3_note(side)}\n")
 
 
 def analysis_text(a: dict | None) -> str:
