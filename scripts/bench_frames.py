@@ -7,16 +7,15 @@ channels_last) and training steps/s, on random inputs of the default architectur
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import sys
-from pathlib import Path
 
 import numpy as np
 import torch
 
 from motion2video import __version__
 from motion2video.benchtools import median_seconds as _median_time
+from motion2video.atomic import write_json
 from motion2video.frames.data import structure_channels
 from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate,
                                        reconstruction_loss)
@@ -80,10 +79,7 @@ def main(argv: list[str] | None = None) -> int:
                      "python": sys.version.split()[0]},
         "machine": platform.platform(),
     }
-    out = Path(args.json)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(payload, indent=2) + "\n")
-    print(json.dumps(payload, indent=2))
+    print(write_json(args.json, payload).read_text(), end="")
     return 0
 
 

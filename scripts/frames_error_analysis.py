@@ -21,7 +21,6 @@ The generator runs on the whole 128x128 frames (``forward_parts``), which for th
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -35,22 +34,14 @@ from motion2video.frames.baselines import run_baseline  # noqa: E402
 from motion2video.frames.checkpoint import load_frame_model  # noqa: E402
 from motion2video.frames.data import (default_cache_dir, default_spec, evaluation_pair_index,  # noqa: E402
                                       load_or_generate, make_pairs)
-from motion2video.frames.evaluate import region_psnr, sharpness_ratio  # noqa: E402
+from motion2video.atomic import write_json  # noqa: E402
+from motion2video.frames.evaluate import frame_metrics, region_psnr, sharpness_ratio  # noqa: E402
+from motion2video.frames.model import images_to_tensor, tensor_to_images  # noqa: E402
 from motion2video.frames.warp import WarpGenerator, warp_image  # noqa: E402
-
-
-def to_uint8(x: torch.Tensor) -> np.ndarray:
-    """(B, 3, H, W) float in [0, 1] -> (B, H, W, 3) uint8."""
-    return (x.detach().clamp(0, 1).permute(0, 2, 3, 1).numpy() * 255.0).round().astype(np.uint8)
 
 
 def mean_person_psnr(pred: np.ndarray, truth: np.ndarray, masks: np.ndarray) -> float:
     return float(np.nanmean([region_psnr(p, t, m) for p, t, m in zip(pred, truth, masks)]))
-
-
-def whole_psnr(pred: np.ndarray, truth: np.ndarray) -> float:
-    mse = ((pred.astype(np.float64) - truth.astype(np.float64)) ** 2).mean(axis=(1, 2, 3))
-    return float(np.mean(10.0 * np.log10(255.0**2 / np.maximum(mse, 1e-10))))
 
 
 def fitted_residual_psnr(ref: torch.Tensor, truth: torch.Tensor, flow: torch.Tensor, masks: np.ndarray, *,
@@ -72,9 +63,9 @@ def fitted_residual_psnr(ref: torch.Tensor, truth: torch.Tensor, flow: torch.Ten
         opt.step()
     with torch.no_grad():
         d = F.interpolate(delta, size=(h, w), mode="bilinear", align_corners=False).permute(0, 2, 3, 1)
-        pred = to_uint8(warp_image(ref, flow + d, mode))
+        pred = tensor_to_images(warp_image(ref, flow + d, mode))
         length = float(d.norm(dim=-1)[torch.from_numpy(masks)].mean())
-    truth_u8 = to_uint8(truth)
+    truth_u8 = tensor_to_images(truth)
     return mean_person_psnr(pred, truth_u8, masks), length
 
 
@@ -97,14 +88,14 @@ def main(argv: list[str] | None = None) -> int:
     index = evaluation_pair_index(seqs)
     pairs = make_pairs(seqs, index)
     truth, ref_u8, tgt_masks, ref_masks = pairs.tgt_images, pairs.ref_images, pairs.tgt_masks, pairs.ref_masks
-    ref = torch.from_numpy(ref_u8).permute(0, 3, 1, 2).float() / 255.0
+    ref = images_to_tensor(ref_u8)
     images, flows, person = [], [], []
     with torch.no_grad():
         for s in range(0, len(pairs), 32):
             out = model.forward_parts(ref[s:s + 32], torch.from_numpy(pairs.ref_points[s:s + 32]),
                                       torch.from_numpy(pairs.tgt_points[s:s + 32]),
                                       torch.from_numpy(pairs.tgt_structures[s:s + 32]))
-            images.append(to_uint8(out.image))
+            images.append(tensor_to_images(out.image))
             flows.append(out.flow)
             person.append(1.0 - out.masks[:, -1])
     gen, flow = np.concatenate(images), torch.cat(flows)
@@ -127,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     with torch.no_grad():
         for name, offset in (("none", (0.0, 0.0)), ("x+0.5", (0.5, 0.0)), ("x-0.5", (-0.5, 0.0)),
                              ("y+0.5", (0.0, 0.5)), ("y-0.5", (0.0, -0.5))):
-            sampled = to_uint8(warp_image(ref, flow + torch.tensor(offset), mode))
+            sampled = tensor_to_images(warp_image(ref, flow + torch.tensor(offset), mode))
             shifts[name] = round(mean_person_psnr(sampled, truth, tgt_masks), 2)
     report["person_psnr_of_the_flow_shifted"] = shifts
 
@@ -139,20 +130,20 @@ def main(argv: list[str] | None = None) -> int:
                                          (("target_person", tgt_masks), ("uncovered_background", uncovered),
                                           ("rest", rest))}
     with torch.no_grad():
-        sampled = to_uint8(warp_image(ref, flow, mode))
+        sampled = tensor_to_images(warp_image(ref, flow, mode))
     alpha = tgt_masks[..., None].astype(np.float64)
     ceiling = np.rint(alpha * sampled + (1 - alpha) * truth).astype(np.uint8)
-    report["whole_psnr"] = {"generator": round(whole_psnr(gen, truth), 2),
-                            "its_flow_true_silhouette_true_background": round(whole_psnr(ceiling, truth), 2)}
+    report["whole_psnr"] = {"generator": round(float(frame_metrics(gen, truth)[0].mean()), 2),
+                            "its_flow_true_silhouette_true_background": round(float(frame_metrics(ceiling, truth)[0].mean()), 2)}
     report["person"] = {"generator_psnr": round(mean_person_psnr(gen, truth, tgt_masks), 2),
                         "generator_sharpness": round(float(np.nanmean([sharpness_ratio(a, b, m) for a, b, m in
                                                                        zip(gen, truth, tgt_masks)])), 3),
                         "limb_warp_psnr": round(mean_person_psnr(limb, truth, tgt_masks), 2)}
 
     pick = np.arange(0, len(pairs), args.oracle_every)
-    tgt = torch.from_numpy(truth[pick]).permute(0, 3, 1, 2).float() / 255.0
+    tgt = images_to_tensor(truth[pick])
     with torch.no_grad():
-        base = mean_person_psnr(to_uint8(warp_image(ref[pick], flow[pick], mode)), truth[pick], tgt_masks[pick])
+        base = mean_person_psnr(tensor_to_images(warp_image(ref[pick], flow[pick], mode)), truth[pick], tgt_masks[pick])
     oracle = {"pairs": len(pick), "its_flow": round(base, 2)}
     for grid in (16, 32):
         value, length = fitted_residual_psnr(ref[pick], tgt, flow[pick], tgt_masks[pick], grid=grid,
@@ -161,10 +152,7 @@ def main(argv: list[str] | None = None) -> int:
                                                     "mean_residual_px": round(length, 2)}
     report["oracle_residual_flow"] = oracle
 
-    path = Path(args.json)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(report, indent=2) + "\n")
-    print(json.dumps(report, indent=2))
+    print(write_json(args.json, report).read_text(), end="")
     return 0
 
 

@@ -188,14 +188,24 @@ def test_evaluation_scores_a_named_baseline_generator():
     assert body_structures(seqs.points[0], 32).shape == (3, 33, 32, 32)
 
 
+def train_then_init_from(tmp_path, seqs, first: WarpGeneratorConfig, second: WarpGeneratorConfig, *,
+                         first_steps: int = 1):
+    """Train a warp model with ``first`` for ``first_steps``, then one step of a ``second`` model started from
+    it (--init-from) at lr 1e-12, which keeps the carried weights; returns both training results."""
+    cfg = TrainFramesConfig(steps=first_steps, batch_size=2, checkpoint_every=first_steps, log_every=1,
+                            model_kind="warp")
+    a = train_frames(seqs, output=tmp_path / "a.safetensors", config=cfg, progress=False, model_config=first)
+    b = train_frames(seqs, output=tmp_path / "b.safetensors", config=TrainFramesConfig(
+        steps=1, batch_size=2, checkpoint_every=1, log_every=1, model_kind="warp", lr=1e-12), progress=False,
+        model_config=second, init_from=a.path)
+    return a, b
+
+
 def test_init_from_carries_weights_across_net_scales(tmp_path):
     seqs = toy_sequences("body", num_sequences=3, frames_per_sequence=3, image_size=32)
     cfg = TrainFramesConfig(steps=1, batch_size=2, checkpoint_every=1, log_every=1, model_kind="warp")
-    first = train_frames(seqs, output=tmp_path / "a.safetensors", config=cfg, progress=False,
-                         model_config=WarpGeneratorConfig(image_size=32, net_scale=4))
-    second = train_frames(seqs, output=tmp_path / "b.safetensors", config=TrainFramesConfig(
-        steps=1, batch_size=2, checkpoint_every=1, log_every=1, model_kind="warp", lr=1e-12), progress=False,
-        model_config=WarpGeneratorConfig(image_size=32, net_scale=2), init_from=first.path)
+    first, second = train_then_init_from(tmp_path, seqs, WarpGeneratorConfig(image_size=32, net_scale=4),
+                                         WarpGeneratorConfig(image_size=32, net_scale=2))
     a, b = load_frame_model(first.path), load_frame_model(second.path)
     assert b.config.net_scale == 2 and b.train["init_from"] == str(first.path)
     for key, value in a.model.state_dict().items():  # a step at lr 1e-12 keeps the carried weights
@@ -207,16 +217,12 @@ def test_init_from_carries_weights_across_net_scales(tmp_path):
 
 
 def test_flow_correction_grows_from_a_trained_model_and_starts_where_it_was(tmp_path):
-    """--init-from a model without the flow residual into one with it (and bicubic sampling): the trained
-    weights carry over, the two new output channels start at zero, so the residual is zero; a non-zero
-    residual moves the person."""
+    """--init-from a model without the flow residual into one with it: the trained weights carry over, the
+    two new output channels start at zero, so the residual is zero; a non-zero residual moves the person."""
     seqs = toy_sequences("body", num_sequences=3, frames_per_sequence=3, image_size=32)
-    cfg = TrainFramesConfig(steps=2, batch_size=2, checkpoint_every=2, log_every=1, model_kind="warp")
-    first = train_frames(seqs, output=tmp_path / "a.safetensors", config=cfg, progress=False,
-                         model_config=WarpGeneratorConfig(image_size=32, net_scale=2))
-    second = train_frames(seqs, output=tmp_path / "b.safetensors", config=TrainFramesConfig(
-        steps=1, batch_size=2, checkpoint_every=1, log_every=1, model_kind="warp", lr=1e-12), progress=False,
-        model_config=WarpGeneratorConfig(image_size=32, net_scale=2, flow_correction=True), init_from=first.path)
+    first, second = train_then_init_from(
+        tmp_path, seqs, WarpGeneratorConfig(image_size=32, net_scale=2),
+        WarpGeneratorConfig(image_size=32, net_scale=2, flow_correction=True), first_steps=2)
     a, b = load_frame_model(first.path).model, load_frame_model(second.path).model
     assert b.config.flow_correction and not a.config.flow_correction
     head_a, head_b = a.decoder.head.weight, b.decoder.head.weight

@@ -287,20 +287,20 @@ def person_flow(masks: torch.Tensor, maps: torch.Tensor, residual: torch.Tensor 
     return flow if residual is None else flow + residual
 
 
-def composite(ref_image: torch.Tensor, plate: torch.Tensor, masks: torch.Tensor, maps: torch.Tensor,
-              residual: torch.Tensor | None = None, mode: str = "bilinear") -> torch.Tensor:
-    """The reference's parts warped by their maps, over the background plate.
+def composite(ref_image: torch.Tensor, plate: torch.Tensor, masks: torch.Tensor, flow: torch.Tensor,
+              mode: str = "bilinear") -> torch.Tensor:
+    """The reference person moved by its flow, over the background plate.
 
     Args:
         ref_image, plate: (B, 3, H, W); masks: (B, K, H, W) softmax over the components (background last);
-        maps: (B, K, H, W, 2) backward maps in reference pixels; residual: (B, H, W, 2) pixels added to the
-        person's flow (:func:`person_flow`); mode: the sampling of :func:`warp_image`.
+        flow: (B, H, W, 2) the person's backward flow in reference pixels (:func:`person_flow`); mode: the
+        sampling of :func:`warp_image`.
     Returns:
-        (B, 3, H, W): the person's mask x the reference sampled by the person's flow, plus the background
-        mask x the plate.
+        (B, 3, H, W): the person's mask x the reference sampled by the flow, plus the background mask x the
+        plate.
     """
     weight = masks[:, :-1].sum(1, keepdim=True)  # (B, 1, H, W)
-    return weight * warp_image(ref_image, person_flow(masks, maps, residual), mode) + masks[:, -1:] * plate
+    return weight * warp_image(ref_image, flow, mode) + masks[:, -1:] * plate
 
 
 # --- networks ---------------------------------------------------------------------------------------------
@@ -413,7 +413,7 @@ class WarpGenerator(nn.Module):
         prior_masks = torch.softmax(prior, dim=1)
         ref_person = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_points, h, w), dim=1)[:, -1:]
         plate = background_plate(ref_image, ref_points, ref_person[:, 0])  # (B, 3, H, W) without the person
-        prior_image = composite(ref_image, plate, prior_masks, maps)
+        prior_image = composite(ref_image, plate, prior_masks, person_flow(prior_masks, maps))
         x = torch.cat([prior_image, plate], dim=1) * 2.0 - 1.0
         scale = self.config.net_scale
         net_in = torch.cat([x, tgt_structure, prior_masks, ref_person], dim=1)
@@ -429,7 +429,7 @@ class WarpGenerator(nn.Module):
         if self.config.flow_correction:  # (B, H, W, 2) pixels
             residual = out[:, k + 4:k + 6].permute(0, 2, 3, 1) * (FLOW_UNIT * w)
         flow = person_flow(masks, maps, residual)  # (B, H, W, 2)
-        warped = composite(ref_image, plate, masks, maps, residual, self.config.sample_mode)
+        warped = composite(ref_image, plate, masks, flow, self.config.sample_mode)
         visibility = torch.sigmoid(out[:, k:k + 1])
         inpainting = torch.sigmoid(out[:, k + 1:k + 4] + torch.logit(plate.clamp(0.02, 0.98)))
         image = visibility * warped + (1.0 - visibility) * inpainting
