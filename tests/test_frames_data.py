@@ -120,3 +120,15 @@ def test_commands_refuse_bad_input(tmp_path, capsys):
     assert main(["train-frames", "--domain", "face", "-o", str(tmp_path / "x.safetensors"), "--steps", "0"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 2 and "error:" in err
+
+
+def test_warp_settings_without_the_warp_model_are_refused_before_any_rendering(tmp_path, capsys):
+    """--sample-mode / --flow-correction / --net-scale on an analogy model: one line, exit 2, and the data
+    (minutes to render) is never touched: the cache folder is not even created."""
+    cache = tmp_path / "cache"
+    for flag in (["--sample-mode", "bicubic"], ["--flow-correction"], ["--net-scale", "2"]):
+        assert main(["train-frames", "--domain", "face", "-o", str(tmp_path / "x.safetensors"), "--steps", "1",
+                     "--cache", str(cache), *flag]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "settings of --model-kind warp" in err
+    assert not cache.exists() and not (tmp_path / "x.safetensors").exists()

@@ -96,12 +96,7 @@ def run(args: argparse.Namespace) -> int:
     warp = args.model_kind == "warp"
     edge = args.edge_weight if args.edge_weight is not None else (1.0 if warp else 0.0)
     person = args.person_weight if args.person_weight is not None else (2.0 if warp else 0.0)
-    cache = Path(args.cache) if args.cache else default_cache_dir()
-    seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
-    config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
-                               adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
-                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person)
-    model_config = None
+    model_config = None  # checked before the data, which may take minutes to render
     if warp:
         from motion2video.frames.data import structure_channels
         from motion2video.frames.warp import WarpGeneratorConfig
@@ -111,6 +106,11 @@ def run(args: argparse.Namespace) -> int:
                                            sample_mode=args.sample_mode or "bilinear")
     elif args.net_scale is not None or args.flow_correction or args.sample_mode is not None:
         raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp")
+    cache = Path(args.cache) if args.cache else default_cache_dir()
+    seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
+    config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
+                               adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
+                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person)
     result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
                           progress=not args.no_progress, init_from=args.init_from,
                           extra_metadata={"dataset_spec": spec.key()})
