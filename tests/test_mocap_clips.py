@@ -29,7 +29,7 @@ import pytest
 from motion2video.formats.canonical import ANKLE_HEIGHT
 from motion2video.formats.manifest import read_manifest
 from motion2video.formats.mocap import default_trim
-from motion2video.skeletons import H36M_17
+from motion2video.core.skeletons import H36M_17, proportion_ratios
 
 J = {name: i for i, name in enumerate(H36M_17.joints)}
 CROWN_ABOVE_HEAD = {"deepmimic-humanoid": 0.0, "deepmimic-humanoid-txt": 0.0}  # others: 0.12 m (docstring)
@@ -136,6 +136,10 @@ def test_real_clip_is_a_plausible_body(mocap_clips, name):
 
     h = stature(x, rig)
     assert 1.4 < h < 2.0, f"stature {h:.2f} m"
+
+    # Human3.6M's body points (skeleton version 2): the four proportions within 0.8-1.25 of Human3.6M's.
+    for key, value in proportion_ratios(x).items():
+        assert 0.8 <= value <= 1.25, f"{key} is {value:.2f} of Human3.6M's"
 
     # Limbs are rigid: every canonical limb maps to one bone (no joint in between).
     for a, b in LIMBS:

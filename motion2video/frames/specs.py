@@ -18,7 +18,9 @@ import numpy as np
 
 
 SPLITS = ("train", "test")
-DATA_VERSION = 2  # 2: person masks stored, patterned clothing, 24 backgrounds
+# 2: person masks stored, patterned clothing, 24 backgrounds; 3: body control points on canonical skeleton
+# version 2 (core.skeletons.SKELETON_VERSION), so renders cached with the old joints are not reused
+DATA_VERSION = 3
 
 
 def default_data_root() -> Path:
