@@ -10,7 +10,7 @@ What ``motion2video batch`` does, as plain functions:
   gallery ``index.html`` (:mod:`motion2video.gallery`) into the output folder.
 - Each job runs the sub-command's own code in the worker process (:func:`run_job`): the command parser and
   ``run`` function, exactly as on the command line, so every check and the atomic writer apply. An
-  :class:`~motion2video.errors.InputError` (or any other exception) fails that job's row only. GL contexts
+  :class:`~motion2video.core.errors.InputError` (or any other exception) fails that job's row only. GL contexts
   (mesh / face styles) are created lazily inside each worker process and never leave it.
 - Outputs are written atomically by the commands (temporary file + rename). A worker killed mid-job can
   leave only its temporary file (``.NAME.*.tmpSUFFIX``); it is removed before the job is retried and when
@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.video import ENCODER_ENV, ENCODER_THREADS_ENV, video_frame_count
 
 ENGINES = ("local", "ray")
@@ -548,7 +548,7 @@ def run_batch(jobs: list[Job], config: BatchConfig) -> BatchSummary:
         raise InputError(f"--retries must be >= 0, got {config.retries}")
     from tqdm import tqdm
 
-    from motion2video.atomic import atomic_output
+    from motion2video.core.atomic import atomic_output
 
     out_dir = Path(config.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

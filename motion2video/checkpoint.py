@@ -27,11 +27,11 @@ from safetensors.torch import save_file
 
 import motion2video.models  # noqa: F401  (registers the learned models and the baselines)
 from motion2video import __version__
-from motion2video.atomic import atomic_output
+from motion2video.core.atomic import atomic_output
 from motion2video.data.dataset import DatasetConfig, Split
 from motion2video.data.windows import FeatureLayout, NormStats
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
 
 FORMAT = "motion2video-motion"

@@ -153,7 +153,7 @@ def check_anny_cache() -> Check:
 def check_checkpoints() -> list[Check]:
     """Every shipped checkpoint loads (motion models and frame generators)."""
     from motion2video.checkpoint import WEIGHTS_DIR, load_model
-    from motion2video.errors import InputError
+    from motion2video.core.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
 
     checks = []

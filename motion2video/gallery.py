@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Iterable
 
-from motion2video.atomic import write_text
+from motion2video.core.atomic import write_text
 
 PAGE_SIZE = 50
 INDEX_NAME = "index.html"

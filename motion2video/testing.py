@@ -42,9 +42,9 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from motion2video.atomic import write_json
-from motion2video.errors import InputError
-from motion2video.motion import FaceMotion, Motion
+from motion2video.core.atomic import write_json
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion, Motion
 from motion2video.video import VIDEO_SUFFIXES, read_image, read_video, write_image
 
 METRICS = ("max", "rel_l1", "ssim")
@@ -545,7 +545,7 @@ def command_peak_rss_mb(argv: list[str], *, env: dict | None = None, cwd: str | 
 def tiled_motion(motion, times: int):
     """``motion`` played ``times`` times in a row (joints tiled along time): a longer clip of the same
     content, for memory-versus-length measurements."""
-    from motion2video.motion import Motion
+    from motion2video.core.motion import Motion
 
     return Motion(np.tile(motion.joints, (int(times), 1, 1)), motion.fps, motion.skeleton, motion.source,
                   motion.label)

@@ -36,10 +36,10 @@ from safetensors.torch import save_file
 from tqdm import tqdm
 
 from motion2video import __version__
-from motion2video.atomic import atomic_output
+from motion2video.core.atomic import atomic_output
 from motion2video.checkpoint import CheckpointMeta, config_dict, read_meta, save_checkpoint
 from motion2video.data.dataset import MotionDataset
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
 from motion2video.schedule import learning_rate
 

@@ -32,7 +32,7 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from motion2video.atomic import write_section  # noqa: E402
+from motion2video.core.atomic import write_section  # noqa: E402
 from motion2video.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_MOCAP,
@@ -42,7 +42,8 @@ from motion2video.data.dataset import (  # noqa: E402
     build_dataset,
     decode_samples,
 )
-from motion2video.evaluation import EvalProtocol, evaluate_bundles, sample_futures  # noqa: E402
+from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
+from motion2video.stages.sampling import sample_futures  # noqa: E402
 from motion2video.models.baselines import BASELINES  # noqa: E402
 from motion2video.training import TrainConfig, train_model  # noqa: E402
 
@@ -329,10 +330,11 @@ def known_answer_section(weights: Path, runs: Path, record: dict, *, steps: int,
 
 def sheet_section(new: dict, images: Path, *, samples: int = 5) -> str:
     """Observed, recorded and K sampled futures of three held-out clips (skeletons, one camera per clip)."""
-    from motion2video.atomic import atomic_output
-    from motion2video.apps.sample import forecast, load_clip_for
+    from motion2video.core.atomic import atomic_output
+    from motion2video.stages.sampling import forecast
+    from motion2video.apps.sample import load_clip_for
     from motion2video.video import GREEN, RED, add_border, grid
-    from renderers.camera import fit_camera
+    from motion2video.core.camera import fit_camera
     from renderers.skeleton import SkeletonRenderer, SkeletonStyle
 
     bundle = new.get("mtvae-add-dlow") or new["mtvae-add"]

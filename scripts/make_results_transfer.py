@@ -16,7 +16,7 @@ What it does (one torch thread; every number comes from this run):
    gamma_C = 0) and MT-VAE (add), whose transfer is the analogy z = E(obs_src, fut_src), x_R = D(obs_tgt, z).
 3. On every held-out window (stride 8), transfers the source's behaviour to the start posture of a window
    of another held-out clip and reports TDE, RE and d_beta at T = 1, 10, 20, 30, 40
-   (:func:`motion2video.transfer.evaluate_transfer`), and the realism classifier's accuracy for
+   (:func:`motion2video.evaluation.transfer.evaluate_transfer`), and the realism classifier's accuracy for
    reconstructions, transfers, prior samples and flow samples.
 4. The known-answer analogy: a small mtvae-add trained on the procedural multimodal benchmark's
    transitions; for several X -> Y and 20 seeds each, the mode classifier's label of D, against a prior
@@ -97,7 +97,8 @@ def train_variants(dataset, *, steps: int, batch_size: int, workdir: Path, seed:
 
 def known_answer(*, steps: int, seeds: int, workdir: Path, seed: int) -> dict:
     """Train the procedural mtvae-add and label D (analogy) and a prior sample from C for each pair."""
-    from motion2video.analogy import analogy_windows, procedural_analogy_case, procedural_transition_dataset
+    from motion2video.stages.latents import analogy_windows
+    from motion2video.evaluation.analogy import procedural_analogy_case, procedural_transition_dataset
     from motion2video.checkpoint import load_model
     from motion2video.data.dataset import decode_samples, encode_windows
     from motion2video.data.multimodal import default_classifier
@@ -195,7 +196,7 @@ def claims(scores: dict) -> list[str]:
 
 
 def write_markdown(path: Path, *, scores: dict, trained: dict, analogy: dict, info: dict) -> None:
-    from motion2video.transfer import TABLE1_TIMESTEPS
+    from motion2video.evaluation.transfer import TABLE1_TIMESTEPS
 
     ts = TABLE1_TIMESTEPS
     lines = [
@@ -357,7 +358,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from motion2video.checkpoint import load_model
     from motion2video.data.dataset import DatasetConfig, build_dataset
-    from motion2video.transfer import evaluate_transfer, transfer_pairs
+    from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
 
     torch.set_num_threads(1)
     t_all = time.perf_counter()

@@ -29,8 +29,8 @@ from pathlib import Path
 import imageio_ffmpeg
 import numpy as np
 
-from motion2video.atomic import write_json
-from motion2video.io import load_motion, resample_motion
+from motion2video.core.atomic import write_json
+from motion2video.formats.io import load_motion, resample_motion
 from motion2video.render import render_motion
 from motion2video.testing import METRICS, frame_error
 from motion2video.video import read_video, write_video

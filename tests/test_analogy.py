@@ -8,19 +8,16 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from motion2video.analogy import (
-    known_answer_labels,
-    procedural_analogy_case,
-    procedural_transition_dataset,
-    stitch_after,
-)
+from motion2video.evaluation.analogy import known_answer_labels, procedural_analogy_case, procedural_transition_dataset
+from motion2video.stages.latents import stitch_after
 from motion2video.checkpoint import load_model
 from motion2video.cli import main
 from motion2video.data.dataset import DatasetConfig, build_dataset
-from motion2video.data.procedural import BodyParams, generate, heading_of
+from motion2video.data.procedural import BodyParams, generate
+from motion2video.core.rotations import heading_of
 from motion2video.data.windows import resample
-from motion2video.io import load_motion, save_motion
-from motion2video.motion import Motion
+from motion2video.formats.io import load_motion, save_motion
+from motion2video.core.motion import Motion
 from motion2video.training import TrainConfig, train_model
 from motion2video.video import read_video
 

@@ -76,7 +76,7 @@ def test_evaluation_scores_zero_velocity_by_hand(walk_windows):
     """evaluate_bundles on real windows == the metric computed directly from the raw windows."""
     from motion2video import metrics as M
     from motion2video.data.windows import metric_vectors
-    from motion2video.evaluation import EvalProtocol, evaluate_bundles
+    from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
 
     ds, w = walk_windows
     bundles = [baseline_bundle(n, ds.config, stats=ds.stats) for n in BASELINES]

@@ -28,8 +28,8 @@ import pytest
 
 from motion2video.formats.canonical import ANKLE_HEIGHT
 from motion2video.formats.manifest import read_manifest
-from motion2video.formats.mocap import default_trim
-from motion2video.skeletons import H36M_17
+from motion2video.formats.manifest import default_trim
+from motion2video.core.skeletons import H36M_17
 
 J = {name: i for i, name in enumerate(H36M_17.joints)}
 CROWN_ABOVE_HEAD = {"deepmimic-humanoid": 0.0, "deepmimic-humanoid-txt": 0.0}  # others: 0.12 m (docstring)

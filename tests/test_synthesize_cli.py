@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from motion2video.cli import main
-from motion2video.pipeline import output_paths
+from motion2video.apps.synthesize import output_paths
 from motion2video.video import read_image, read_video
 from tests.test_pipeline import (DEMO, FRAME_SIZE, assert_framed, train_body_motion_model, train_face_motion_model,
                                  train_frame_model)

@@ -14,19 +14,13 @@ from motion2video.checkpoint import load_model, save_checkpoint
 from motion2video.cli import main
 from motion2video.data.dataset import DatasetConfig, build_dataset
 from motion2video.data.windows import resample, rotate_about_z
-from motion2video.io import load_motion, save_motion
+from motion2video.formats.io import load_motion, save_motion
 from motion2video.metrics import MeanStd
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 from motion2video.training import TrainConfig, train_model
-from motion2video.transfer import (
-    TABLE1_TIMESTEPS,
-    LoadedClip,
-    evaluate_transfer,
-    load_clip,
-    regression_error,
-    transfer_behavior,
-    transfer_pairs,
-)
+from motion2video.evaluation.transfer import TABLE1_TIMESTEPS, evaluate_transfer, regression_error, transfer_pairs
+from motion2video.stages.clips import LoadedClip, load_clip
+from motion2video.apps.transfer import transfer_behavior
 from motion2video.video import read_video, write_image
 from tests.conftest import link_clips
 

@@ -8,7 +8,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.video import (
     ENCODER_ENV,
     ENCODERS,

@@ -79,7 +79,7 @@ def analogy(bundle: ModelBundle, a: LoadedClip, b: LoadedClip, c: LoadedClip, *,
     """D = decode(C, E(A, B)) for user clips (frame starts in each file's own numbering).
 
     Args:
-        a, b, c: clips loaded for the model (:func:`motion2video.transfer.load_clip`).
+        a, b, c: clips loaded for the model (:func:`motion2video.stages.clips.load_clip`).
         a_start, c_start: first frame of A's and C's windows.
         b_start: first frame of B's window; None: right after A's window when B is A's file, else 0.
         observed: frames of A and C (default: the model's).

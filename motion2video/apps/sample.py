@@ -14,13 +14,13 @@ from typing import Iterator
 
 import numpy as np
 
-from motion2video.atomic import save_npz
+from motion2video.core.atomic import save_npz
 from motion2video.checkpoint import ModelBundle
-from motion2video.errors import InputError
-from motion2video.motion import FaceMotion
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion
 from motion2video.stages.clips import load_clip
-from motion2video.stages.sampling import Forecast, forecast  # noqa: F401 (public names of this module)
-from motion2video.stages.structure import check_style, renderer_for
+from motion2video.stages.sampling import Forecast
+from renderers.registry import check_style, renderer_for
 
 STYLES = ("skeleton", "mesh")
 

@@ -3,7 +3,7 @@
 The stages are plain functions with typed results, so each can be called (and timed) alone:
 
 1. :func:`motion2video.reference.load_reference`: the reference appearance image at the frame generator's size, and its pose.
-2. :func:`sample_futures`: K futures of the observed clip from a motion model (:mod:`motion2video.forecast`).
+2. :func:`~motion2video.stages.sampling.sample_forecast`: K futures of the observed clip from a motion model.
 3. :func:`render_structures`: where the person is in every frame, in the generator's structure conventions
    (the same functions that made its training pairs, :mod:`motion2video.frames.data`):
 
@@ -47,38 +47,13 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.atomic import check_output_path
-from motion2video.errors import InputError
+from motion2video.core.atomic import check_output_path
+from motion2video.core.errors import InputError
 from motion2video.reference import load_reference
-from motion2video.stages.frames import (  # noqa: F401 (the generation stage; old import paths)
-    GENERATE_CHUNK,
-    GeneratedFrames,
-    default_generator_threads,
-    generate_frames,
-    generate_video_frames,
-    iter_generated,
-)
-from motion2video.stages.sampling import MAX_SAMPLES, torch_threads  # noqa: F401 (old import path)
-from motion2video.stages.sampling import sample_forecast as sample_futures  # old name
-from motion2video.stages.structure import (  # noqa: F401 (the structure stage; old import paths)
-    ALIGN_JOINTS,
-    BODY_ELEVATION_DEG,
-    BODY_MARGIN,
-    BODY_YFOV_DEG,
-    DOMAIN_OF_LAYOUT,
-    BodyPlacement,
-    Structures,
-    face_camera_front,
-    follow_on_ground,
-    place_body,
-    render_structures,
-    renderer_for,
-    similarity_fit,
-    split_rows,
-    structure_maps,
-    structure_previews,
-    timeline_rows,
-)
+from motion2video.stages.frames import GeneratedFrames, default_generator_threads, iter_generated
+from motion2video.stages.sampling import sample_forecast
+from motion2video.stages.structure import DOMAIN_OF_LAYOUT, Structures, render_structures, structure_previews
+from renderers.registry import renderer_for
 
 STRUCTURE_SUFFIX = "-structure"
 SHEET_SUFFIX = "-sheet"
@@ -241,7 +216,7 @@ class SynthesisResult:
         domain: ``"body"`` or ``"face"``.
         notes: conversions and assumptions (one line each).
         timings: seconds per stage: load, sampling, structures, generation, compose, encoding, total.
-        forecast: the sampled motion (:class:`motion2video.forecast.Forecast`).
+        forecast: the sampled motion (:class:`motion2video.stages.sampling.Forecast`).
         structures: the :class:`Structures` used.
     """
 
@@ -335,7 +310,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    fc = sample_futures(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
+    fc = sample_forecast(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
                         start=config.start, seed=config.seed, threads=config.motion_threads, source=str(input_path),
                         rigid_bones=config.rigid_bones)
     timings["sampling"] = time.perf_counter() - t0

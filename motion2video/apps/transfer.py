@@ -330,7 +330,7 @@ def rendered_reference(fc, size: int):
     from motion2video.stages.structure import BODY_ELEVATION_DEG, BODY_MARGIN, BODY_YFOV_DEG, place_body
     from motion2video.core.camera import fit_camera
     from motion2video.reference import Reference, ReferencePose
-    from motion2video.stages.structure import renderer_for
+    from renderers.registry import renderer_for
 
     placement = place_body(fc.observed, fc.futures, size=size)
     start = placement.world_observed[0]  # (17, 3) front-facing start posture

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D"
 
@@ -54,9 +54,9 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.apps.analogy import analogy, iter_analogy
     from motion2video.stages.latents import analogy_model
-    from motion2video.stages.structure import check_style
+    from renderers.registry import check_style
     from motion2video.checkpoint import load_model
-    from motion2video.atomic import save_npz
+    from motion2video.core.atomic import save_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.stages.clips import load_clip
     from motion2video.stages.video import check_cell_size

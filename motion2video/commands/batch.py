@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from motion2video.commands.common import add_command
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = ("run many render/sample/synthesize jobs (JSONL job file, or a folder/glob and a template) on a process "
         "pool or Ray, resumable, with results.jsonl and an HTML gallery")

@@ -32,7 +32,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from motion2video.atomic import check_output_path, write_text
+    from motion2video.core.atomic import check_output_path, write_text
     from motion2video.doctor import report, run_checks
 
     if args.json:

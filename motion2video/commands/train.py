@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)"
 

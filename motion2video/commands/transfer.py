@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.atomic import save_npz
+from motion2video.core.atomic import save_npz
 from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
 

@@ -1,8 +1,4 @@
 """Evaluation protocols, one place: held-out forecasting metrics (:mod:`~motion2video.evaluation.forecasting`,
 the DLow protocol of ``evaluate`` and Table 1 of ``results.md``), behaviour transfer's Table 1 / Table 3
 (:mod:`~motion2video.evaluation.transfer`) and the known-answer analogy (:mod:`~motion2video.evaluation.analogy`).
-
-The forecasting protocol's names are importable from here, as they were from the old ``evaluation`` module.
 """
-
-from motion2video.evaluation.forecasting import *  # noqa: F401,F403

@@ -19,7 +19,7 @@ from motion2video.checkpoint import ModelBundle
 from motion2video.data.dataset import WindowSet
 from motion2video.data.windows import FeatureLayout, metric_vectors
 from motion2video.stages.sampling import as_model_input, keep_bone_lengths
-from motion2video.stages.sampling import sample_futures  # noqa: F401 (public name of this module)
+from motion2video.stages.sampling import sample_futures
 
 # DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
 MM_THRESHOLDS = {"body3d": 0.5, "body2d": 0.1, "face": 0.25}

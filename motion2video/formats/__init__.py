@@ -8,5 +8,5 @@
 - :mod:`~motion2video.formats.face_csv`: Live Link Face ARKit CSV -> FaceMotion
 - :mod:`~motion2video.formats.resample`: linear frame-rate conversion
 
-:mod:`motion2video.io` dispatches on the path (``load_motion``, ``save_motion``).
+:mod:`motion2video.formats.io` dispatches on the path (``load_motion``, ``save_motion``).
 """

@@ -21,9 +21,9 @@ from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
 
 from motion2video import __version__
-from motion2video.atomic import atomic_output
+from motion2video.core.atomic import atomic_output
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 
