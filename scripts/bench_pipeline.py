@@ -48,12 +48,12 @@ sys.path.insert(0, str(REPO / "scripts"))
 import demo  # noqa: E402  (scripts/demo.py: the demo's inputs and checkpoint names)
 
 from motion2video import __version__  # noqa: E402
-from motion2video.benchtools import median_seconds  # noqa: E402
+from motion2video.evaluation.benchtools import median_seconds  # noqa: E402
 from motion2video.apps.synthesize import (  # noqa: E402
     SynthesisConfig, compose_video, contact_sheet, output_paths, synthesize, write_outputs,
 )
 from motion2video.stages.frames import default_generator_threads, generate_frames, generate_video_frames  # noqa: E402
-from motion2video.reference import load_reference  # noqa: E402
+from motion2video.stages.reference import load_reference  # noqa: E402
 from motion2video.stages.structure import render_structures, split_rows, structure_previews  # noqa: E402
 from motion2video.stages.sampling import sample_forecast, torch_threads  # noqa: E402
 
@@ -128,7 +128,7 @@ def bench_warp_generator(frame_model, *, repeats: int, frames: int = 16) -> dict
     the crop is the size the pipeline would use)."""
     import cv2
 
-    from motion2video.reference import load_reference_pose
+    from motion2video.stages.reference import load_reference_pose
 
     net = frame_model.model
     size = net.config.image_size
@@ -167,7 +167,7 @@ def bench_any_generator(frame_model, *, repeats: int) -> dict:
 
 def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> dict:
     """Wall time of synthesize vs the sum of its stages timed alone, for one demo clip."""
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.apps.sample import load_clip_for
     from motion2video.frames.checkpoint import load_frame_model
 

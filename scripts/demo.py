@@ -60,7 +60,7 @@ def run_demo(out: Path, *, samples: int = 5, seed: int = 0, weights: Path = WEIG
     from motion2video.apps.synthesize import (
         SynthesisConfig, compose_video, contact_sheet, render_mesh_frames, synthesize,
     )
-    from motion2video.video import write_image, write_video
+    from motion2video.formats.video import write_image, write_video
 
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Path] = {}
@@ -95,12 +95,12 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     import numpy as np
 
     from motion2video.apps.transfer import iter_transfer, transfer_behavior
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.core.atomic import save_npz
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.reference import load_reference
+    from motion2video.stages.reference import load_reference
     from motion2video.stages.clips import load_clip
-    from motion2video.video import VideoWriter, write_image
+    from motion2video.formats.video import VideoWriter, write_image
 
     t0 = time.perf_counter()
     spec = TRANSFER
@@ -140,8 +140,8 @@ def render_inputs(out: Path, *, size: int = 128) -> dict[str, Path]:
     ``out/inputs/<clip>_<style>.mp4``: the structure renderers on their own, as ``motion2video render`` does."""
     from motion2video.formats.io import load_motion
     from motion2video.core.motion import FaceMotion
-    from motion2video.render import render_motion
-    from motion2video.video import write_video
+    from motion2video.apps.render import render_motion
+    from motion2video.formats.video import write_video
 
     written: dict[str, Path] = {}
     (out / "inputs").mkdir(parents=True, exist_ok=True)

@@ -156,7 +156,7 @@ def write_reference_poses(out: Path) -> list[Path]:
     """Write ``<image>.pose.npz`` beside each reference image: the pose it shows, in its pixels (body
     joints) or with the camera that rendered it (face), so ``synthesize`` knows the reference structure
     exactly (:mod:`motion2video.apps.synthesize`). Needs the Anny renderers; renders one frame per body size."""
-    from motion2video.reference import ReferencePose, reference_pose_path, save_reference_pose
+    from motion2video.stages.reference import ReferencePose, reference_pose_path, save_reference_pose
     from renderers.body import BodyRenderer, BodyStyle
     from motion2video.core.camera import project
     from renderers.face import FaceRenderer, FaceStyle

@@ -66,7 +66,7 @@ def _reusable(path: Path, *, name: str, config: dict, data, train) -> bool:
     (``--workdir`` reuse)."""
     import dataclasses
 
-    from motion2video.checkpoint import read_meta
+    from motion2video.models.checkpoint import read_meta
 
     if not path.is_file():
         return False
@@ -78,8 +78,8 @@ def _reusable(path: Path, *, name: str, config: dict, data, train) -> bool:
 def train_variants(dataset, *, steps: int, batch_size: int, workdir: Path, seed: int) -> dict:
     """Train every variant (or reuse an identical checkpoint in ``workdir``); returns label -> (path, training
     wall time in seconds as the checkpoint records it)."""
-    from motion2video.checkpoint import read_meta
-    from motion2video.training import TrainConfig, train_model
+    from motion2video.models.checkpoint import read_meta
+    from motion2video.models.training import TrainConfig, train_model
 
     out = {}
     for label, name, extra in VARIANTS:
@@ -99,10 +99,10 @@ def known_answer(*, steps: int, seeds: int, workdir: Path, seed: int) -> dict:
     """Train the procedural mtvae-add and label D (analogy) and a prior sample from C for each pair."""
     from motion2video.stages.latents import analogy_windows
     from motion2video.evaluation.analogy import procedural_analogy_case, procedural_transition_dataset
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.data.dataset import decode_samples, encode_windows
     from motion2video.data.multimodal import default_classifier
-    from motion2video.training import TrainConfig, train_model
+    from motion2video.models.training import TrainConfig, train_model
 
     dataset = procedural_transition_dataset(600, seed=1)
     path = workdir / "procedural-mtvae-add.safetensors"
@@ -232,7 +232,7 @@ def write_markdown(path: Path, *, scores: dict, trained: dict, analogy: dict, in
         "- Realism (Table 3): accuracy of a real/fake classifier (closed-form ridge, even items train, odd items "
         "test) between held-out ground-truth futures (pose + root trajectory, 48 frames) and: reconstructions "
         "(self), transfers, prior samples (z ~ N(0, I)), flow samples (z = T^-1(u)). Two descriptors: 'full' = "
-        "`motion2video.metrics.sequence_descriptor` (poses every 4th frame + mean absolute velocity and "
+        "`motion2video.evaluation.metrics.sequence_descriptor` (poses every 4th frame + mean absolute velocity and "
         "acceleration + standard deviations; `metrics.quality`), 'poses' = the poses every 4th frame alone. "
         "0.5 = indistinguishable, 1.0 = always told apart; lower is better (the paper reports a score where "
         "higher is better, max 0.5).",
@@ -356,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", default=None, help="also write the raw numbers here")
     args = parser.parse_args(argv)
 
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.data.dataset import DatasetConfig, build_dataset
     from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
 

@@ -10,7 +10,7 @@ import pytest
 
 from motion2video.evaluation.analogy import known_answer_labels, procedural_analogy_case, procedural_transition_dataset
 from motion2video.stages.latents import stitch_after
-from motion2video.checkpoint import load_model
+from motion2video.models.checkpoint import load_model
 from motion2video.cli import main
 from motion2video.data.dataset import DatasetConfig, build_dataset
 from motion2video.data.procedural import BodyParams, generate
@@ -18,8 +18,8 @@ from motion2video.core.rotations import heading_of
 from motion2video.data.windows import resample
 from motion2video.formats.io import load_motion, save_motion
 from motion2video.core.motion import Motion
-from motion2video.training import TrainConfig, train_model
-from motion2video.video import read_video
+from motion2video.models.training import TrainConfig, train_model
+from motion2video.formats.video import read_video
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh")
 OBSERVED, HORIZON = 8, 12

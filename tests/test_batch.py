@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from motion2video.batch import BatchConfig, jobs_from_jsonl, jobs_from_template, read_results, run_batch
-from motion2video.video import video_frame_count
+from motion2video.apps.batch import BatchConfig, jobs_from_jsonl, jobs_from_template, read_results, run_batch
+from motion2video.formats.video import video_frame_count
 from motion2video.cli import main
 from motion2video.core.errors import InputError
-from motion2video.gallery import write_gallery
-from motion2video.video import read_video
+from motion2video.apps.gallery import write_gallery
+from motion2video.formats.video import read_video
 from tests.batch_helpers import CLIPS, WorkerKiller, clip_folder
 
 TEMPLATE = "render {input} -o {output} --style skeleton --size 64 --frames 24"

@@ -26,7 +26,7 @@ from motion2video.frames.evaluate import (METHODS, contact_sheet, evaluate_seque
                                           frame_metrics, write_json)
 from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate, ssim)
 from motion2video.frames.train import TrainFramesConfig, train_frames
-from motion2video.schedule import learning_rate
+from motion2video.core.schedule import learning_rate
 from motion2video.core.skeletons import H36M_17
 
 TINY = dict(image_size=32, channels=(8, 12, 16))

@@ -21,10 +21,10 @@ from motion2video.apps.synthesize import (
 )
 from motion2video.stages.structure import face_camera_front, follow_on_ground, place_body, similarity_fit
 from motion2video.stages.frames import generate_frames
-from motion2video import reference as R
+from motion2video.stages import reference as R
 from motion2video.cli import main
 from motion2video.core.errors import InputError
-from motion2video.video import GREEN, RED, read_image, read_video
+from motion2video.formats.video import GREEN, RED, read_image, read_video
 
 REPO = Path(__file__).resolve().parents[1]
 DEMO = REPO / "demo_inputs"

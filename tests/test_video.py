@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from motion2video.core.errors import InputError
-from motion2video.video import (
+from motion2video.formats.video import (
     ENCODER_ENV,
     ENCODERS,
     GREEN,

@@ -22,7 +22,7 @@ from typing import Iterator
 
 import numpy as np
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.stages.clips import LoadedClip, model_frame
 from motion2video.stages.latents import analogy_model, analogy_windows, stitch_after, window_config
@@ -34,7 +34,7 @@ from motion2video.stages.structure import (
     iter_sequence,
 )
 from motion2video.stages.video import iter_mark_segments
-from motion2video.video import GREEN, RED, iter_grid
+from motion2video.formats.video import GREEN, RED, iter_grid
 
 STYLES = ("skeleton", "mesh")
 

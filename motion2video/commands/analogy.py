@@ -55,12 +55,12 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.apps.analogy import analogy, iter_analogy
     from motion2video.stages.latents import analogy_model
     from renderers.registry import check_style
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.core.atomic import save_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.stages.clips import load_clip
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_cell_size(args.size)

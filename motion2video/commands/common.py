@@ -48,7 +48,7 @@ def check_at_least(option: str, value: int, minimum: int = 1) -> None:
 def check_video_and_npz(output: str | Path, npz: str | Path | None) -> Path:
     """Validate ``-o OUT.mp4|.gif`` and an optional ``--npz OUT.npz`` before any work; returns the video path."""
     from motion2video.core.atomic import check_output_path
-    from motion2video.video import VIDEO_SUFFIXES
+    from motion2video.formats.video import VIDEO_SUFFIXES
 
     out = check_output_path(output, VIDEO_SUFFIXES)
     if npz is not None:

@@ -17,7 +17,7 @@ import numpy as np
 import torch
 
 from motion2video.core.errors import InputError
-from motion2video.schedule import learning_rate  # the one schedule of both training loops
+from motion2video.core.schedule import learning_rate  # the one schedule of both training loops
 from motion2video.frames.checkpoint import (build_model, load_frame_model, load_train_state, model_kind,
                                             save_frame_model, save_train_state, state_path)
 from motion2video.frames.specs import FrameSequences

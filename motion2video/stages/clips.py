@@ -71,7 +71,7 @@ LOADERS = {"body3d": _body_data, "body2d": _body_data, "face": _face_data}
 
 
 def load_clip(bundle, path: str | Path) -> LoadedClip:
-    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.checkpoint.ModelBundle`).
+    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.models.checkpoint.ModelBundle`).
 
     Returns:
         A :class:`LoadedClip` at the model's rate.

@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import torch
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import DatasetConfig, decode_samples, encode_windows

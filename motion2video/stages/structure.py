@@ -24,7 +24,7 @@ import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.core.rotations import heading_of
-from motion2video.reference import Reference
+from motion2video.stages.reference import Reference
 from renderers.registry import PIXELS, renderer_for
 
 # Two clearly different Anny identities: the source keeps the renderer's default look, the target gets
