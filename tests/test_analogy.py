@@ -67,7 +67,10 @@ def test_analogy_of_consecutive_windows(ckpts, clips, tmp_path, capsys):
     code = main(["analogy", "--model", str(ckpts["mtvae"]), clips["walk"], clips["walk"], clips["jump"],
                  "--a-start", "480", "--c-start", "240", "--size", "48", "-o", str(out), "--npz", str(npz)])
     assert code == 0
-    assert "B placed after A" not in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "B placed after A" not in printed
+    # the model the user gave (mtvae.safetensors), not its architecture's name (mtvae-add)
+    assert "(A:B::C:D with mtvae;" in printed and "mtvae-add" not in printed, printed
     frames, fps = read_video(out)
     assert fps == 25.0 and frames.shape == (OBSERVED + HORIZON, 48, 98, 3)
     saved = np.load(npz)
@@ -172,8 +175,20 @@ def test_bad_input(case, ckpts, clips, tmp_path, capsys):
     assert code == 2, err
     assert len(err.splitlines()) == 1 and err.startswith("motion2video analogy: error:"), err
     assert not out.exists() and not npz.exists()
-    expected = {"pred-lstm": "'pred-lstm' is a deterministic model", "baseline": "baseline",
-                "face-model-body-clip": "body motion", "body-model-face-clip": "face motion",
+    expected = {"pred-lstm": "pred is a deterministic 'pred-lstm' model", "baseline": "baseline",
+                "face-model-body-clip": "face is a face model, but this file holds body motion",
+                "body-model-face-clip": "mtvae is a body model, but this file holds face motion",
                 "c-start-out-of-range": "the C start frame 99999 is outside", "a-too-short": "needs",
                 "other-skeleton": "coco-17", "observed-1": "--observed must be >= 2"}[case]
     assert expected in err
+
+
+def test_errors_name_the_shipped_model_given(clips, tmp_path, capsys):
+    """Body motion given to the shipped mtvae-add-face names mtvae-add-face, not its architecture mtvae-add."""
+    out = tmp_path / "a.mp4"
+    code = main(["analogy", "--model", "mtvae-add-face", clips["walk"], clips["walk"], clips["jump"],
+                 "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and not out.exists()
+    assert "mtvae-add-face is a face model, but this file holds body motion" in err, err
+    assert "131_01.bvh" in err and "mtvae-add is" not in err, err

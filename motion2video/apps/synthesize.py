@@ -299,7 +299,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     domain = gen_config.domain
     layout_domain = DOMAIN_OF_LAYOUT[bundle.data_config.layout]
     if layout_domain != domain:
-        raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.name} predicts "
+        raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.label} predicts "
                          f"{layout_domain} motion: give a {layout_domain} frame model (frames-{layout_domain}-128)")
     size = gen_config.image_size if config.size is None else int(config.size)
     if size != gen_config.image_size and getattr(frames_model, "kind", "analogy") != "warp":

@@ -216,7 +216,7 @@ def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, r
     loaded = load_frame_model(frame_name)
     domain = loaded.config.domain
     if domain != DOMAIN_OF_LAYOUT[layout]:
-        raise InputError(f"this frame generator makes {domain} frames, but {bundle.name} moves a "
+        raise InputError(f"this frame generator makes {domain} frames, but {bundle.label} moves a "
                          f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
     if reference:
         return loaded, load_reference(reference, size=loaded.config.image_size, domain=domain,

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     with VideoWriter(out, result.fps) as writer:
         for chunk in chunks:
             writer.write(chunk)
-    print(f"wrote {out} (A:B::C:D with {bundle.name}; {result.observed} observed + "
+    print(f"wrote {out} (A:B::C:D with {bundle.label}; {result.observed} observed + "
           f"{result.cd.shape[0] - result.observed} generated frames, {writer.width}x{writer.height}, "
           f"{result.fps:g} fps{'' if result.consecutive else '; B placed after A'})")
     if args.npz:

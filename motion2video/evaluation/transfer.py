@@ -221,7 +221,7 @@ def evaluate_transfer(bundle: ModelBundle, test: WindowSet, train: WindowSet, *,
         seed: seeds the prior / flow samples.
     """
     if not (hasattr(bundle.model, "encode") and hasattr(bundle.model, "decode")):
-        raise InputError(f"{bundle.name!r} has no latent space (encode / decode) to transfer with")
+        raise InputError(f"{bundle.label} has no latent space (encode / decode) to transfer with")
     to = test.observed
     horizon = test.features.shape[1] - to
     if max(timesteps) > horizon:
