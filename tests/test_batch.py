@@ -170,7 +170,7 @@ def test_killed_worker_without_retries_fails_its_row_only(mocap_dir, tmp_path):
 def _chromium() -> str:
     path = shutil.which("chromium") or shutil.which("chromium-browser")
     if path is None:
-        pytest.fail("Debian's chromium is needed for the gallery test (make setup installs it: apt-get install chromium)")
+        pytest.fail("Debian's chromium is needed for the gallery test (make setup-test, which make test runs, installs it: apt-get install chromium)")
     return path
 
 
