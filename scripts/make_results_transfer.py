@@ -16,7 +16,7 @@ What it does (one torch thread; every number comes from this run):
    gamma_C = 0) and MT-VAE (add), whose transfer is the analogy z = E(obs_src, fut_src), x_R = D(obs_tgt, z).
 3. On every held-out window (stride 8), transfers the source's behaviour to the start posture of a window
    of another held-out clip and reports TDE, RE and d_beta at T = 1, 10, 20, 30, 40
-   (:func:`motion2video.transfer.evaluate_transfer`), and the realism classifier's accuracy for
+   (:func:`motion2video.evaluation.transfer.evaluate_transfer`), and the realism classifier's accuracy for
    reconstructions, transfers, prior samples and flow samples.
 4. The known-answer analogy: a small mtvae-add trained on the procedural multimodal benchmark's
    transitions; for several X -> Y and 20 seeds each, the mode classifier's label of D, against a prior
@@ -66,7 +66,7 @@ def _reusable(path: Path, *, name: str, config: dict, data, train) -> bool:
     (``--workdir`` reuse)."""
     import dataclasses
 
-    from motion2video.checkpoint import read_meta
+    from motion2video.models.checkpoint import read_meta
 
     if not path.is_file():
         return False
@@ -78,8 +78,8 @@ def _reusable(path: Path, *, name: str, config: dict, data, train) -> bool:
 def train_variants(dataset, *, steps: int, batch_size: int, workdir: Path, seed: int) -> dict:
     """Train every variant (or reuse an identical checkpoint in ``workdir``); returns label -> (path, training
     wall time in seconds as the checkpoint records it)."""
-    from motion2video.checkpoint import read_meta
-    from motion2video.training import TrainConfig, train_model
+    from motion2video.models.checkpoint import read_meta
+    from motion2video.models.training import TrainConfig, train_model
 
     out = {}
     for label, name, extra in VARIANTS:
@@ -97,11 +97,12 @@ def train_variants(dataset, *, steps: int, batch_size: int, workdir: Path, seed:
 
 def known_answer(*, steps: int, seeds: int, workdir: Path, seed: int) -> dict:
     """Train the procedural mtvae-add and label D (analogy) and a prior sample from C for each pair."""
-    from motion2video.analogy import analogy_windows, procedural_analogy_case, procedural_transition_dataset
-    from motion2video.checkpoint import load_model
+    from motion2video.stages.latents import analogy_windows
+    from motion2video.evaluation.analogy import procedural_analogy_case, procedural_transition_dataset
+    from motion2video.models.checkpoint import load_model
     from motion2video.data.dataset import decode_samples, encode_windows
     from motion2video.data.multimodal import default_classifier
-    from motion2video.training import TrainConfig, train_model
+    from motion2video.models.training import TrainConfig, train_model
 
     dataset = procedural_transition_dataset(600, seed=1)
     path = workdir / "procedural-mtvae-add.safetensors"
@@ -195,7 +196,7 @@ def claims(scores: dict) -> list[str]:
 
 
 def write_markdown(path: Path, *, scores: dict, trained: dict, analogy: dict, info: dict) -> None:
-    from motion2video.transfer import TABLE1_TIMESTEPS
+    from motion2video.evaluation.transfer import TABLE1_TIMESTEPS
 
     ts = TABLE1_TIMESTEPS
     lines = [
@@ -231,7 +232,7 @@ def write_markdown(path: Path, *, scores: dict, trained: dict, analogy: dict, in
         "- Realism (Table 3): accuracy of a real/fake classifier (closed-form ridge, even items train, odd items "
         "test) between held-out ground-truth futures (pose + root trajectory, 48 frames) and: reconstructions "
         "(self), transfers, prior samples (z ~ N(0, I)), flow samples (z = T^-1(u)). Two descriptors: 'full' = "
-        "`motion2video.metrics.sequence_descriptor` (poses every 4th frame + mean absolute velocity and "
+        "`motion2video.evaluation.metrics.sequence_descriptor` (poses every 4th frame + mean absolute velocity and "
         "acceleration + standard deviations; `metrics.quality`), 'poses' = the poses every 4th frame alone. "
         "0.5 = indistinguishable, 1.0 = always told apart; lower is better (the paper reports a score where "
         "higher is better, max 0.5).",
@@ -355,9 +356,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", default=None, help="also write the raw numbers here")
     args = parser.parse_args(argv)
 
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.data.dataset import DatasetConfig, build_dataset
-    from motion2video.transfer import evaluate_transfer, transfer_pairs
+    from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
 
     torch.set_num_threads(1)
     t_all = time.perf_counter()

@@ -40,7 +40,7 @@ def _pairs(values: list[str]) -> list[tuple[str, str]]:
 
 
 def benchmark_rows(mocap: str, behaviors: list[tuple[str, str]], analogy: str | None) -> dict:
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.evaluation import transfer_benchmark as B
 
     rows: dict[str, list[dict]] = {}
@@ -68,7 +68,7 @@ def checkpoint_dataset(mocap: str, bundle):
 
 
 def liveliness(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, seed: int) -> dict:
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
 
     import numpy as np
@@ -96,7 +96,7 @@ def sampler_rows(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int,
     held-out windows: :func:`motion2video.evaluation.transfer.sample_realism`."""
     import dataclasses
 
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.evaluation.transfer import sample_realism
 
     out = {}
@@ -114,8 +114,8 @@ def classifier_controls(mocap: str, checkpoint: str, *, stride: int) -> dict:
     real futures, (c) a random half of themselves."""
     import numpy as np
 
-    from motion2video import metrics as M
-    from motion2video.checkpoint import load_model
+    from motion2video.evaluation import metrics as M
+    from motion2video.models.checkpoint import load_model
     from motion2video.evaluation.transfer import classifier_accuracy, pose_descriptor
 
     bundle = load_model(checkpoint)

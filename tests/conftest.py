@@ -17,8 +17,9 @@ settings.load_profile("ci")
 
 from motion2video.formats.canonical import CanonicalClip, floor_height
 from motion2video.formats.manifest import ManifestEntry, read_manifest
-from motion2video.formats.mocap import default_trim, load_mocap, mocap_canonical
-from motion2video.motion import Motion
+from motion2video.formats.manifest import default_trim
+from motion2video.formats.mocap import load_mocap, mocap_canonical
+from motion2video.core.motion import Motion
 
 SHARED_DIR = Path(__file__).resolve().parents[2] / "shared"
 

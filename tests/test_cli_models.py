@@ -10,7 +10,7 @@ import torch
 from safetensors.torch import save_file
 
 from motion2video.cli import main
-from motion2video.checkpoint import load_model
+from motion2video.models.checkpoint import load_model
 from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_02.bvh", "cmu/01_01.bvh", "mass/mass_pirouette.bvh",
@@ -200,7 +200,7 @@ def test_sample_mesh_style(trained, mocap_dir, tmp_path):
     out = tmp_path / "mesh.mp4"
     assert main(["sample", "--model", str(trained), str(mocap_dir / "cmu" / "131_02.bvh"), "--samples", "1",
                  "--horizon", "2", "--style", "mesh", "--size", "64", "-o", str(out)]) == 0
-    from motion2video.video import read_video
+    from motion2video.formats.video import read_video
 
     frames, fps = read_video(out)
     assert frames.shape[0] == 18 and fps == pytest.approx(25.0)

@@ -8,12 +8,12 @@ import os
 import numpy as np
 import pytest
 
-from motion2video import atomic
-from motion2video.errors import InputError
+from motion2video.core import atomic
+from motion2video.core.errors import InputError
 from motion2video.formats import face_csv, npz, openpose, videopose3d
-from motion2video.io import load_motion, save_motion
-from motion2video.motion import ARKIT_NAMES, FACE_DIM, FaceMotion, Motion
-from motion2video.skeletons import BODY_25, H36M_32_TO_17, OPENPOSE_18, convert_openpose_to_h36m
+from motion2video.formats.io import load_motion, save_motion
+from motion2video.core.motion import ARKIT_NAMES, FACE_DIM, FaceMotion, Motion
+from motion2video.core.skeletons import BODY_25, H36M_32_TO_17, OPENPOSE_18, convert_openpose_to_h36m
 
 FACE_FILES = ["livelinkface/S07-001.csv", "livelinkface/S88-001.csv", "livelinkface/alex_rom_3.csv",
               "livelinkface/alex_rom_4.csv", "livelinkface/apfel.csv", "llv/dao.csv"]

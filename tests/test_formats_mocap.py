@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats import bvh, deepmimic, expmap
 from motion2video.formats.mocap import load_mocap, mocap_kind
-from motion2video.io import load_motion
+from motion2video.formats.io import load_motion
 
 DEEPMIMIC_TWINS = sorted(p.stem for p in (Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
                                           / "deepmimic" / "txt").glob("*.txt"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D"
 
@@ -54,13 +54,13 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.apps.analogy import analogy, iter_analogy
     from motion2video.stages.latents import analogy_model
-    from motion2video.stages.structure import check_style
-    from motion2video.checkpoint import load_model
-    from motion2video.atomic import save_npz
+    from renderers.registry import check_style
+    from motion2video.models.checkpoint import load_model
+    from motion2video.core.atomic import save_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.stages.clips import load_clip
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_cell_size(args.size)
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     with VideoWriter(out, result.fps) as writer:
         for chunk in chunks:
             writer.write(chunk)
-    print(f"wrote {out} (A:B::C:D with {bundle.name}; {result.observed} observed + "
+    print(f"wrote {out} (A:B::C:D with {bundle.label}; {result.observed} observed + "
           f"{result.cd.shape[0] - result.observed} generated frames, {writer.width}x{writer.height}, "
           f"{result.fps:g} fps{'' if result.consecutive else '; B placed after A'})")
     if args.npz:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Callable
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 RIGID_BONES_HELP = ("keep the observed bone lengths in every future frame (3D body models: the models' own futures "
                     "stretch and shrink limbs by several per cent; rigid ones are about 3%% further from the truth)")
@@ -47,8 +47,8 @@ def check_at_least(option: str, value: int, minimum: int = 1) -> None:
 
 def check_video_and_npz(output: str | Path, npz: str | Path | None) -> Path:
     """Validate ``-o OUT.mp4|.gif`` and an optional ``--npz OUT.npz`` before any work; returns the video path."""
-    from motion2video.atomic import check_output_path
-    from motion2video.video import VIDEO_SUFFIXES
+    from motion2video.core.atomic import check_output_path
+    from motion2video.formats.video import VIDEO_SUFFIXES
 
     out = check_output_path(output, VIDEO_SUFFIXES)
     if npz is not None:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from motion2video.atomic import write_json
+from motion2video.core.atomic import write_json
 from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "score a motion model and the zero-velocity / last-step / sequence-motion baselines"
 
@@ -58,9 +58,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.checkpoint import baseline_bundle, load_model
+    from motion2video.models.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import build_dataset
-    from motion2video.evaluation import EvalProtocol, evaluate_bundles
+    from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
     from motion2video.models.baselines import BASELINES
 
     set_threads(args.threads)
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         out = write_json(args.json, result.to_json())
         print(f"wrote {out}")
     if args.plot is not None:
-        from motion2video.plots import plot_ade_per_frame
+        from motion2video.evaluation.plots import plot_ade_per_frame
 
         out = plot_ade_per_frame(result.ade_per_frame, args.plot, fps=cfg.fps, units=result.protocol["units"].split(" (")[0],
                                  best_of=args.samples,

@@ -51,9 +51,10 @@ def run(args: argparse.Namespace) -> int:
 
     import imageio.v3 as iio
 
-    from motion2video.errors import InputError
+    from motion2video.core.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
+    from motion2video.frames.data import default_cache_dir, load_or_generate
+    from motion2video.frames.specs import default_spec
     from motion2video.frames.evaluate import evaluate_sequences, evaluation_contact_sheet, write_json
 
     if args.pairs is not None:

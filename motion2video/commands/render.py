@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from motion2video.commands.common import add_command
-from motion2video.render import STYLES, RenderRequest, render_file
+from motion2video.apps.render import STYLES, RenderRequest, render_file
 
 HELP = ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) to "
         "mp4/GIF")

@@ -47,12 +47,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.checkpoint import baseline_bundle, load_model
+    from motion2video.models.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import DatasetConfig
-    from motion2video.apps.sample import forecast, iter_forecast, load_clip_for, save_forecast_npz
+    from motion2video.stages.sampling import forecast
+    from motion2video.apps.sample import iter_forecast, load_clip_for, save_forecast_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_at_least("--samples", args.samples)

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from motion2video.commands.common import RIGID_BONES_HELP, add_command, check_at_least
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.atomic import save_npz
+from motion2video.core.atomic import save_npz
 from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
 
@@ -63,14 +63,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.models.baselines import BASELINES
     from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
                                             style_for, transfer_behavior)
     from motion2video.stages.clips import load_clip
     from motion2video.stages.latents import behavior_model
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_cell_size(args.size)

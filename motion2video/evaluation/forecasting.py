@@ -1,7 +1,7 @@
 """Evaluate motion models on the same windows with the DLow protocol (and MT-VAE's R-MSE / S-MSE / CLL).
 
 :func:`evaluate_bundles` runs every model on every window of a split, K samples each, and computes the
-metrics of :mod:`motion2video.metrics` on un-normalised, root-relative frame vectors
+metrics of :mod:`motion2video.evaluation.metrics` on un-normalised, root-relative frame vectors
 (:func:`motion2video.data.windows.metric_vectors`: metres for body3d, virtual-camera image heights for
 body2d, parameter units for faces). The ``evaluate`` command and ``scripts/make_results.py`` call it.
 """
@@ -14,12 +14,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from motion2video import metrics as M
-from motion2video.checkpoint import ModelBundle
+from motion2video.evaluation import metrics as M
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.data.dataset import WindowSet
 from motion2video.data.windows import FeatureLayout, metric_vectors
 from motion2video.stages.sampling import as_model_input, keep_bone_lengths
-from motion2video.stages.sampling import sample_futures  # noqa: F401 (public name of this module)
+from motion2video.stages.sampling import sample_futures
 
 # DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
 MM_THRESHOLDS = {"body3d": 0.5, "body2d": 0.1, "face": 0.25}
@@ -63,7 +63,7 @@ class EvalResult:
         protocol: a JSON-able description of what was measured.
         results: method name -> metric name -> value.
         ade_per_frame: method name -> best-of-K displacement at each future frame (see
-            :func:`motion2video.metrics.ade_per_frame`), the curve ``evaluate --plot`` draws.
+            :func:`motion2video.evaluation.metrics.ade_per_frame`), the curve ``evaluate --plot`` draws.
     """
 
     protocol: dict

@@ -7,7 +7,7 @@ start posture of a window of a DIFFERENT clip:
 - d_beta: Euclidean distance between z(x_beta) and z(x_R) (re-encoding the re-enactment from its own start);
 - RE(T): mean squared error of a ridge regression from z(x_beta) to the posture x_beta[T] (fitted on
   training windows), i.e. how much posture the representation carries;
-- realism (Table 3): accuracy of a real/fake classifier (:func:`motion2video.metrics.quality`) between
+- realism (Table 3): accuracy of a real/fake classifier (:func:`motion2video.evaluation.metrics.quality`) between
   held-out ground-truth sequences and reconstructions ("self"), transfers, prior samples and flow samples.
 MT-VAE enters through analogy: z = E(obs_source, future_source), x_R = D(obs_target, z).
 """
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from motion2video import metrics as M
-from motion2video.checkpoint import ModelBundle
+from motion2video.evaluation import metrics as M
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import WindowSet
@@ -96,7 +96,7 @@ def pose_descriptor(seq: np.ndarray) -> np.ndarray:
 
 def classifier_accuracy(real: np.ndarray, fake: np.ndarray, *, l2: float = 1.0) -> float:
     """Test accuracy of a ridge real/fake classifier on descriptors (N, P) and (M, P); even items train, odd
-    items test (as :func:`motion2video.metrics.quality`, on any descriptor)."""
+    items test (as :func:`motion2video.evaluation.metrics.quality`, on any descriptor)."""
     x = np.concatenate([real, fake])
     y = np.concatenate([np.ones(len(real), np.int64), np.zeros(len(fake), np.int64)])
     train = np.concatenate([np.arange(len(real)) % 2 == 0, np.arange(len(fake)) % 2 == 0])
@@ -221,7 +221,7 @@ def evaluate_transfer(bundle: ModelBundle, test: WindowSet, train: WindowSet, *,
         seed: seeds the prior / flow samples.
     """
     if not (hasattr(bundle.model, "encode") and hasattr(bundle.model, "decode")):
-        raise InputError(f"{bundle.name!r} has no latent space (encode / decode) to transfer with")
+        raise InputError(f"{bundle.label} has no latent space (encode / decode) to transfer with")
     to = test.observed
     horizon = test.features.shape[1] - to
     if max(timesteps) > horizon:

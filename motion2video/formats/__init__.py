@@ -1,4 +1,4 @@
-"""Motion file formats: one module per format, each reading into the project's containers.
+"""Files in and out: one module per motion format, each reading into the project's containers, and video.
 
 - :mod:`~motion2video.formats.bvh`: BVH motion capture (reader, forward kinematics, canonical conversion)
 - :mod:`~motion2video.formats.manifest`: the mocap / face ``manifest.csv`` (true fps, labels)
@@ -8,5 +8,6 @@
 - :mod:`~motion2video.formats.face_csv`: Live Link Face ARKit CSV -> FaceMotion
 - :mod:`~motion2video.formats.resample`: linear frame-rate conversion
 
-:mod:`motion2video.io` dispatches on the path (``load_motion``, ``save_motion``).
+:mod:`motion2video.formats.io` dispatches on the path (``load_motion``, ``save_motion``).
+:mod:`motion2video.formats.video` writes mp4 / GIF (atomic, streaming), grids, borders and labels.
 """

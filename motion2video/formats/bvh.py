@@ -2,7 +2,7 @@
 
 Reading (:func:`read_bvh`) keeps the file's own skeleton and units (:class:`BvhClip`);
 :func:`bvh_world_positions` runs forward kinematics over all frames at once; :func:`bvh_to_canonical`
-and :func:`load_bvh` give a :class:`~motion2video.motion.Motion` in the project's frame (``h36m-17``,
+and :func:`load_bvh` give a :class:`~motion2video.core.motion.Motion` in the project's frame (``h36m-17``,
 metres, right-handed, z up, floor at z = 0).
 
 BVH conventions used here:
@@ -14,7 +14,7 @@ BVH conventions used here:
 - Position channels give the joint's translation in its parent's frame and replace the ``OFFSET``
   component on the same axis (the usual reading: the root's channels are its world position).
 - ``End Site`` blocks become nodes named ``"<joint>:end"`` (the notation of
-  :data:`motion2video.skeletons.RIG_JOINT_MAPS`).
+  :data:`motion2video.core.skeletons.RIG_JOINT_MAPS`).
 """
 
 from __future__ import annotations
@@ -24,21 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.formats.canonical import (  # noqa: F401 (ANKLE_HEIGHT, Y_UP_TO_Z_UP: re-exported)
-    ANKLE_HEIGHT,
-    Y_UP_TO_Z_UP,
-    CanonicalClip,
-    canonical_from_map,
-    canonical_motion,
-    floor_height,
-    to_project_frame,
-)
-from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_manifest  # noqa: F401 (default_trim re-exported)
+from motion2video.core.errors import InputError
+from motion2video.formats.canonical import CanonicalClip, canonical_from_map, canonical_motion, to_project_frame
+from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_manifest
 from motion2video.formats.numbers import parse_number_rows
 from motion2video.formats.resample import round_fps
-from motion2video.motion import Motion
-from motion2video.skeletons import RIG_JOINT_MAPS
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import RIG_JOINT_MAPS
 
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 _CHANNEL_LOOKUP = {c.lower(): c for c in CHANNEL_NAMES}
@@ -408,7 +400,7 @@ def bvh_rest_positions(clip: BvhClip) -> np.ndarray:
 # --- canonical conversion -------------------------------------------------------------------------------
 
 def rig_joint_maps() -> dict[str, dict[str, str | tuple[str, str]]]:
-    """All known rigs (:data:`motion2video.skeletons.RIG_JOINT_MAPS`)."""
+    """All known rigs (:data:`motion2video.core.skeletons.RIG_JOINT_MAPS`)."""
     return RIG_JOINT_MAPS
 
 
@@ -443,7 +435,7 @@ def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) ->
         names: (N,) node names.
         rig: a key of :func:`rig_joint_maps`.
     Returns:
-        (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
+        (T, 17, 3) positions in :data:`~motion2video.core.skeletons.H36M_17` order.
     """
     return canonical_from_map(nodes, names, rig_joint_maps()[rig])
 

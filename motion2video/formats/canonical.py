@@ -1,5 +1,5 @@
 """What every motion-capture reader shares once it has joint positions: the project frame, the floor,
-trimming and resampling into a canonical ``h36m-17`` :class:`~motion2video.motion.Motion`.
+trimming and resampling into a canonical ``h36m-17`` :class:`~motion2video.core.motion.Motion`.
 
 A reader (BVH, DeepMimic, exp-map text) does its own forward kinematics and hands a
 :class:`CanonicalClip` (every node and the 17 canonical joints, metres, z up, floor not yet placed) to
@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.resample import resample_linear
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 from motion2video.core.skeletons import H36M_17, h36m_body_points
 
 # Height of the ankle joint centre above the floor with the foot flat, metres. Anny's default body (the mesh
@@ -140,7 +140,7 @@ def canonical_from_map(nodes: np.ndarray, names: tuple[str, ...],
         names: (N,) node names.
         mapping: canonical joint -> node name, or a tuple of node names whose mean is the joint.
     Returns:
-        (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
+        (T, 17, 3) positions in :data:`~motion2video.core.skeletons.H36M_17` order.
     """
     index = {n: i for i, n in enumerate(names)}
     out = []

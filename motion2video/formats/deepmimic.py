@@ -30,11 +30,11 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.canonical import CanonicalClip, canonical_from_map, canonical_motion, to_project_frame
 from motion2video.formats.manifest import ManifestEntry, resolve_manifest
 from motion2video.formats.resample import round_fps
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 
 RIG = "deepmimic-humanoid-txt"
 CHARACTER_FILE = "humanoid3d_character.txt"

@@ -10,8 +10,8 @@ path                                    read as
 ``"Frames"``                            character file found beside it), same manifest rules
 other ``*.txt``                         exp-map text file (:mod:`~motion2video.formats.expmap`, with the
                                         ``skeleton.json`` layout found beside or above it), same manifest rules
-``*.npz`` with ``joints``               body :class:`~motion2video.motion.Motion`
-``*.npz`` with ``face``                 :class:`~motion2video.motion.FaceMotion`
+``*.npz`` with ``joints``               body :class:`~motion2video.core.motion.Motion`
+``*.npz`` with ``face``                 :class:`~motion2video.core.motion.FaceMotion`
 ``*.npz`` with ``positions_3d``         VideoPose3D Human3.6M file holding exactly one clip (else use
                                         :func:`~motion2video.formats.videopose3d.load_videopose3d`)
 a directory, or another ``*.json``      OpenPose keypoints (2D, image pixels)
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.face_csv import load_face_csv
 from motion2video.formats.mocap import is_deepmimic_file, load_mocap
 from motion2video.formats.npz import (
@@ -39,7 +39,7 @@ from motion2video.formats.npz import (
 from motion2video.formats.openpose import load_openpose_folder
 from motion2video.formats.resample import resample_linear
 from motion2video.formats.videopose3d import load_videopose3d
-from motion2video.motion import NUM_EXPRESSIONS, FaceMotion, Motion
+from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion, Motion
 
 MOTION_SUFFIXES = (".bvh", ".txt", ".npz", ".json", ".csv")
 

@@ -19,15 +19,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.canonical import CanonicalClip, canonical_motion
-from motion2video.formats.manifest import (  # noqa: F401 (default_trim: also imported from here)
+from motion2video.formats.manifest import (
     ManifestEntry,
     default_trim,
     read_manifest,
     resolve_manifest,
 )
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 
 KINDS = ("bvh", "deepmimic", "expmap")
 MOCAP_SUFFIXES = (".bvh", ".txt", ".json")

@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.frames.specs import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
                                        default_data_root, identities, is_test_clip)
 
@@ -146,7 +146,7 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
     """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, masks (T, S, S) bool,
     clip index, start)."""
     from motion2video.core.camera import project
-    from motion2video.motion import Motion
+    from motion2video.core.motion import Motion
     from renderers.body import BodyStyle
     from renderers.registry import renderer_for
 
@@ -252,7 +252,7 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
         (T, S, S) uint8 grey structure renders, masks (T, S, S) bool, clip index, first source frame.
     """
     from motion2video.data.face_dynamics import head_pose_track
-    from motion2video.motion import NUM_EXPRESSIONS, FaceMotion
+    from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion
     from renderers.body import BodyStyle
     from renderers.registry import renderer_for
 

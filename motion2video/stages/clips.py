@@ -48,7 +48,7 @@ def _body_data(bundle, motion, path: Path) -> np.ndarray:
     from motion2video.data.dataset import _body_clip_from_motion
 
     if isinstance(motion, FaceMotion):
-        raise InputError(f"{bundle.name} is a body model, but this file holds face motion", path)
+        raise InputError(f"{bundle.label} is a body model, but this file holds face motion", path)
     if not isinstance(motion, Motion) or motion.skeleton != "h36m-17" or motion.dim != 3:
         raise InputError(f"body models need 3D h36m-17 joints (BVH, motion npz, ...), got skeleton "
                          f"{motion.skeleton} with D={motion.dim}", path)
@@ -60,7 +60,7 @@ def _face_data(bundle, motion, path: Path) -> np.ndarray:
     from motion2video.data.dataset import _face_clip_from_motion
 
     if not isinstance(motion, FaceMotion):
-        raise InputError(f"{bundle.name} is a face model, but this file holds body motion", path)
+        raise InputError(f"{bundle.label} is a face model, but this file holds body motion", path)
     cfg = bundle.data_config
     data = _face_clip_from_motion(motion, name=path.name, fps=cfg.fps, head_pose=cfg.face_head_pose).data
     data[:, :52] = np.clip(data[:, :52], 0.0, 1.0)
@@ -71,7 +71,7 @@ LOADERS = {"body3d": _body_data, "body2d": _body_data, "face": _face_data}
 
 
 def load_clip(bundle, path: str | Path) -> LoadedClip:
-    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.checkpoint.ModelBundle`).
+    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.models.checkpoint.ModelBundle`).
 
     Returns:
         A :class:`LoadedClip` at the model's rate.

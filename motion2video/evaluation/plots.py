@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.atomic import atomic_output
+from motion2video.core.atomic import atomic_output
 
 BASELINE_STYLE = {"zero-velocity": ("0.35", "--"), "last-step": ("0.55", ":"), "sequence-motion": ("0.7", "-.")}
 

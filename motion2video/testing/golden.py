@@ -42,10 +42,10 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from motion2video.atomic import write_json
-from motion2video.errors import InputError
-from motion2video.motion import FaceMotion, Motion
-from motion2video.video import VIDEO_SUFFIXES, read_image, read_video, write_image
+from motion2video.core.atomic import write_json
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion, Motion
+from motion2video.formats.video import VIDEO_SUFFIXES, read_image, read_video, write_image
 
 METRICS = ("max", "rel_l1", "ssim")
 MANIFEST = "golden.json"
@@ -229,13 +229,13 @@ def golden_clip(source, *, style: str | None = None, size: int | None = None, pa
     Args:
         source: (T, H, W, 3) or (H, W, 3) uint8 frames; a ``.mp4`` / ``.gif`` path (read whole, fps from the
             file); or a :class:`Motion` / :class:`FaceMotion`, rendered with
-            :func:`motion2video.render.render_motion` (``style`` and ``size`` required; fps from the motion).
+            :func:`motion2video.apps.render.render_motion` (``style`` and ``size`` required; fps from the motion).
         fps: the frame array's fps (ignored for videos and motions, which carry their own).
     """
     if isinstance(source, (Motion, FaceMotion)):
         if style is None or size is None:
             raise ValueError("a Motion is compared after rendering: give style= and size=")
-        from motion2video.render import render_motion
+        from motion2video.apps.render import render_motion
 
         frames = render_motion(source, style=style, size=int(size), palette=palette)
         return GoldenClip(frames, float(source.fps), f"{type(source).__name__} rendered as {style} {size}px")
@@ -545,7 +545,7 @@ def command_peak_rss_mb(argv: list[str], *, env: dict | None = None, cwd: str | 
 def tiled_motion(motion, times: int):
     """``motion`` played ``times`` times in a row (joints tiled along time): a longer clip of the same
     content, for memory-versus-length measurements."""
-    from motion2video.motion import Motion
+    from motion2video.core.motion import Motion
 
     return Motion(np.tile(motion.joints, (int(times), 1, 1)), motion.fps, motion.skeleton, motion.source,
                   motion.label)

@@ -11,7 +11,7 @@ A checkpoint ``NAME.safetensors`` holds the model's ``state_dict`` and two metad
      "training": {"steps": 3000, "seed": 0, "config": {...TrainConfig...}, "wall_time_s": ..., ...}}
 
 :func:`load_model` rebuilds any of them from a path or a shipped name (``motion2video/weights/<name>.safetensors``).
-Optimizer state for resuming lives in a sidecar file written by :mod:`motion2video.training`.
+Optimizer state for resuming lives in a sidecar file written by :mod:`motion2video.models.training`.
 """
 
 from __future__ import annotations
@@ -27,16 +27,16 @@ from safetensors.torch import save_file
 
 import motion2video.models  # noqa: F401  (registers the learned models and the baselines)
 from motion2video import __version__
-from motion2video.atomic import atomic_output
+from motion2video.core.atomic import atomic_output
 from motion2video.data.dataset import DatasetConfig, Split
 from motion2video.data.windows import FeatureLayout, NormStats
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
+from motion2video.core.errors import InputError
 from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
-from motion2video.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
 
 FORMAT = "motion2video-motion"
-WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
+WEIGHTS_DIR = Path(__file__).resolve().parents[1] / "weights"
 SUFFIX = ".safetensors"
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 # Formats written by other parts of the project, for a helpful wrong-kind message.

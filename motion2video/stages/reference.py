@@ -25,8 +25,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from motion2video.atomic import save_npz
-from motion2video.errors import InputError
+from motion2video.core.atomic import save_npz
+from motion2video.core.errors import InputError
 
 REFERENCE_POSE_SUFFIX = ".pose.npz"
 
@@ -58,7 +58,7 @@ class ReferencePose:
     points: np.ndarray | None = None
     face: np.ndarray | None = None
     identity: dict = field(default_factory=dict)
-    camera: object | None = None  # renderers.camera.PinholeCamera
+    camera: object | None = None  # motion2video.core.camera.PinholeCamera
 
     def __post_init__(self) -> None:
         if self.kind not in ("body", "face"):

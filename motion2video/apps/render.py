@@ -13,11 +13,11 @@ from typing import Iterator
 
 import numpy as np
 
-from motion2video.atomic import check_output_path
-from motion2video.errors import InputError
+from motion2video.core.atomic import check_output_path
+from motion2video.core.errors import InputError
 from motion2video.formats.io import load_motion, resample_motion
-from motion2video.motion import FaceMotion, Motion
-from motion2video.video import VIDEO_SUFFIXES
+from motion2video.core.motion import FaceMotion, Motion
+from motion2video.formats.video import VIDEO_SUFFIXES
 
 STYLES = ("skeleton", "heatmap", "mesh", "face")
 MIN_SIZE, MAX_SIZE = 32, 2048
@@ -29,7 +29,7 @@ class RenderRequest:
     """Everything ``render`` needs.
 
     Attributes:
-        input: the motion file (see :func:`motion2video.io.load_motion`).
+        input: the motion file (see :func:`motion2video.formats.io.load_motion`).
         output: the .mp4 or .gif to write.
         style: one of :data:`STYLES`.
         size: frame width and height in pixels, 32..2048.
@@ -150,7 +150,7 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
 
 def render_file(request: RenderRequest) -> RenderResult:
     """Load ``request.input``, render it and write ``request.output``; see :class:`RenderRequest`."""
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     out = check_output_path(request.output, VIDEO_SUFFIXES)
     size = check_size(request.size)

@@ -1,4 +1,4 @@
-"""The learning-rate schedule of both training loops (motion models: :mod:`motion2video.training`; the frame
+"""The learning-rate schedule of both training loops (motion models: :mod:`motion2video.models.training`; the frame
 generator: :mod:`motion2video.frames.train`). Pure: no torch, no state."""
 
 from __future__ import annotations

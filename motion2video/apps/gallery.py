@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Iterable
 
-from motion2video.atomic import write_text
+from motion2video.core.atomic import write_text
 
 PAGE_SIZE = 50
 INDEX_NAME = "index.html"
@@ -125,7 +125,7 @@ def gallery_rows(out_dir: Path, results: Iterable) -> list[dict]:
 
 def write_gallery(out_dir: str | Path, results: Iterable, *, title: str | None = None,
                   page_size: int = PAGE_SIZE) -> Path:
-    """Write ``out_dir/index.html`` (atomically) for batch results (:class:`~motion2video.batch.JobResult`
+    """Write ``out_dir/index.html`` (atomically) for batch results (:class:`~motion2video.apps.batch.JobResult`
     or dicts with name, input, output, status, frames, seconds, error); returns its path."""
     out_dir = Path(out_dir)
     rows = gallery_rows(out_dir, results)

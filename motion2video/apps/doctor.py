@@ -85,7 +85,7 @@ def probe_gl(platform: str) -> Check:
 
     name, package = GL_LIBRARIES[platform]
     start = time.perf_counter()
-    code = f"from motion2video.doctor import _gl_child; _gl_child({platform!r})"
+    code = f"from motion2video.apps.doctor import _gl_child; _gl_child({platform!r})"
     env = {**os.environ, "PYOPENGL_PLATFORM": platform}
     try:
         run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
@@ -152,8 +152,8 @@ def check_anny_cache() -> Check:
 
 def check_checkpoints() -> list[Check]:
     """Every shipped checkpoint loads (motion models and frame generators)."""
-    from motion2video.checkpoint import WEIGHTS_DIR, load_model
-    from motion2video.errors import InputError
+    from motion2video.models.checkpoint import WEIGHTS_DIR, load_model
+    from motion2video.core.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
 
     checks = []

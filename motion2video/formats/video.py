@@ -20,7 +20,7 @@
 - Writes are atomic: the file is written to a temporary name in the same directory and renamed with
   ``os.replace``; on any failure the temporary file is removed and the error is raised, so no partial file
   is ever left behind. A destination whose directory cannot be written raises
-  :class:`~motion2video.errors.InputError` before anything is encoded. Missing parent directories are
+  :class:`~motion2video.core.errors.InputError` before anything is encoded. Missing parent directories are
   created.
 
 All frames are RGB uint8: (T, H, W, 3) for clips, (H, W, 3) for images.
@@ -41,7 +41,7 @@ import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
 IMAGE_SUFFIXES = (".png",)

@@ -2,7 +2,7 @@
 
 AdamW, gradient-norm clipping, a cosine learning-rate decay, seeded batches, a tqdm progress bar, a
 validation loss, periodic checkpoints and ``resume``; the final checkpoint carries the model config,
-normalisation statistics, the split and a training record (see :mod:`motion2video.checkpoint`).
+normalisation statistics, the split and a training record (see :mod:`motion2video.models.checkpoint`).
 
 Models with extra training protocol (documented in :mod:`motion2video.models.behavior`):
 
@@ -36,13 +36,13 @@ from safetensors.torch import save_file
 from tqdm import tqdm
 
 from motion2video import __version__
-from motion2video.atomic import atomic_output
-from motion2video.checkpoint import CheckpointMeta, config_dict, read_meta, save_checkpoint
+from motion2video.core.atomic import atomic_output
+from motion2video.models.checkpoint import CheckpointMeta, config_dict, read_meta, save_checkpoint
 from motion2video.core.skeletons import SKELETON_VERSION
 from motion2video.data.dataset import MotionDataset
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
-from motion2video.schedule import learning_rate
+from motion2video.core.schedule import learning_rate
 
 SUFFIX = ".safetensors"
 

@@ -7,10 +7,10 @@ What ``motion2video batch`` does, as plain functions:
 - :func:`run_batch` runs them with :func:`run_local` (a ``ProcessPoolExecutor`` of ``workers`` reused
   processes) or :func:`run_ray` (Ray tasks, ``max_retries`` for crashed workers), skipping jobs whose output
   already reads back as a video (unless ``force``), and writes ``results.jsonl`` (one row per job) and the
-  gallery ``index.html`` (:mod:`motion2video.gallery`) into the output folder.
+  gallery ``index.html`` (:mod:`motion2video.apps.gallery`) into the output folder.
 - Each job runs the sub-command's own code in the worker process (:func:`run_job`): the command parser and
   ``run`` function, exactly as on the command line, so every check and the atomic writer apply. An
-  :class:`~motion2video.errors.InputError` (or any other exception) fails that job's row only. GL contexts
+  :class:`~motion2video.core.errors.InputError` (or any other exception) fails that job's row only. GL contexts
   (mesh / face styles) are created lazily inside each worker process and never leave it.
 - Outputs are written atomically by the commands (temporary file + rename). A worker killed mid-job can
   leave only its temporary file (``.NAME.*.tmpSUFFIX``); it is removed before the job is retried and when
@@ -34,8 +34,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
 
-from motion2video.errors import InputError
-from motion2video.video import ENCODER_ENV, ENCODER_THREADS_ENV, video_frame_count
+from motion2video.core.errors import InputError
+from motion2video.formats.video import ENCODER_ENV, ENCODER_THREADS_ENV, video_frame_count
 
 ENGINES = ("local", "ray")
 COMMANDS = ("render", "sample", "synthesize", "transfer", "analogy")
@@ -304,7 +304,7 @@ def init_worker() -> None:
         import cv2
 
         from motion2video.cli import build_parser
-        import motion2video.render  # noqa: F401  (the renderers most jobs use)
+        import motion2video.apps.render  # noqa: F401  (the renderers most jobs use)
         import renderers.skeleton  # noqa: F401
 
         cv2.setNumThreads(1)  # as the encoder: parallelism comes from the workers, not from threads inside one
@@ -548,7 +548,7 @@ def run_batch(jobs: list[Job], config: BatchConfig) -> BatchSummary:
         raise InputError(f"--retries must be >= 0, got {config.retries}")
     from tqdm import tqdm
 
-    from motion2video.atomic import atomic_output
+    from motion2video.core.atomic import atomic_output
 
     out_dir = Path(config.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -588,7 +588,7 @@ def run_batch(jobs: list[Job], config: BatchConfig) -> BatchSummary:
                 remove_temp_files(job.output)
     summary = BatchSummary([rows[job.name] for job in jobs], time.perf_counter() - start, results_path)
     if config.gallery:
-        from motion2video.gallery import write_gallery
+        from motion2video.apps.gallery import write_gallery
 
         summary.gallery_path = write_gallery(out_dir, summary.results)
     return summary
