@@ -149,6 +149,25 @@ def _table(rows: dict, split: str, key: str, fmt: str) -> list[str]:
     return lines
 
 
+def _relative_table(rows: dict, split: str) -> list[str]:
+    """Per behaviour and method: the root-path signature's median ratio, then each root-relative one's."""
+    from motion2video.evaluation import transfer_benchmark as B
+
+    def cell(v: float) -> str:
+        return "-" if v != v else f"{v:.2f}"
+
+    names = list(B.RELATIVE)
+    lines = ["| behaviour | method | root path (its signature) | " + " | ".join(n.replace("_", " ") for n in names)
+             + " |", "| --- | --- | ---: | " + " | ".join("---:" for _ in names) + " |"]
+    behaviours = [r["behaviour"] for r in next(iter(rows.values())) if r["split"] == split]
+    for b in behaviours:
+        for m, rs in rows.items():
+            r = next(r for r in rs if r["split"] == split and r["behaviour"] == b)
+            lines.append(f"| {b} | {m} | {r['median_ratio']:.2f} ({r['signature']}) | "
+                         + " | ".join(cell(r["relative"][n]) for n in names) + " |")
+    return lines
+
+
 def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: str, seconds: float) -> str:
     from motion2video.evaluation import transfer_benchmark as B
 
@@ -171,10 +190,22 @@ def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: 
          "- analogy: MT-VAE A : B :: C : D, A = 16 frames before the source start (the first frame repeated "
          "where the clip starts there), C = 16 frames up to the target posture;",
          "- copy the source: the source moved rigidly onto the target's position and heading (ratio 1 by "
-         "construction; it does not start from the target's posture).", ""]
+         "construction; it does not start from the target's posture).", "",
+         "Root-relative signatures (issue 24; `signatures.ROOT_RELATIVE_SIGNATURES`), each the range over the "
+         "window of a distance measured on the body, so a re-enactment carried along the source's root path "
+         "gets no credit for the path itself: leg extension = pelvis height above the ankles' mean height; arm "
+         "swing = wrist height relative to the thorax (the larger of the two wrists); knee bend = hip-to-ankle "
+         "distance (the larger of the two legs); ankle lift = ankle height relative to the pelvis (the kick "
+         "measured from the body). Ratios as above; '-' where no source of the row moves that way by "
+         f"{B.MIN_RELATIVE_AMPLITUDE:.2f} m or more. Target for held-out jumps and kicks: every median between 0.6 "
+         "and 1.4.", ""]
     for split in ("held-out", "train"):
         L += [f"### Signature ratio, {split} clips (median [IQR])", ""]
         L += _table(bench, split, "ratio", "{median_ratio:.2f} [{q25:.2f}, {q75:.2f}]")
+        L.append("")
+    for split in ("held-out", "train"):
+        L += [f"### Root-relative signatures beside the root-path one, {split} clips (median ratio)", ""]
+        L += _relative_table(bench, split)
         L.append("")
     L += ["### Start posture and rigid bones, held-out clips", "",
           "Start error: mean per-joint distance (m) between the first generated frame and the target posture "
