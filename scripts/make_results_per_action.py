@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import subprocess
 import sys
 import time
@@ -93,7 +92,7 @@ def ratios(result: dict, label: str) -> dict:
 
 
 def render(result: dict, labels: list[str], *, command: str, seconds: float, seen: dict, samples: int,
-           stride: int, dropped: int, kept: bool) -> str:
+           stride: int, dropped: int, kept: bool, validated: list[str]) -> str:
     table = {label: ratios(result, label) for label in labels}
     counts = result["protocol"]["actions"]
     zv = result["per_action"][BASELINE]
@@ -140,7 +139,9 @@ def render(result: dict, labels: list[str], *, command: str, seconds: float, see
         "",
         "Lowest ADE ratio per action: " + "; ".join(f"{a}: `{m}`" for a, m in best.items()) + ".",
         "",
-        "Held-out check: " + check,
+        "Held-out check: " + check + (
+            f" Kept: {len(validated)} clips some model's recorded split used for validation ({', '.join(validated)}; "
+            "model selection, not training)." if validated else ""),
         "",
         "Per action in the JSON of `motion2video evaluate --model NAME --data ../shared/data/mocap --json out.json` "
         "(`per_action`, `macro`); the 5-minute checkpoints load as they are.",
@@ -184,6 +185,7 @@ def main(argv: list[str] | None = None) -> int:
     seen = {label: sorted(clips & set(b.meta.split.train)) if b.meta.split else []
             for (label, _), b in zip(models, bundles)}
     trained = sorted(set().union(*seen.values()))
+    validated = sorted(set().union(*[clips & set(b.meta.split.val) for b in bundles if b.meta.split]))
     dropped = 0
     if trained and not args.keep_trained:  # only windows that no model trained on
         keep = np.flatnonzero(~np.isin(np.asarray(windows.clip_names), trained))
@@ -213,10 +215,11 @@ def main(argv: list[str] | None = None) -> int:
                                                        ("every", args.every)) if v != p.get_default(k))
     command += "".join(f" --model '{v}'" for v in args.model) + (" --no-defaults" if args.no_defaults else "")
     section = render(merged, labels, command=command, seconds=seconds, seen=seen, samples=args.samples,
-                     stride=args.stride, dropped=dropped, kept=args.keep_trained)
+                     stride=args.stride, dropped=dropped, kept=args.keep_trained, validated=validated)
     merged["ratios"] = {label: ratios(merged, label) for label in labels}
     merged["trained_on_test_clips"] = seen
     merged["windows_left_out"] = dropped
+    merged["validation_clips_kept"] = validated
     merged["seconds"] = seconds
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     write_json(args.json, merged)

@@ -126,9 +126,9 @@ def classifier_controls(mocap: str, checkpoint: str, *, stride: int, seed: int =
     other = R.motion_features(dataset.windows("val", stride=stride).raw[:, to:], dim=dim)
     x = np.concatenate([real, other])
     y = np.concatenate([np.ones(len(real), np.int64), np.zeros(len(other), np.int64)])
-    return {"a random half of the held-out futures against the other half (the control)":
+    return {"two random halves of the held-out futures (the control)":
             {"accuracy": R.real_vs_real_control(real, seed=seed), "items": [len(real) // 2, len(real) - len(real) // 2]},
-            "the validation subjects' real futures (other people)":
+            "the held-out futures against the validation subjects' real futures (other people)":
             {"accuracy": R.cross_validated_accuracy(x, y, np.arange(len(x)), seed=seed),
              "items": [len(real), len(other)]}}
 
@@ -252,20 +252,25 @@ def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: 
               "own ground truth); the two-sample realism test (above) and the pose classifier on one sample per window, "
               "with the test's real-vs-real control. "
               "'before' = the checkpoints shipped before the liveliness term (git 96e5d78), 'after' = shipped now.",
-              "", "| model | velocity / acceleration | vs real | two-sample test | control | classifier (poses) |",
-              "| --- | ---: | ---: | ---: | ---: | ---: |"]
+              "Beside it, the test on one family of features alone (speeds / accelerations / positional spreads of "
+              "the 17 points), which says what kind of difference gives the generated futures away.",
+              "", "| model | velocity / acceleration | vs real | two-sample test | control | speed / accel. / spread alone "
+              "| classifier (poses) |",
+              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
         for label, d in samplers.items():
             v, a = d["samples"]
             rv, ra = d["real"]  # each model's own ground truth (a 2D model's is in image units)
             L.append(f"| {label} | {v:.4f} / {a:.4f} | {v / rv:.2f} / {a / ra:.2f} | "
-                     f"{d['realism']:.2f} | {d['realism_control']:.2f} | {d['realism_poses']:.2f} |")
+                     f"{d['realism']:.2f} | {d['realism_control']:.2f} | "
+                     + " / ".join(f"{v:.2f}" for v in d["realism_by_family"].values())
+                     + f" | {d['realism_poses']:.2f} |")
         L.append("")
     if controls:
         L += ["### What the realism test's classifier says about real motion", "",
               "The two-sample test's classifier and folds with real motion capture on both sides:", "",
               "| the two classes (all real motion) | items | held-out accuracy |", "| --- | ---: | ---: |"]
         for what, d in controls.items():
-            L.append(f"| held-out futures vs {what} | {d['items'][0]} / {d['items'][1]} | {d['accuracy']:.2f} |")
+            L.append(f"| {what} | {d['items'][0]} / {d['items'][1]} | {d['accuracy']:.2f} |")
         L += ["", "The retired realism classifier (a ridge classifier on the full sequence descriptor: poses every "
               "4th frame, mean absolute velocity and acceleration, standard deviations) told the held-out subjects' "
               "real futures from the validation subjects' with accuracy 0.99: it measured who moves and what they "

@@ -66,3 +66,14 @@ def test_two_sample_test_on_real_windows(real_futures):
     assert R.two_sample_realism(real, slow, dim=3).accuracy > 0.8
     with pytest.raises(ValueError):
         R.two_sample_realism(real, real[:-1], dim=3)
+
+
+def test_feature_families_say_what_gives_fakes_away(real_futures):
+    """Futures whose points jitter (same mean path, frame-to-frame noise) differ in acceleration far more than
+    in positional spread."""
+    rng = np.random.default_rng(0)
+    jitter = real_futures + rng.normal(0.0, 0.01, real_futures.shape)
+    test = R.two_sample_realism(real_futures, jitter, dim=3)
+    assert set(test.by_family) == set(R.FAMILIES)
+    assert test.by_family["acceleration"] > 0.95 and test.accuracy > 0.95
+    assert test.by_family["spread"] < test.by_family["acceleration"]

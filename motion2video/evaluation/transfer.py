@@ -125,7 +125,8 @@ class SampleRealism:
         realism: two-sample test accuracy (:func:`motion2video.evaluation.realism.two_sample_realism`)
             between the ground truth and one sample per window of the same windows (sample ``i mod K`` for
             window i, so that a sampler whose K outputs differ in kind, DLow's maps, is seen whole);
-            realism_control: its real-vs-real control (about 0.5);
+            realism_control: its real-vs-real control (about 0.5); realism_by_family: the test on speeds,
+            accelerations or positional spreads alone (:attr:`TwoSampleRealism.by_family`);
             realism_poses: a ridge real/fake classifier on poses alone, the same pairs.
         windows, samples_per_window: N and K.
     """
@@ -134,6 +135,7 @@ class SampleRealism:
     samples: tuple[float, float]
     realism: float
     realism_control: float
+    realism_by_family: dict
     realism_poses: float
     windows: int
     samples_per_window: int
@@ -151,7 +153,7 @@ def sample_realism(bundle: ModelBundle, test: WindowSet, *, samples: int = 10, s
     every = fake_all.reshape(-1, horizon, real.shape[-1])  # (N*K, T, F)
     test = two_sample_realism(real, one, dim=point_dim(bundle.layout.kind), seed=seed)
     return SampleRealism(real=motion_liveliness(real), samples=motion_liveliness(every),
-                         realism=test.accuracy, realism_control=test.control,
+                         realism=test.accuracy, realism_control=test.control, realism_by_family=test.by_family,
                          realism_poses=classifier_accuracy(pose_descriptor(real), pose_descriptor(one)),
                          windows=len(real), samples_per_window=samples)
 
