@@ -59,8 +59,11 @@ def test_evaluate_writes_the_json_table(trained, small_data, tmp_path, capsys):
                  "--stride", "32", "--json", str(out)])
     assert code == 0
     result = json.loads(out.read_text())
-    assert set(result) == {"protocol", "results", "ade_per_frame"}
+    assert set(result) == {"protocol", "results", "per_action", "macro", "ade_per_frame"}
     assert list(result["results"]) == ["cvae", "zero-velocity", "last-step", "sequence-motion"]
+    assert list(result["per_action"]) == list(result["macro"]) == list(result["results"])
+    counts = {a: row["windows"] for a, row in result["per_action"]["cvae"].items()}
+    assert counts == result["protocol"]["actions"] and sum(counts.values()) == result["protocol"]["windows"]
     for row in result["results"].values():
         assert {"ade", "fde", "mmade", "mmfde", "apd"} <= set(row)
         assert all(np.isfinite(v) for v in row.values())

@@ -13,9 +13,13 @@ HELP = "score a motion model and the zero-velocity / last-step / sequence-motion
 
 DESCRIPTION = """\
 Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
-MMFDE (DLow protocol). Prints a table; --json writes {"protocol": {...}, "results": {"<method>": {"ade": ..,
-"fde": .., "mmade": .., "mmfde": .., "apd": .., "velocity_ratio": .., "acceleration_ratio": ..}}}, the last two
-how lively the samples are (mean absolute velocity / acceleration of all features over the true futures').
+MMFDE (DLow protocol), pooled over all windows, as the macro average over actions (every action counts once)
+and per action (the action class of each clip's manifest label). Prints the three tables; --json writes
+{"protocol": {...}, "results": {"<method>": {"ade": .., "fde": .., "mmade": .., "mmfde": .., "apd": ..,
+"velocity_ratio": .., "acceleration_ratio": ..}}, "macro": {"<method>": {same keys}}, "per_action":
+{"<method>": {"<action>": {same keys, "windows": n}}}}; the ratios say how lively the samples are (mean
+absolute velocity / acceleration of all features over the true futures'). Pooled ADE / FDE / APD / MMADE /
+MMFDE are the window-weighted means of the per-action ones.
 """
 
 EXAMPLES = """\
@@ -101,6 +105,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(windows)} windows from {len(result.protocol['clips'])} clip(s), best of {args.samples}, "
           f"units: {result.protocol['units']}")
     print(result.table(columns))
+    actions = result.protocol["actions"]
+    print(f"\nmacro average over {len(actions)} action(s) (each action counts once):")
+    print(result.macro_table(columns))
+    print("\nper action (windows):")
+    print(result.per_action_table(columns))
     if args.json is not None:
         out = write_json(args.json, result.to_json())
         print(f"wrote {out}")

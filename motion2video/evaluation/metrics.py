@@ -88,9 +88,9 @@ def fde(pred: np.ndarray, gt: np.ndarray) -> float:
     return float(fde_per_window(pred, gt).mean())
 
 
-def apd(pred: np.ndarray) -> float:
-    """Average pairwise distance: for each window, the mean over sample pairs i < j of the L2 distance
-    between whole flattened sequences (T * D), averaged over windows; 0 when K = 1.
+def apd_per_window(pred: np.ndarray) -> np.ndarray:
+    """(N,) average pairwise distance of each window: the mean over sample pairs i < j of the L2 distance
+    between whole flattened sequences (T * D); zeros when K = 1.
 
     Args:
         pred: (N, K, T, D).
@@ -98,10 +98,19 @@ def apd(pred: np.ndarray) -> float:
     pred = _f64(pred)
     n, k = pred.shape[:2]
     if k < 2:
-        return 0.0
+        return np.zeros(n)
     dist = pairwise_distances(pred.reshape(n, k, -1))  # (N, K, K) between whole flattened sequences
     iu = np.triu_indices(k, 1)
-    return float(dist[:, iu[0], iu[1]].mean())
+    return dist[:, iu[0], iu[1]].mean(axis=1)
+
+
+def apd(pred: np.ndarray) -> float:
+    """Average pairwise distance: :func:`apd_per_window` averaged over windows; 0 when K = 1.
+
+    Args:
+        pred: (N, K, T, D).
+    """
+    return float(apd_per_window(pred).mean())
 
 
 def multimodal_ground_truth(last_observed: np.ndarray, *, threshold: float) -> list[np.ndarray]:
@@ -119,17 +128,24 @@ def multimodal_ground_truth(last_observed: np.ndarray, *, threshold: float) -> l
     return [np.flatnonzero(row <= threshold) for row in dist]
 
 
-def _multimodal(pred: np.ndarray, futures: np.ndarray, groups: list[np.ndarray], final: bool) -> float:
+def multimodal_per_window(pred: np.ndarray, futures: np.ndarray, groups: list[np.ndarray], *,
+                          final: bool) -> np.ndarray:
+    """(N,) per window i: the mean over the futures j in ``groups[i]`` of the best-of-K ADE (``final``:
+    FDE) against future j. pred (N, K, T, D); futures (N, T, D); groups from :func:`multimodal_ground_truth`."""
     pred, futures = _check_pred_gt(pred, futures)
     if len(groups) != pred.shape[0]:
         raise ValueError(f"need one group per window: {len(groups)} groups for {pred.shape[0]} windows")
-    scores = []
+    scores = np.empty(len(groups))
     for i, idx in enumerate(groups):
         others = futures[idx]  # (M, T, D)
         dist = np.linalg.norm(pred[i][:, None] - others[None], axis=-1)  # (K, M, T)
         err = dist[:, :, -1] if final else dist.mean(axis=2)  # (K, M)
-        scores.append(err.min(axis=0).mean())  # best sample per ground truth, averaged over them
-    return float(np.mean(scores))
+        scores[i] = err.min(axis=0).mean()  # best sample per ground truth, averaged over them
+    return scores
+
+
+def _multimodal(pred: np.ndarray, futures: np.ndarray, groups: list[np.ndarray], final: bool) -> float:
+    return float(np.mean(multimodal_per_window(pred, futures, groups, final=final)))
 
 
 def mmade(pred: np.ndarray, futures: np.ndarray, groups: list[np.ndarray]) -> float:
@@ -157,8 +173,14 @@ def best_of_k_mse(pred: np.ndarray, gt: np.ndarray) -> float:
     R-MSE (MT-VAE eq. 6) when the K samples decode latents drawn from the recognition model
     q(z | obs, future); S-MSE (eq. 7) when they are drawn from the prior.
     """
+    return float(best_of_k_mse_per_window(pred, gt).mean())
+
+
+def best_of_k_mse_per_window(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """(N,) per window, the minimum over K of the mean squared error per coordinate (:func:`best_of_k_mse`).
+    pred (N, K, T, D); gt (N, T, D)."""
     pred, gt = _check_pred_gt(pred, gt)
-    return float(((pred - gt[:, None]) ** 2).mean(axis=(2, 3)).min(axis=1).mean())
+    return ((pred - gt[:, None]) ** 2).mean(axis=(2, 3)).min(axis=1)
 
 
 def parzen_log_likelihood(samples: np.ndarray, gt: np.ndarray, *, bandwidth: float) -> np.ndarray:
