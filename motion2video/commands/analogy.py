@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
+from motion2video.commands.common import (add_command, add_motion_input_arguments, add_video_output_arguments,
+                                          check_video_and_npz, set_threads)
 from motion2video.errors import InputError
 
 HELP = "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D"
@@ -48,6 +49,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
                    help="skeleton maps or Anny bodies (body models; face models draw the Anny face)")
     add_video_output_arguments(p, npz_help="also write A->B, C->D and z to this .npz")
+    add_motion_input_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,9 +73,10 @@ def run(args: argparse.Namespace) -> int:
     bundle = load_model(args.model)
     analogy_model(bundle)  # the wrong kind of model fails before any clip is read
     check_style(bundle.data_config.layout, args.style)  # mesh needs a 3D body model
-    a = load_clip(bundle, args.a)
-    b = a if args.b == args.a else load_clip(bundle, args.b)
-    c = load_clip(bundle, args.c)
+    options = {"character": args.character, "fps": args.input_fps}
+    a = load_clip(bundle, args.a, **options)
+    b = a if args.b == args.a else load_clip(bundle, args.b, **options)
+    c = load_clip(bundle, args.c, **options)
     result = analogy(bundle, a, b, c, a_start=args.a_start, b_start=args.b_start, c_start=args.c_start,
                      observed=args.observed, horizon=args.horizon)
     chunks = iter_analogy(result, style=args.style, size=args.size)

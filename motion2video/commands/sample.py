@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_threads_argument, check_at_least,
-                                          check_video_and_npz, set_threads)
+from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_motion_input_arguments,
+                                          add_threads_argument, check_at_least, check_video_and_npz, set_threads)
 
 HELP = "sample K futures of a clip from a motion model and render them as a grid video"
 
@@ -44,6 +44,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="skeleton maps or the Anny body mesh (body models; face models draw the Anny face)")
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
     add_threads_argument(p)
+    add_motion_input_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         bundle = baseline_bundle(args.model, DatasetConfig())
     else:
         bundle = load_model(args.model)
-    clip = load_clip_for(bundle, args.input)
+    clip = load_clip_for(bundle, args.input, character=args.character, fps=args.input_fps)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
                   start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
     chunks = iter_forecast(fc, style=args.style, size=args.size)

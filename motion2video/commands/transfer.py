@@ -6,7 +6,8 @@ import argparse
 import sys
 
 from motion2video.atomic import save_npz
-from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
+from motion2video.commands.common import (add_command, add_motion_input_arguments, add_video_output_arguments,
+                                          check_video_and_npz, set_threads)
 from motion2video.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
@@ -59,6 +60,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "or frames-face-128 for face models)")
     p.add_argument("--seed", type=int, default=0, help="seed of the flow samples (default 0)")
     add_video_output_arguments(p, npz_help="also write source, re-enactments and latents to this .npz")
+    add_motion_input_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -87,9 +89,9 @@ def run(args: argparse.Namespace) -> int:
                                                     reference_pose=args.reference_pose)
     elif args.reference_pose or args.frame_model:
         raise InputError("--frame-model and --reference-pose are only used with --style frames")
-    target = load_clip(bundle, args.target)
+    target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
     if args.behavior is not None:
-        source = load_clip(bundle, args.behavior)
+        source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
         result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
                                    target_frame=args.target_frame, horizon=args.horizon)
     else:

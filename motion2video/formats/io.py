@@ -111,9 +111,9 @@ def load_motion(
                                  "motion2video.formats.videopose3d.load_videopose3d(path, subject, action)", path)
             motion = clips[0]
         else:
-            raise InputError("unknown .npz layout: expected key 'joints' (body), 'face' (face) or "
-                             "'positions_3d' (VideoPose3D)", path)
-        if fps is not None:
+            raise InputError("unknown .npz layout: expected key 'joints' (body), 'face' (face), "
+                             "'positions_3d' (VideoPose3D), or exactly one joint array", path)
+        if fps is not None and not is_joint_array(path, keys):
             motion = _with_fps(motion, fps)
     else:
         raise InputError(f"unknown motion file extension {path.suffix!r}; expected one of "
