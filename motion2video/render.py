@@ -158,12 +158,13 @@ def _joint_futures(path: str, fps: float | None) -> list[Motion] | None:
     """The K clips of a ``(K, T, J, 3)`` joint array (:mod:`motion2video.formats.joint_arrays`); None for any
     other input (including a single ``(T, J, 3)`` array, which renders as one clip)."""
     from motion2video.formats.joint_arrays import is_joint_array, load_joint_futures, read_joint_array
-    from motion2video.formats.npz import npz_keys
+    from motion2video.formats.npz import npz_keys, npz_kind
 
     p = Path(path)
     if p.suffix.lower() not in (".npy", ".npz") or not p.is_file():
         return None
-    if not is_joint_array(p, npz_keys(p) if p.suffix.lower() == ".npz" else None):
+    keys = npz_keys(p) if p.suffix.lower() == ".npz" else None
+    if not is_joint_array(p, keys) or (keys is not None and npz_kind(keys) in ("face", "videopose3d")):
         return None
     if read_joint_array(p).ndim != 4:
         return None

@@ -98,7 +98,7 @@ def load_motion(
     elif suffix == ".npz":
         keys = npz_keys(path)
         kind = npz_kind(keys)
-        if is_joint_array(path, keys):
+        if kind not in ("face", "videopose3d") and is_joint_array(path, keys):
             motion = load_joint_array(path, fps=fps)
         elif kind == "body":
             motion = load_motion_npz(path)
@@ -113,7 +113,7 @@ def load_motion(
         else:
             raise InputError("unknown .npz layout: expected key 'joints' (body), 'face' (face), "
                              "'positions_3d' (VideoPose3D), or exactly one joint array", path)
-        if fps is not None and not is_joint_array(path, keys):
+        if fps is not None:
             motion = _with_fps(motion, fps)
     else:
         raise InputError(f"unknown motion file extension {path.suffix!r}; expected one of "
