@@ -38,7 +38,7 @@ from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_m
 from motion2video.formats.numbers import parse_number_rows
 from motion2video.formats.resample import round_fps
 from motion2video.motion import Motion
-from motion2video.skeletons import RIG_JOINT_MAPS
+from motion2video.core.skeletons import BODY_POINT_RIGS, RIG_JOINT_MAPS
 
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 _CHANNEL_LOOKUP = {c.lower(): c for c in CHANNEL_NAMES}
@@ -55,6 +55,7 @@ RIG_UNITS: dict[str, float] = {
     "cmu-daz": 0.01,
     "deepmimic-humanoid": 0.01,
     "mass-character1": 0.01,
+    "motion2video-h36m": 1.0,  # the files motion2video writes (formats/bvh_write.py)
 }
 
 @dataclass(frozen=True)
@@ -482,7 +483,7 @@ def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) ->
     Returns:
         (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
     """
-    return canonical_from_map(nodes, names, rig_joint_maps()[rig])
+    return canonical_from_map(nodes, names, rig_joint_maps()[rig], body_points=rig not in BODY_POINT_RIGS)
 
 
 # A BVH clip in the project frame (the shared container of every mocap reader).
@@ -543,7 +544,7 @@ def bvh_to_canonical(
     elif canonical.joints.shape[0] != clip.num_frames or (rig is not None and canonical.rig != rig):
         raise ValueError("canonical= does not belong to this clip / rig")
     return canonical_motion(canonical.joints, fps=rate, source=clip.path, start=start, frames=frames,
-                            target_fps=target_fps, label=label)
+                            target_fps=target_fps, label=label, place_floor=canonical.rig not in BODY_POINT_RIGS)
 
 
 

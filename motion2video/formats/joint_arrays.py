@@ -49,7 +49,8 @@ H36M_FPS = 50.0  # Human3.6M, and the stochastic predictors trained on it
 ARRAY_SUFFIXES = (".npy", ".npz")
 KNOWN_JOINTS = {22: "SMPL-22 (y up)", 17: "H36M-17 (z up)"}
 SAVE_HINT = ("save the joint array itself: np.save(path, joints) with joints of shape (T, 22, 3) or "
-             "(K, T, J, 3) (MDM's results.npy: np.save(path, results['motion'][i].transpose(2, 0, 1)), one (T, 22, 3) clip)")
+             "(K, T, J, 3) (MDM's results.npy: np.save(path, results['motion'][i].transpose(2, 0, 1)), one "
+             "(T, 22, 3) clip)")
 
 
 def read_joint_array(path: str | Path) -> np.ndarray:

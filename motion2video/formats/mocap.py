@@ -20,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from motion2video.core.errors import InputError
+from motion2video.core.skeletons import BODY_POINT_RIGS
 from motion2video.formats.canonical import CanonicalClip, canonical_motion
 from motion2video.formats.manifest import (  # noqa: F401 (default_trim: also imported from here)
     ManifestEntry,
@@ -128,7 +129,7 @@ def load_mocap(
         label = entry.label if label is None else label
     return canonical_motion(canon.joints, fps=canon.fps if fps is None else float(fps), source=str(path),
                             start=default_trim(canon.rig) if entry is not None else 0,
-                            target_fps=target_fps, label=label)
+                            target_fps=target_fps, label=label, place_floor=canon.rig not in BODY_POINT_RIGS)
 
 
 def mocap_files(folder: str | Path) -> dict[str, ManifestEntry | None]:
