@@ -83,3 +83,56 @@ def test_bvh_option_errors_write_nothing(tiny_model, mocap_dir, tmp_path, capsys
     assert main(args + ["--bvh", str(tmp_path / "no" / "such" / "dir")]) == 2
     assert "parent does not exist" in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.fixture(scope="module")
+def tiny_latent_models(tmp_path_factory, mocap_dir):
+    """A behaviour model and an MT-VAE trained 3 steps on three CMU clips."""
+    from motion2video.data.dataset import DatasetConfig, build_dataset
+    from motion2video.training import TrainConfig, train_model
+
+    root = link_clips(tmp_path_factory.mktemp("bvh_latent_data"), mocap_dir,
+                      ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh"))
+    d = tmp_path_factory.mktemp("bvh_latent_ckpt")
+    out = {}
+    for name, kind, data_kw in (("behavior", "behavior", {}), ("mtvae", "mtvae-add", {"observed": 8, "future": 12})):
+        dataset = build_dataset(root, DatasetConfig(val_fraction=0.0, test_fraction=0.0, **data_kw))
+        train_model(model_name=kind, model_config={"hidden_dim": 16, "latent_dim": 4}, dataset=dataset,
+                    config=TrainConfig(steps=3, batch_size=4, warmup_steps=0, checkpoint_every=1000, val_every=0,
+                                       flow_steps=5, flow_windows=16),
+                    out=d / f"{name}.safetensors", progress=False)
+        out[name] = d / f"{name}.safetensors"
+    return out
+
+
+def _bone_spread(joints: np.ndarray) -> float:
+    """The largest change of a bone's length over the frames (m): what a rigid-bone BVH cannot follow."""
+    from motion2video.core.skeletons import bone_lengths
+
+    lengths = bone_lengths(joints)  # (T, 17)
+    return float((lengths.max(axis=0) - lengths.min(axis=0)).max())
+
+
+def test_transfer_and_analogy_write_bvh(tiny_latent_models, mocap_dir, tmp_path):
+    """transfer --bvh: one file per re-enactment; analogy --bvh: C then D. Read back, each is within its
+    own bone-length change of the --npz joints (these outputs have no --rigid-bones: the model's bones
+    stretch, the file's bones cannot)."""
+    target, source = str(mocap_dir / "cmu/01_01.bvh"), str(mocap_dir / "cmu/131_03.bvh")
+    npz, folder = tmp_path / "t.npz", tmp_path / "t"
+    assert main(["transfer", "--model", str(tiny_latent_models["behavior"]), "--sample", "2", "--target", target,
+                 "--horizon", "10", "--style", "skeleton", "--size", "48", "-o", str(tmp_path / "t.mp4"),
+                 "--npz", str(npz), "--bvh", str(folder)]) == 0
+    reenacted = np.load(npz)["reenacted"]  # (2, 11, 17, 3)
+    assert sorted(p.name for p in folder.iterdir()) == ["reenacted_1.bvh", "reenacted_2.bvh"]
+    for k in range(2):
+        back = load_motion(folder / f"reenacted_{k + 1}.bvh")
+        assert back.num_frames == reenacted.shape[1] and back.fps == 25.0
+        err = np.linalg.norm(back.joints - reenacted[k], axis=-1).max()
+        assert err <= 2 * _bone_spread(reenacted[k]) + 1e-3, (err, _bone_spread(reenacted[k]))
+    npz, folder = tmp_path / "a.npz", tmp_path / "a"
+    assert main(["analogy", "--model", str(tiny_latent_models["mtvae"]), target, target, source,
+                 "--size", "48", "-o", str(tmp_path / "a.mp4"), "--npz", str(npz), "--bvh", str(folder)]) == 0
+    cd = np.load(npz)["cd"]  # (20, 17, 3)
+    back = load_motion(folder / "analogy_1.bvh")
+    assert back.num_frames == len(cd)
+    assert np.linalg.norm(back.joints - cd, axis=-1).max() <= 2 * _bone_spread(cd) + 1e-3
