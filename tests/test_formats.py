@@ -78,7 +78,8 @@ def test_overwrite_is_atomic_and_keeps_the_old_file_on_failure(tmp_path):
         ({"face": np.zeros((4, 57), np.float32), "fps": 30.0, "identity": "{}"}, "shape (T, 58)"),
         ({"face": np.zeros((4, 58), np.float32), "fps": 30.0, "identity": "[1"}, "not valid JSON"),
         ({"face": np.full((4, 58), np.inf, np.float32), "fps": 30.0, "identity": "{}"}, "NaN or Inf"),
-        ({"something": np.zeros(3)}, "unknown .npz layout"),
+        ({"something": np.zeros(3)}, "expected joints of shape (T, J, 3)"),  # one array: a joint array
+        ({"something": np.zeros(3), "else": np.zeros(3)}, "unknown .npz layout"),
     ],
 )
 def test_bad_npz_raises_input_error(tmp_path, arrays, message):

@@ -37,6 +37,10 @@ class RenderRequest:
         start, frames: the frame range to render, counted at the output rate.
         palette: skeleton palette, ``"leftright"`` or ``"openpose"``.
         progress: show a progress bar.
+        character: the character file of a DeepMimic motion file (None: found beside it, else the standard).
+        input_fps: the input's true frame rate, for files that state none (joint arrays) or a wrong one.
+
+    A joint array of K clips ``(K, T, J, 3)`` renders as one grid of K cells (skeleton style, one camera).
     """
 
     input: str
@@ -48,6 +52,8 @@ class RenderRequest:
     frames: int | None = None
     palette: str = "leftright"
     progress: bool = False
+    character: str | None = None
+    input_fps: float | None = None
 
 
 @dataclass(frozen=True)
@@ -148,6 +154,48 @@ def render_motion(motion: Motion | FaceMotion, *, style: str, size: int, palette
     return np.concatenate(list(iter_frames(motion, style=style, size=size, palette=palette, progress=progress)))
 
 
+def _joint_futures(path: str, fps: float | None) -> list[Motion] | None:
+    """The K clips of a ``(K, T, J, 3)`` joint array (:mod:`motion2video.formats.joint_arrays`); None for any
+    other input (including a single ``(T, J, 3)`` array, which renders as one clip)."""
+    from motion2video.formats.joint_arrays import is_joint_array, load_joint_futures, read_joint_array
+    from motion2video.formats.npz import npz_keys, npz_kind
+
+    p = Path(path)
+    if p.suffix.lower() not in (".npy", ".npz") or not p.is_file():
+        return None
+    keys = npz_keys(p) if p.suffix.lower() == ".npz" else None
+    if not is_joint_array(p, keys) or (keys is not None and npz_kind(keys) in ("face", "videopose3d")):
+        return None
+    if read_joint_array(p).ndim != 4:
+        return None
+    return load_joint_futures(p, fps=fps)
+
+
+def iter_futures_grid(futures: list[Motion], *, size: int, palette: str = "leftright") -> Iterator[np.ndarray]:
+    """K clips as one grid video drawn the way ``sample`` draws its futures: one camera fitted to every
+    clip, each cell framed red and labelled ``sample k``.
+
+    Args:
+        futures: K h36m-17 Motions (3D), any lengths (a shorter cell holds its last frame).
+    Yields:
+        (t, H, W, 3) uint8 chunks of the grid.
+    """
+    from motion2video.core.camera import fit_camera
+    from motion2video.formats.video import RED, add_border, iter_grid
+    from renderers.registry import renderer_for
+
+    camera = fit_camera(np.concatenate([m.joints.reshape(-1, 3) for m in futures]), size, size, margin=0.1)
+    labels = [f"sample {k + 1}" for k in range(len(futures))]
+
+    def cell(renderer, motion: Motion) -> Iterator[np.ndarray]:
+        for start in range(0, motion.num_frames, CHUNK):
+            yield add_border(renderer.draw(motion.joints[start:start + CHUNK], skeleton=motion.skeleton,
+                                           camera=camera), RED)
+
+    with renderer_for("body3d", "skeleton", size=size, palette=palette) as renderer:
+        yield from iter_grid([cell(renderer, m) for m in futures], labels)
+
+
 def render_file(request: RenderRequest) -> RenderResult:
     """Load ``request.input``, render it and write ``request.output``; see :class:`RenderRequest`."""
     from motion2video.formats.video import VideoWriter
@@ -158,13 +206,27 @@ def render_file(request: RenderRequest) -> RenderResult:
         raise InputError(f"unknown style {request.style!r}; choose one of {', '.join(STYLES)}")
     if request.fps is not None and not request.fps > 0:
         raise InputError(f"--fps must be positive, got {request.fps}")
-    motion = load_motion(request.input)
-    if request.fps is not None:
-        motion = resample_motion(motion, float(request.fps))
-    if request.start != 0 or request.frames is not None:
-        motion = motion.slice(request.start, request.frames)
-    frames = iter_frames(motion, style=request.style, size=size, palette=request.palette,
-                         progress=request.progress)
+    if request.input_fps is not None and not request.input_fps > 0:
+        raise InputError(f"--input-fps must be positive, got {request.input_fps}")
+    futures = _joint_futures(request.input, request.input_fps)
+    if futures is not None:
+        if request.style != "skeleton":
+            raise InputError(f"a joint array of {len(futures)} clips renders as a skeleton grid only, not "
+                             f"--style {request.style}", request.input)
+        if request.fps is not None:
+            futures = [resample_motion(m, float(request.fps)) for m in futures]
+        if request.start != 0 or request.frames is not None:
+            futures = [m.slice(request.start, request.frames) for m in futures]
+        motion = futures[0]
+        frames = iter_futures_grid(futures, size=size, palette=request.palette)
+    else:
+        motion = load_motion(request.input, fps=request.input_fps, character=request.character)
+        if request.fps is not None:
+            motion = resample_motion(motion, float(request.fps))
+        if request.start != 0 or request.frames is not None:
+            motion = motion.slice(request.start, request.frames)
+        frames = iter_frames(motion, style=request.style, size=size, palette=request.palette,
+                             progress=request.progress)
     with VideoWriter(out, motion.fps) as writer:
         for chunk in frames:
             writer.write(chunk)

@@ -188,6 +188,8 @@ class SynthesisConfig:
             keeps the reference's background at this size and generates the person at its own size.
         rigid_bones: give the futures the observed bone lengths (3D body models;
             :func:`motion2video.stages.sampling.forecast`).
+        character: the character file of a DeepMimic input (None: found beside it, else the standard one).
+        input_fps: the input's true frame rate when the file states none (joint arrays) or a wrong one.
     """
 
     samples: int = 5
@@ -202,6 +204,8 @@ class SynthesisConfig:
     preset: str = "medium"
     size: int | None = None
     rigid_bones: bool = False
+    character: str | None = None
+    input_fps: float | None = None
 
 
 @dataclass
@@ -305,7 +309,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     if size != gen_config.image_size and getattr(frames_model, "kind", "analogy") != "warp":
         raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
                          f"{gen_config.image_size} px frames only)")
-    clip = load_clip(bundle, input_path).data
+    clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps).data
     ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
     timings["load"] = time.perf_counter() - t0
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_threads_argument, check_at_least,
-                                          check_video_and_npz, set_threads)
+from motion2video.commands.common import (RIGID_BONES_HELP, add_bvh_argument, add_command,
+                                          add_motion_input_arguments, add_threads_argument, check_at_least,
+                                          check_bvh_output, check_video_and_npz, set_threads)
 
 HELP = "sample K futures of a clip from a motion model and render them as a grid video"
 
@@ -44,6 +45,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="skeleton maps or the Anny body mesh (body models; face models draw the Anny face)")
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
     add_threads_argument(p)
+    add_motion_input_arguments(p)
+    add_bvh_argument(p, "future (observed frames then the future: DIR/sample_1.bvh, ...)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -63,7 +66,8 @@ def run(args: argparse.Namespace) -> int:
         bundle = baseline_bundle(args.model, DatasetConfig())
     else:
         bundle = load_model(args.model)
-    clip = load_clip_for(bundle, args.input)
+    check_bvh_output(args.bvh, bundle.data_config.layout)
+    clip = load_clip_for(bundle, args.input, character=args.character, fps=args.input_fps)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
                   start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
     chunks = iter_forecast(fc, style=args.style, size=args.size)
@@ -75,4 +79,13 @@ def run(args: argparse.Namespace) -> int:
     if args.npz:
         save_forecast_npz(fc, args.npz)
         print(f"wrote {args.npz}")
+    if args.bvh:
+        import numpy as np
+
+        from motion2video.formats.bvh_write import write_bvh_files
+
+        clips = np.concatenate([np.broadcast_to(fc.observed, (len(fc.futures),) + fc.observed.shape), fc.futures],
+                               axis=1)  # (K, To + Tf, 17, 3)
+        paths = write_bvh_files(args.bvh, "sample", clips, fc.fps)
+        print(f"wrote {len(paths)} BVH files to {args.bvh} ({paths[0].name} ...)")
     return 0

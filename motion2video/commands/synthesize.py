@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.commands.common import RIGID_BONES_HELP, add_command, check_at_least
+from motion2video.commands.common import RIGID_BONES_HELP, add_command, add_motion_input_arguments, check_at_least
 from motion2video.core.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"
@@ -57,6 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "keeps the reference background at this size and generates the person at its own size")
     p.add_argument("--threads", type=int, default=None,
                    help="torch threads for the frame generator (default: half the cores, 1 to 4; sampling uses 1)")
+    add_motion_input_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -74,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
         check_at_least("--horizon", args.horizon)
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
-                             size=args.size, rigid_bones=args.rigid_bones)
+                             size=args.size, rigid_bones=args.rigid_bones, character=args.character,
+                             input_fps=args.input_fps)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

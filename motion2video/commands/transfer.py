@@ -6,7 +6,9 @@ import argparse
 import sys
 
 from motion2video.core.atomic import save_npz
-from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
+from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
+                                          add_video_output_arguments, check_bvh_output, check_video_and_npz,
+                                          set_threads)
 from motion2video.core.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
@@ -59,6 +61,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "or frames-face-128 for face models)")
     p.add_argument("--seed", type=int, default=0, help="seed of the flow samples (default 0)")
     add_video_output_arguments(p, npz_help="also write source, re-enactments and latents to this .npz")
+    add_motion_input_arguments(p)
+    add_bvh_argument(p, "re-enactment (DIR/reenacted_1.bvh, ...)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     if args.model in BASELINES:
         raise InputError(f"behaviour transfer needs a 'behavior' model; {args.model!r} is a baseline")
     bundle = load_model(args.model)
+    check_bvh_output(args.bvh, bundle.data_config.layout)
     behavior_model(bundle)  # the wrong kind of model fails before any clip is read
     style = style_for(bundle.data_config.layout, style)
     frame_model = reference = None
@@ -87,9 +92,9 @@ def run(args: argparse.Namespace) -> int:
                                                     reference_pose=args.reference_pose)
     elif args.reference_pose or args.frame_model:
         raise InputError("--frame-model and --reference-pose are only used with --style frames")
-    target = load_clip(bundle, args.target)
+    target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
     if args.behavior is not None:
-        source = load_clip(bundle, args.behavior)
+        source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
         result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
                                    target_frame=args.target_frame, horizon=args.horizon)
     else:
@@ -114,4 +119,9 @@ def run(args: argparse.Namespace) -> int:
             arrays["source"] = result.source
         save_npz(args.npz, arrays)
         print(f"wrote {args.npz}")
+    if args.bvh:
+        from motion2video.formats.bvh_write import write_bvh_files
+
+        paths = write_bvh_files(args.bvh, "reenacted", result.reenacted, result.fps)
+        print(f"wrote {len(paths)} BVH files to {args.bvh} ({paths[0].name} ...)")
     return 0

@@ -70,8 +70,15 @@ def _face_data(bundle, motion, path: Path) -> np.ndarray:
 LOADERS = {"body3d": _body_data, "body2d": _body_data, "face": _face_data}
 
 
-def load_clip(bundle, path: str | Path) -> LoadedClip:
+def load_clip(bundle, path: str | Path, *, character: str | Path | None = None,
+              fps: float | None = None) -> LoadedClip:
     """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.models.checkpoint.ModelBundle`).
+
+    Args:
+        character: the character file of a DeepMimic motion file (default: found beside it, else the
+            standard humanoid3d).
+        fps: the file's true frame rate, for files that state none or a wrong one (joint arrays: 20 fps
+            for SMPL-22 by default).
 
     Returns:
         A :class:`LoadedClip` at the model's rate.
@@ -84,7 +91,7 @@ def load_clip(bundle, path: str | Path) -> LoadedClip:
     path = Path(path)
     if path.is_dir():
         raise InputError("a model takes one clip file, not a folder", path)
-    motion = load_motion(path)
+    motion = load_motion(path, fps=fps, character=character)
     data = LOADERS[bundle.data_config.layout](bundle, motion, path)
     identity = dict(motion.identity) if isinstance(motion, FaceMotion) else {}
     source_frames = motion.num_frames
