@@ -19,6 +19,9 @@ Coordinates: image pixels, x right, y down, origin at the top-left corner of the
 
 from __future__ import annotations
 
+import os
+import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -228,7 +231,10 @@ def roi_matrix(roi: Roi, out_size: int = LANDMARK_SIZE) -> np.ndarray:
 
 def crop_roi(image: np.ndarray, roi: Roi, out_size: int = LANDMARK_SIZE) -> np.ndarray:
     """(out_size, out_size, 3) float32 [0, 1] crop of the ROI from (H, W, 3) uint8 RGB (border replicated)."""
-    crop = cv2.warpAffine(image, roi_matrix(roi, out_size), (out_size, out_size),
+    mat = roi_matrix(roi, out_size)
+    # OpenCV maps pixel indices (centres at integers); ours maps continuous coordinates (centres at +0.5).
+    mat[:, 2] += mat[:, :2] @ np.array([0.5, 0.5]) - 0.5
+    crop = cv2.warpAffine(image, mat, (out_size, out_size),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
     return crop.astype(np.float32) * (1.0 / 255.0)
 
@@ -315,6 +321,25 @@ def decode_landmarks(raw: np.ndarray, flag: float, heatmap: np.ndarray, world: n
 
 # --- the two models -------------------------------------------------------------------------------------------
 
+@contextmanager
+def _quiet_stderr():
+    """Silence file descriptor 2 (C++ logging) for the block; Python's own errors still propagate."""
+    try:
+        fd = sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):  # no real stderr (e.g. captured): nothing to silence
+        yield
+        return
+    sys.stderr.flush()
+    saved = os.dup(fd)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), fd)
+            yield
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
+
+
 class BlazePose:
     """The two BlazePose models behind LiteRT interpreters.
 
@@ -325,10 +350,11 @@ class BlazePose:
     def __init__(self, *, num_threads: int = 2) -> None:
         from ai_edge_litert.interpreter import Interpreter
 
-        self._det = Interpreter(model_path=str(DETECTOR_FILE), num_threads=num_threads)
-        self._det.allocate_tensors()
-        self._lmk = Interpreter(model_path=str(LANDMARK_FILE), num_threads=num_threads)
-        self._lmk.allocate_tensors()
+        with _quiet_stderr():  # LiteRT prints "INFO: Created TensorFlow Lite XNNPACK delegate" to fd 2
+            self._det = Interpreter(model_path=str(DETECTOR_FILE), num_threads=num_threads)
+            self._det.allocate_tensors()
+            self._lmk = Interpreter(model_path=str(LANDMARK_FILE), num_threads=num_threads)
+            self._lmk.allocate_tensors()
         self._det_in = self._det.get_input_details()[0]["index"]
         det_out = {d["shape"][-1]: d["index"] for d in self._det.get_output_details()}
         self._det_boxes, self._det_scores = det_out[12], det_out[1]

@@ -48,9 +48,16 @@ def order_people(detections: list[Detection]) -> list[Detection]:
     return sorted(detections, key=lambda d: float(d.keypoints[0, 0]))
 
 
-def choose_person(detections: list[Detection], person: str | int, source: str | Path | None = None
-                  ) -> Detection:
-    """The detection ``person`` names: ``"largest"`` (the biggest body ROI) or an index left to right.
+def landmark_extent(lm: Landmarks) -> float:
+    """Size of a landmark result: the diagonal (pixels) of the 33 body landmarks' bounding box."""
+    xy = lm.xy[:NUM_BODY_LANDMARKS]
+    return float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0))))
+
+
+def choose_person(model: BlazePose, image: np.ndarray, detections: list[Detection], person: str | int,
+                  source: str | Path | None = None) -> Landmarks:
+    """The landmarks of the person ``person`` names among ``detections`` of ``image``: ``"largest"`` (the
+    largest landmark bounding box of those with a pose) or an index counted left to right (by hip centre).
 
     Raises:
         InputError: no detection, or an index beyond the people found.
@@ -58,13 +65,15 @@ def choose_person(detections: list[Detection], person: str | int, source: str | 
     if not detections:
         raise InputError("no person found", source)
     if person == "largest":
-        return max(detections, key=lambda d: detection_roi(d).size)
+        found = [model.landmarks(image, detection_roi(d)) for d in detections]
+        present = [lm for lm in found if lm.score >= MIN_PRESENCE] or found
+        return max(present, key=landmark_extent)
     people = order_people(detections)
     index = int(person)
     if not 0 <= index < len(people):
         raise InputError(f"--person {index}: {len(people)} people found (0..{len(people) - 1} left to right)",
                          source)
-    return people[index]
+    return model.landmarks(image, detection_roi(people[index]))
 
 
 def parse_person(value: str) -> str | int:
@@ -142,8 +151,7 @@ def estimate_image(image: np.ndarray, *, person: str | int = "largest", model: B
     """
     model = model or default_model()
     detections = model.detect(image)
-    det = choose_person(detections, person, source)
-    lm = model.landmarks(image, detection_roi(det))
+    lm = choose_person(model, image, detections, person, source)
     if lm.score < MIN_PRESENCE:
         raise InputError(f"no person found (pose presence {lm.score:.2f})", source)
     body = slice(0, NUM_BODY_LANDMARKS)
@@ -194,10 +202,10 @@ def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
                 yield None
                 continue
             if last_hip is None:
-                det = choose_person(detections, person, source)
+                lm = choose_person(model, frame, detections, person, source)
             else:
                 det = min(detections, key=lambda d: float(np.hypot(*(d.keypoints[0] - last_hip))))
-            lm = model.landmarks(frame, detection_roi(det))
+                lm = model.landmarks(frame, detection_roi(det))
             if lm.score < min_presence:
                 roi = None
                 yield None
