@@ -2,7 +2,7 @@
 feeds its model with.
 
 One loader per input kind, chosen by the model's layout: body models take 3D h36m-17 motion (BVH of any rig,
-DeepMimic / exp-map text, motion npz, ...), face models take face captures (Live Link Face CSV, FaceMotion
+DeepMimic / exp-map text, motion npz, ..., or a video of a person, whose pose is estimated and cached), face models take face captures (Live Link Face CSV, FaceMotion
 npz). The clip is resampled to the model's rate exactly as its training data was
 (:mod:`motion2video.data.dataset`); a face capture with no head pose gets the same procedural head track the
 training captures got (``DatasetConfig.face_head_pose``).
@@ -10,6 +10,7 @@ training captures got (``DatasetConfig.face_head_pose``).
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -70,6 +71,29 @@ def _face_data(bundle, motion, path: Path) -> np.ndarray:
 LOADERS = {"body3d": _body_data, "body2d": _body_data, "face": _face_data}
 
 
+def is_video_path(path: str | Path) -> bool:
+    """A video file (``.mp4``, ``.avi``, ``.mov``, ...) by its extension."""
+    from motion2video.stages.people import is_video
+
+    return is_video(path)
+
+
+def _note(line: str) -> None:
+    print(f"note: {line}", file=sys.stderr)
+
+
+def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion:
+    """The motion of the person in a video for ``bundle``'s model: its estimated pose
+    (:func:`motion2video.stages.people.video_pose`, cached in the user cache by the file's hash), as 3D joints
+    (metres, z up) at the video's frame rate. Face models refuse it."""
+    from motion2video.pose.files import pose_motion_3d
+    from motion2video.stages.people import video_pose
+
+    if bundle.data_config.layout == "face":
+        raise InputError(f"{bundle.name} is a face model; a video gives body motion", path)
+    return pose_motion_3d(video_pose(path, person=person, note=_note), path)
+
+
 def load_clip(bundle, path: str | Path) -> LoadedClip:
     """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.checkpoint.ModelBundle`).
 
@@ -84,7 +108,10 @@ def load_clip(bundle, path: str | Path) -> LoadedClip:
     path = Path(path)
     if path.is_dir():
         raise InputError("a model takes one clip file, not a folder", path)
-    motion = load_motion(path)
+    if is_video_path(path):
+        motion = video_motion(bundle, path)
+    else:
+        motion = load_motion(path)
     data = LOADERS[bundle.data_config.layout](bundle, motion, path)
     identity = dict(motion.identity) if isinstance(motion, FaceMotion) else {}
     source_frames = motion.num_frames
