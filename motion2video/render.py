@@ -16,6 +16,7 @@ import numpy as np
 from motion2video.atomic import check_output_path
 from motion2video.errors import InputError
 from motion2video.formats.io import load_motion, resample_motion
+from motion2video.formats.mocap import is_deepmimic_file
 from motion2video.motion import FaceMotion, Motion
 from motion2video.video import VIDEO_SUFFIXES
 
@@ -33,7 +34,8 @@ class RenderRequest:
         output: the .mp4 or .gif to write.
         style: one of :data:`STYLES`.
         size: frame width and height in pixels, 32..2048.
-        fps: output frame rate (the motion is resampled to it); None keeps the clip's rate.
+        fps: output frame rate (the motion is resampled to it); None keeps the clip's rate. An OpenPose
+            folder (or JSON file) has no rate of its own: ``fps`` is then its true rate (default 25).
         start, frames: the frame range to render, counted at the output rate.
         palette: skeleton palette, ``"leftright"`` or ``"openpose"``.
         progress: show a progress bar.
@@ -158,7 +160,12 @@ def render_file(request: RenderRequest) -> RenderResult:
         raise InputError(f"unknown style {request.style!r}; choose one of {', '.join(STYLES)}")
     if request.fps is not None and not request.fps > 0:
         raise InputError(f"--fps must be positive, got {request.fps}")
-    motion = load_motion(request.input)
+    src = Path(request.input)
+    if request.fps is not None and (src.is_dir() or src.suffix.lower() == ".json") and not (src.is_file() and is_deepmimic_file(src)):
+        # OpenPose keypoints carry no frame rate: --fps is the rate of the video they came from.
+        motion = load_motion(src, fps=float(request.fps))
+    else:
+        motion = load_motion(src)
     if request.fps is not None:
         motion = resample_motion(motion, float(request.fps))
     if request.start != 0 or request.frames is not None:

@@ -194,17 +194,18 @@ def test_a_photo_without_a_person_is_refused():
         estimate_image(empty, source="blank.png")
 
 
-def test_crop_person_makes_a_small_person_fill_a_square(photos_dir):
-    from motion2video.stages.people import crop_person, photo_pose
+def test_crop_person_makes_a_person_fill_a_square(photos_dir):
+    from motion2video.reference import ReferencePose, crop_to_person
 
-    photo = photo_pose(photos_dir / "man_by_truck.jpg")
-    crop = crop_person(photo)
-    h, w = crop.image.shape[:2]
-    assert h == w and h < 1280
-    pts = crop.pose.points2d
-    assert ((pts > 0) & (pts < w)).all()
-    # the person spans most of the crop (the margin is 15% of the larger side on each side)
-    assert max(np.ptp(crop.pose.landmarks.xy[:33], axis=0)) == pytest.approx(w / 1.3, rel=0.02)
+    image = read_image_rgb(photos_dir / "man_by_truck.jpg")  # 1280 x 720, the man in the middle third
+    pose = estimate_image(image)
+    crop, moved, (left, top, side) = crop_to_person(image, ReferencePose("body", 1280, 720, points=pose.points2d))
+    assert crop.shape == (side, side, 3) and side < 720 * 1.1
+    np.testing.assert_allclose(moved.points, pose.points2d - (left, top))
+    assert ((moved.points > 0.05 * side) & (moved.points < 0.95 * side)).all()
+    # the crop is the image's pixels where it lies inside the image
+    inside = crop[max(0, -top):, max(0, -left):][:100, :100]
+    np.testing.assert_array_equal(inside, image[max(0, top):, max(0, left):][:100, :100])
 
 
 # --- real video --------------------------------------------------------------------------------------------------

@@ -213,6 +213,8 @@ class SynthesisConfig:
             keeps the reference's background at this size and generates the person at its own size.
         rigid_bones: give the futures the observed bone lengths (3D body models;
             :func:`motion2video.stages.sampling.forecast`).
+        crop_person: cut the reference photo to a square around its person first
+            (:func:`motion2video.reference.crop_to_person`).
     """
 
     samples: int = 5
@@ -227,6 +229,7 @@ class SynthesisConfig:
     preset: str = "medium"
     size: int | None = None
     rigid_bones: bool = False
+    crop_person: bool = False
 
 
 @dataclass
@@ -300,7 +303,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     Args:
         motion_model: a checkpoint path / shipped name, or a loaded ModelBundle.
         frame_model: a checkpoint path / shipped name, or a loaded frame model (LoadedFrameModel).
-        input_path: the observed clip (.bvh / body .npz for body models; FaceMotion .npz / .csv for face).
+        input_path: the observed clip (.bvh / body .npz / a video of a person for body models; FaceMotion
+            .npz / .csv for face).
         reference: the reference appearance image.
         output: ``OUT.mp4``.
         config: the options.
@@ -331,7 +335,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
         raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
                          f"{gen_config.image_size} px frames only)")
     clip = load_clip(bundle, input_path).data
-    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
+    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose,
+                         crop_person=config.crop_person)
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -92,3 +92,39 @@ CAMERA_TO_PROJECT = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]
 def world_to_project(world: np.ndarray) -> np.ndarray:
     """(..., 3) BlazePose world landmarks (y down) -> project axes (metres, z up), origin unchanged."""
     return np.asarray(world, np.float64) @ CAMERA_TO_PROJECT.T
+
+
+# Canonical thigh + shin (Human3.6M S1), metres: the scale of a 2D body lifted onto a plane.
+LEG_METRES = 0.897
+
+
+def image_to_plane(points2d: np.ndarray, *, leg_metres: float = LEG_METRES) -> np.ndarray:
+    """2D joints in image pixels -> 3D joints on the vertical plane y = 0 (metres, z up), as a camera in front
+    of the plane would see them: a similarity (uniform scale, flip of the y-down axis), no depth.
+
+    The scale makes the clip's 90th-percentile 2D leg (hip -> knee -> ankle, both sides' mean) ``leg_metres``
+    long; x follows the image's x from the first frame's pelvis, z the image's up; the lowest ankle is
+    put on the floor (z = 0, as :func:`motion2video.formats.canonical.floor_height` places it). A 2D body
+    model's virtual camera (in front of the plane, looking along +y) then sees the keypoints as the image
+    showed them, up to scale and position.
+
+    Args:
+        points2d: (T, 17, 2) canonical H36M-17 joints, pixels, x right, y down.
+    Returns:
+        (T, 17, 3) float64 joints.
+    """
+    from motion2video.formats.canonical import floor_height
+
+    p = np.asarray(points2d, np.float64)
+    r_hip, r_knee, r_ankle, l_hip, l_knee, l_ankle = (H36M_17.index(n) for n in (
+        "right_hip", "right_knee", "right_ankle", "left_hip", "left_knee", "left_ankle"))
+
+    def chain(a: int, b: int, c: int) -> np.ndarray:
+        return np.linalg.norm(p[:, b] - p[:, a], axis=-1) + np.linalg.norm(p[:, c] - p[:, b], axis=-1)
+
+    leg_px = float(np.percentile(0.5 * (chain(r_hip, r_knee, r_ankle) + chain(l_hip, l_knee, l_ankle)), 90))
+    scale = leg_metres / max(leg_px, 1e-6)
+    rel = (p - p[:1, :1]) * scale  # (T, 17, 2), origin at the first pelvis
+    out = np.stack([rel[..., 0], np.zeros(rel.shape[:-1]), -rel[..., 1]], axis=-1)
+    out[..., 2] -= floor_height(out)
+    return out

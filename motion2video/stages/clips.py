@@ -50,9 +50,17 @@ def _body_data(bundle, motion, path: Path) -> np.ndarray:
 
     if isinstance(motion, FaceMotion):
         raise InputError(f"{bundle.name} is a body model, but this file holds face motion", path)
+    if (isinstance(motion, Motion) and motion.skeleton == "h36m-17" and motion.dim == 2
+            and bundle.data_config.layout == "body2d"):
+        # A 2D model sees the keypoints through its virtual camera: put them on a plane facing that camera.
+        from motion2video.pose.h36m import image_to_plane
+
+        motion = Motion(image_to_plane(motion.joints).astype(np.float32), motion.fps, "h36m-17", motion.source)
     if not isinstance(motion, Motion) or motion.skeleton != "h36m-17" or motion.dim != 3:
-        raise InputError(f"body models need 3D h36m-17 joints (BVH, motion npz, ...), got skeleton "
-                         f"{motion.skeleton} with D={motion.dim}", path)
+        hint = " (2D keypoints: use a 2D model such as mtvae-add-2d, or a video, whose 3D pose is estimated)" \
+            if isinstance(motion, Motion) and motion.dim == 2 else ""
+        raise InputError(f"body models need 3D h36m-17 joints (BVH, motion npz, a video, ...), got skeleton "
+                         f"{motion.skeleton} with D={motion.dim}{hint}", path)
     return _body_clip_from_motion(motion, name=path.name, fps=bundle.data_config.fps).data
 
 
@@ -84,14 +92,18 @@ def _note(line: str) -> None:
 
 def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion:
     """The motion of the person in a video for ``bundle``'s model: its estimated pose
-    (:func:`motion2video.stages.people.video_pose`, cached in the user cache by the file's hash), as 3D joints
-    (metres, z up) at the video's frame rate. Face models refuse it."""
-    from motion2video.pose.files import pose_motion_3d
+    (:func:`motion2video.stages.people.video_pose`, cached in the user cache by the file's hash) at the
+    video's frame rate: 3D joints (metres, z up) for 3D body models, the 2D image keypoints for 2D body models
+    (which see them through their virtual camera, :func:`motion2video.pose.h36m.image_to_plane`). Face models
+    refuse it."""
+    from motion2video.pose.files import pose_motion_2d, pose_motion_3d
     from motion2video.stages.people import video_pose
 
-    if bundle.data_config.layout == "face":
+    layout = bundle.data_config.layout
+    if layout == "face":
         raise InputError(f"{bundle.name} is a face model; a video gives body motion", path)
-    return pose_motion_3d(video_pose(path, person=person, note=_note), path)
+    pose = video_pose(path, person=person, note=_note)
+    return pose_motion_2d(pose, path) if layout == "body2d" else pose_motion_3d(pose, path)
 
 
 def load_clip(bundle, path: str | Path) -> LoadedClip:
@@ -106,8 +118,8 @@ def load_clip(bundle, path: str | Path) -> LoadedClip:
     from motion2video.formats.io import load_motion
 
     path = Path(path)
-    if path.is_dir():
-        raise InputError("a model takes one clip file, not a folder", path)
+    if path.is_dir() and bundle.data_config.layout != "body2d":
+        raise InputError("a model takes one clip file, not a folder (OpenPose folders: 2D body models only)", path)
     if is_video_path(path):
         motion = video_motion(bundle, path)
     else:

@@ -5,8 +5,6 @@
 - :func:`video_pose`: a video -> :class:`~motion2video.pose.estimate.VideoPose`, cached by the file's
   sha256 (next to an output, or in ``~/.cache/motion2video/pose``), so that running two commands on the
   same video estimates it once;
-- :func:`crop_person`: a square around the person, with a margin, so a person small in a large photo fills
-  the generator's frame;
 - :func:`write_photo_overlay` / :func:`write_video_overlay`: the keypoints drawn on the input.
 """
 
@@ -24,9 +22,6 @@ from motion2video.core.errors import InputError
 from motion2video.pose.estimate import (IMAGE_SUFFIXES, VIDEO_SUFFIXES, PersonPose, VideoPose, estimate_image,
                                         estimate_video, iter_video_frames, read_image_rgb)
 from motion2video.pose.files import ESTIMATOR, load_video_pose, save_video_pose
-
-CROP_MARGIN = 0.15  # of the person's larger bounding-box side, on each side
-
 
 def is_video(path: str | Path) -> bool:
     """A video file by its extension (``.mp4``, ``.avi``, ``.mov``, ...)."""
@@ -122,41 +117,6 @@ def reference_pose_of(pose: PersonPose):
     from motion2video.reference import ReferencePose
 
     return ReferencePose("body", pose.width, pose.height, points=pose.points2d.astype(np.float64))
-
-
-def crop_box(pose: PersonPose, *, margin: float = CROP_MARGIN) -> tuple[int, int, int]:
-    """The square (x0, y0, side) in pixels around the person's landmarks, ``margin`` of its larger side on each
-    side, centred on the person; it may reach outside the image (the crop pads with the border colour)."""
-    x0, y0, x1, y1 = pose.bounding_box()
-    side = max(x1 - x0, y1 - y0) * (1 + 2 * margin)
-    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
-    side_i = max(8, int(round(side)))
-    return int(round(cx - side_i / 2)), int(round(cy - side_i / 2)), side_i
-
-
-def crop_image(image: np.ndarray, box: tuple[int, int, int]) -> np.ndarray:
-    """(side, side, 3) crop of (H, W, 3) ``image`` at ``box`` = (x0, y0, side), replicating the border outside."""
-    import cv2
-
-    x0, y0, side = box
-    h, w = image.shape[:2]
-    pad = max(0, -x0, -y0, x0 + side - w, y0 + side - h)
-    if pad:
-        image = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_REPLICATE)
-    return np.ascontiguousarray(image[y0 + pad:y0 + pad + side, x0 + pad:x0 + pad + side])
-
-
-def crop_person(photo: PhotoPose, *, margin: float = CROP_MARGIN) -> PhotoPose:
-    """The photo cut to a square around its person (:func:`crop_box`), the pose moved into the crop."""
-    box = crop_box(photo.pose, margin=margin)
-    shift = np.array(box[:2], np.float64)
-    p = photo.pose
-    lm = p.landmarks
-    from dataclasses import replace
-
-    moved = replace(lm, xy=lm.xy - shift, roi=replace(lm.roi, centre=lm.roi.centre - shift))
-    cropped = PersonPose(p.points2d - shift, p.joints3d, p.confidence, moved, box[2], box[2], p.people)
-    return PhotoPose(crop_image(photo.image, box), cropped, photo.people)
 
 
 # --- overlays ------------------------------------------------------------------------------------------------
