@@ -8,7 +8,8 @@
 - :func:`estimate_video`: a video file -> :class:`VideoPose` (frames without a person at the ends trimmed,
   gaps inside linearly interpolated), the data of ``motion2video pose VIDEO``.
 
-3D joints: BlazePose's world landmarks (hip-centred, metres) turned z up; the body's position comes from the
+3D joints: BlazePose's world landmarks (hip-centred, metres) turned z up, on the canonical body points
+(:func:`motion2video.core.skeletons.h36m_body_points`, skeleton version 2); the body's position comes from the
 2D hip centre under a constant metres-per-pixel scale (the clip's median leg length in metres over its
 90th-percentile leg length in pixels): sideways and vertical movement in the image plane, none in depth.
 The floor is put at z = 0, :data:`~motion2video.formats.canonical.ANKLE_HEIGHT` below the lowest ankle.
@@ -24,6 +25,7 @@ import cv2
 import numpy as np
 
 from motion2video.core.errors import InputError
+from motion2video.core.skeletons import h36m_body_points
 from motion2video.formats.canonical import floor_height
 from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, detection_roi
 from motion2video.pose.h36m import blazepose_to_h36m, leg_length, world_to_project
@@ -103,7 +105,10 @@ def landmarks_to_joints(xy: np.ndarray, world: np.ndarray, visibility: np.ndarra
         points2d (T, 17, 2) pixels, joints3d (T, 17, 3) metres z up floor at 0, confidence (T, 17).
     """
     points2d, confidence = blazepose_to_h36m(xy, visibility)
-    local, _ = blazepose_to_h36m(world_to_project(world))  # (T, 17, 3), pelvis at the origin
+    raw, _ = blazepose_to_h36m(world_to_project(world))  # (T, 17, 3), pelvis at the origin
+    # canonical skeleton v2: spine, neck/nose and head at Human3.6M's lengths scaled by the clip's leg, the
+    # head along the thorax -> ears direction (the raw neck -> head direction)
+    local = h36m_body_points(raw)
     local -= local[:, :1]
     leg_m = float(np.median(leg_length(world)))
     leg_px = float(np.percentile(leg_length(xy), 90))

@@ -9,7 +9,9 @@ there), from Human3.6M's own proportions (subject S1, see docs/architecture.md):
   (121 mm and 115 mm over a 897 mm thigh + shin), where ``leg`` is the mean of the two hip -> knee -> ankle
   lengths of the same frame.
 
-Confidence of a built joint is the least confidence of the landmarks it is built from.
+Confidence of a built joint is the least confidence of the landmarks it is built from. These are the
+canonical skeleton's (version 2) definitions; the 3D joints then go through
+:func:`motion2video.core.skeletons.h36m_body_points` (fixed-length spine chain, clip-level leg).
 """
 
 from __future__ import annotations
