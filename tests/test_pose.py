@@ -311,3 +311,25 @@ def test_pose_command_checks_its_options_before_any_work(photos_dir, tmp_path, c
     assert main(["pose", photo, "-o", str(tmp_path / "x.npz"), "--overlay", str(tmp_path / "x.mp4")]) == 2
     assert main(["pose", photo, "-o", str(tmp_path / "x.npz"), "--person", "tallest"]) == 2
     assert not list(tmp_path.iterdir())
+
+
+def test_one_euro_smooths_noise_and_follows_fast_motion():
+    from motion2video.pose.smoothing import IMAGE_LANDMARKS, one_euro, runs
+
+    rng = np.random.default_rng(0)
+    still = 100 + rng.normal(0, 1.0, (100, 1))
+    out = one_euro(still, 25.0, IMAGE_LANDMARKS, scale=np.full(100, 300.0))
+    assert np.std(out[50:]) < 0.6 * np.std(still[50:])
+    ramp = np.arange(100, dtype=float)[:, None] * 20.0  # 20 pixels a frame: fast for a 300-pixel person
+    lag = ramp - one_euro(ramp, 25.0, IMAGE_LANDMARKS, scale=np.full(100, 300.0))
+    assert np.abs(lag[50:]).max() < 2.0
+    assert runs(np.array([False, True, True, False, True])) == [(1, 3), (4, 5)]
+
+
+def test_video_smoothing_removes_jitter_not_motion(dancer_clip):
+    raw = estimate_video(dancer_clip, smooth=False)
+    smooth = estimate_video(dancer_clip)
+    height = np.ptp(raw.points2d[:, :, 1], axis=1).mean()
+    accel = lambda p: np.linalg.norm(np.diff(p, 2, axis=0), axis=-1).mean()  # noqa: E731
+    assert accel(smooth.points2d) < 0.5 * accel(raw.points2d)
+    assert np.linalg.norm(smooth.points2d - raw.points2d, axis=-1).mean() < 0.01 * height

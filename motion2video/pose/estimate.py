@@ -6,7 +6,8 @@
   detector runs again (keeping the detection nearest the person's last position) when the landmark model's
   presence score falls below ``min_presence``.
 - :func:`estimate_video`: a video file -> :class:`VideoPose` (frames without a person at the ends trimmed,
-  gaps inside linearly interpolated), the data of ``motion2video pose VIDEO``.
+  landmarks smoothed as MediaPipe smooths them, gaps inside linearly interpolated), the data of
+  ``motion2video pose VIDEO``.
 
 3D joints: BlazePose's world landmarks (hip-centred, metres) turned z up, on the canonical body points
 (:func:`motion2video.core.skeletons.h36m_body_points`, skeleton version 2); the body's position comes from the
@@ -29,6 +30,7 @@ from motion2video.core.skeletons import h36m_body_points
 from motion2video.formats.canonical import floor_height
 from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, detection_roi
 from motion2video.pose.h36m import blazepose_to_h36m, leg_length, world_to_project
+from motion2video.pose.smoothing import smooth_landmarks
 
 MIN_PRESENCE = 0.5
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v")
@@ -322,8 +324,11 @@ def interpolate_gaps(values: np.ndarray, found: np.ndarray) -> np.ndarray:
 
 
 def poses_from_landmarks(results: list[Landmarks | None], *, fps: float, width: int, height: int,
-                         source: str | Path | None = None) -> VideoPose:
-    """Per-frame tracking results -> :class:`VideoPose` (trim the ends, interpolate the gaps).
+                         source: str | Path | None = None, smooth: bool = True) -> VideoPose:
+    """Per-frame tracking results -> :class:`VideoPose` (trim the ends, smooth, interpolate the gaps).
+
+    ``smooth``: MediaPipe's One-Euro smoothing of the landmarks (:mod:`motion2video.pose.smoothing`), each
+    run of frames with the person on its own.
 
     Raises:
         InputError: no person in any frame, or in fewer than 2 frames (a motion needs two).
@@ -338,17 +343,20 @@ def poses_from_landmarks(results: list[Landmarks | None], *, fps: float, width: 
     ok = found[first:last + 1]
     body = slice(0, NUM_BODY_LANDMARKS)
     blank = np.zeros((NUM_BODY_LANDMARKS, 1))
-    xy = interpolate_gaps(np.stack([r.xy[body] if r is not None else blank.repeat(2, 1) for r in kept]), ok)
-    world = interpolate_gaps(np.stack([r.world[body] if r is not None else blank.repeat(3, 1) for r in kept]),
-                             ok)
-    vis = np.stack([r.visibility[body] if r is not None else blank[:, 0] for r in kept])
+    xy = np.stack([r.xy[body] if r is not None else blank.repeat(2, 1) for r in kept])  # (T, 33, 2)
+    world = np.stack([r.world[body] if r is not None else blank.repeat(3, 1) for r in kept])  # (T, 33, 3)
+    vis = np.stack([r.visibility[body] if r is not None else blank[:, 0] for r in kept])  # (T, 33)
+    if smooth:
+        size = np.array([r.roi.size if r is not None else 1.0 for r in kept])
+        xy, world, vis = smooth_landmarks(xy, world, vis, size, ok, fps)
+    xy, world = interpolate_gaps(xy, ok), interpolate_gaps(world, ok)
     points2d, joints3d, confidence = landmarks_to_joints(xy, world, vis)
     confidence[~ok] = 0.0
     return VideoPose(points2d, joints3d, confidence, ~ok, xy, float(fps), first, width, height, len(results))
 
 
-def estimate_video(path: str | Path, *, person: str | int = "largest", model: BlazePose | None = None
-                   ) -> VideoPose:
+def estimate_video(path: str | Path, *, person: str | int = "largest", model: BlazePose | None = None,
+                   smooth: bool = True) -> VideoPose:
     """The motion of one person in a video file (see the module docstring).
 
     Raises:
@@ -359,4 +367,5 @@ def estimate_video(path: str | Path, *, person: str | int = "largest", model: Bl
     results = list(track_frames(iter_video_frames(path), person=person, model=model, source=path))
     if len(results) < 2:
         raise InputError(f"the video has {len(results)} frame; a motion needs at least two", path)
-    return poses_from_landmarks(results, fps=info.fps, width=info.width, height=info.height, source=path)
+    return poses_from_landmarks(results, fps=info.fps, width=info.width, height=info.height, source=path,
+                                smooth=smooth)
