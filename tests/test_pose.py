@@ -157,7 +157,7 @@ def _check_plausible_body(points2d: np.ndarray, joints3d: np.ndarray) -> None:
     for side in ("left", "right"):
         assert y[J[f"{side}_hip"]] < y[J[f"{side}_knee"]] < y[J[f"{side}_ankle"]]
     lowest_ankle = joints3d[[J["left_ankle"], J["right_ankle"]], 2].min()
-    assert 0.07 - 1e-6 <= lowest_ankle < 0.15  # the floor is 7 cm under the clip's lowest ankle
+    assert 0.06 <= lowest_ankle < 0.15  # the floor is 7 cm under the clip's 1st-percentile lowest ankle
     assert 1.2 < joints3d[J["head"], 2] < 2.0
 
 
