@@ -278,6 +278,7 @@ class Landmarks:
         world: (39, 3) metres, hip-centred, x right, y down, z away from the camera.
         score: pose presence score in [0, 1].
         roi: the ROI it was computed on.
+        segmentation: (256, 256) person segmentation logits over the ROI crop, or None.
     """
 
     xy: np.ndarray
@@ -287,6 +288,19 @@ class Landmarks:
     world: np.ndarray
     score: float
     roi: Roi
+    segmentation: np.ndarray | None = None
+
+    def person_mask(self, width: int, height: int) -> np.ndarray:
+        """(height, width) float32 person probability in the image, from the segmentation over the ROI
+        (0 outside the ROI); zeros when there is no segmentation."""
+        if self.segmentation is None:
+            return np.zeros((height, width), np.float32)
+        n = self.segmentation.shape[0]
+        mat = roi_matrix(self.roi, n)
+        mat[:, 2] += mat[:, :2] @ np.array([0.5, 0.5]) - 0.5  # pixel indices, as in crop_roi
+        prob = (1.0 / (1.0 + np.exp(-np.clip(self.segmentation, -50, 50)))).astype(np.float32)
+        return cv2.warpAffine(prob, mat, (width, height), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                              borderValue=0.0)
 
     def next_roi(self) -> Roi:
         """The ROI for the next video frame, from the two ROI landmarks (PoseLandmarksToRoi)."""
@@ -297,8 +311,8 @@ def _sigmoid(x: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-x))
 
 
-def decode_landmarks(raw: np.ndarray, flag: float, heatmap: np.ndarray, world: np.ndarray, roi: Roi
-                     ) -> Landmarks:
+def decode_landmarks(raw: np.ndarray, flag: float, heatmap: np.ndarray, world: np.ndarray, roi: Roi,
+                     segmentation: np.ndarray | None = None) -> Landmarks:
     """Landmark-model outputs -> :class:`Landmarks` in image pixels.
 
     Args:
@@ -307,6 +321,7 @@ def decode_landmarks(raw: np.ndarray, flag: float, heatmap: np.ndarray, world: n
         heatmap: (64, 64, 39) logits.
         world: (117,) 39 x (x, y, z) metres in the crop's orientation.
         roi: the ROI the crop was taken from.
+        segmentation: (256, 256) segmentation logits over the crop, kept as they are.
     """
     lm = raw.reshape(NUM_LANDMARKS, 5).astype(np.float64)
     norm = refine_from_heatmap(lm[:, :2] / LANDMARK_SIZE, heatmap)
@@ -316,7 +331,9 @@ def decode_landmarks(raw: np.ndarray, flag: float, heatmap: np.ndarray, world: n
     c, s = np.cos(roi.rotation), np.sin(roi.rotation)
     w = world.reshape(NUM_LANDMARKS, 3).astype(np.float64)
     w_rot = np.stack([c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1], w[:, 2]], axis=1)
-    return Landmarks(xy, z, _sigmoid(lm[:, 3]), _sigmoid(lm[:, 4]), w_rot, float(flag), roi)
+    return Landmarks(xy, z, _sigmoid(lm[:, 3]), _sigmoid(lm[:, 4]), w_rot, float(flag), roi,
+                     None if segmentation is None else np.array(segmentation, np.float32).reshape(
+                         segmentation.shape[0], segmentation.shape[1]))
 
 
 # --- the two models -------------------------------------------------------------------------------------------
@@ -362,6 +379,7 @@ class BlazePose:
         by_size = {int(np.prod(d["shape"])): d["index"] for d in self._lmk.get_output_details()}
         self._lmk_raw, self._lmk_flag = by_size[195], by_size[1]
         self._lmk_heat, self._lmk_world = by_size[64 * 64 * 39], by_size[117]
+        self._lmk_seg = by_size[LANDMARK_SIZE * LANDMARK_SIZE]
 
     def detect(self, image: np.ndarray) -> list[Detection]:
         """People in an (H, W, 3) uint8 RGB image, best score first."""
@@ -383,7 +401,8 @@ class BlazePose:
         return decode_landmarks(self._lmk.get_tensor(self._lmk_raw)[0],
                                 float(self._lmk.get_tensor(self._lmk_flag).reshape(())),
                                 self._lmk.get_tensor(self._lmk_heat)[0],
-                                self._lmk.get_tensor(self._lmk_world)[0], roi)
+                                self._lmk.get_tensor(self._lmk_world)[0], roi,
+                                self._lmk.get_tensor(self._lmk_seg)[0, :, :, 0])
 
 
 def detection_roi(det: Detection) -> Roi:
