@@ -7,8 +7,8 @@ per-frame detection. Writes JSON.
 The 720p video is made from the first ``--frames`` frames of ``--video`` (padded to 16:9 by repeating the
 border, resized to 1280x720, H.264) in a temporary folder. Timed: the whole estimate (decoding, detection,
 tracking, landmarks, the mapping to H36M-17) after one warm-up run, median of ``--repeats``; and the two
-models per call. Agreement: on the same frames, the tracked joints (ROI from the previous frame) against the
-joints with the detector run on every frame, as the median over frames and joints of the distance in % of
+models per call. Agreement: on the same frames, the tracked joints (ROI from the previous frame, before
+smoothing) against the joints with the detector run on every frame, as the median over frames and joints of the distance in % of
 the person's height (pelvis-relative height of the 2D head above the lowest ankle).
 """
 
@@ -53,7 +53,7 @@ def make_720p(src: Path, dst: Path, frames: int) -> Path:
 
 def agreement(video: Path, model: BlazePose) -> dict:
     """Tracked vs detected-every-frame 2D joints, % of the person's height."""
-    tracked = estimate_video(video, model=model).points2d  # (T, 17, 2)
+    tracked = estimate_video(video, model=model, smooth=False).points2d  # (T, 17, 2), the tracker alone
     detected = []
     for frame in iter_video_frames(video):
         dets = model.detect(frame)

@@ -19,7 +19,7 @@ The floor is put at z = 0, :data:`~motion2video.formats.canonical.ANKLE_HEIGHT` 
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -364,7 +364,9 @@ def estimate_video(path: str | Path, *, person: str | int = "largest", model: Bl
     """
     cap, info = open_video(path)
     cap.release()
-    results = list(track_frames(iter_video_frames(path), person=person, model=model, source=path))
+    # the segmentation (256 KB a frame) is not kept: a long video's landmarks stay a few MB
+    results = [None if lm is None else replace(lm, segmentation=None)
+               for lm in track_frames(iter_video_frames(path), person=person, model=model, source=path)]
     if len(results) < 2:
         raise InputError(f"the video has {len(results)} frame; a motion needs at least two", path)
     return poses_from_landmarks(results, fps=info.fps, width=info.width, height=info.height, source=path,
