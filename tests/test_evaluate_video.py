@@ -15,6 +15,9 @@ from tests.test_pipeline import train_frame_model
 from tests.test_pose import _cut_video
 
 
+pytestmark = pytest.mark.slow  # real video decoded and a tiny generator trained: seconds each
+
+
 @pytest.fixture(scope="module")
 def dancer_clip(dancer_video, tmp_path_factory) -> Path:
     return _cut_video(dancer_video, tmp_path_factory.mktemp("clip") / "dancer120.avi", 120)

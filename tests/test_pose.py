@@ -234,6 +234,7 @@ def dancer_clip(dancer_video, tmp_path_factory) -> Path:
     return _cut_video(dancer_video, tmp_path_factory.mktemp("clip") / "dancer40.avi", 40)
 
 
+@pytest.mark.slow
 def test_dancer_video_is_tracked_every_frame(dancer_clip):
     pose = estimate_video(dancer_clip)
     assert pose.num_frames == 40 and pose.fps == pytest.approx(25.0) and pose.gaps == 0
@@ -246,6 +247,7 @@ def test_dancer_video_is_tracked_every_frame(dancer_clip):
         assert p[J[f"{side}_shoulder"], 1] < p[J[f"{side}_elbow"], 1] < p[J[f"{side}_wrist"], 1]
 
 
+@pytest.mark.slow
 def test_unreadable_and_one_frame_videos_are_refused(dancer_video, tmp_path):
     fake = tmp_path / "fake.mp4"
     fake.write_text("not a video")
@@ -272,6 +274,7 @@ def test_pose_command_on_a_photo_writes_the_reference_pose_file(photos_dir, tmp_
     assert "found 1 person" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_pose_command_on_a_video_writes_a_motion_file(dancer_clip, tmp_path, capsys):
     from motion2video.formats.io import load_motion
     from motion2video.pose.files import load_video_pose
@@ -326,6 +329,7 @@ def test_one_euro_smooths_noise_and_follows_fast_motion():
     assert runs(np.array([False, True, True, False, True])) == [(1, 3), (4, 5)]
 
 
+@pytest.mark.slow
 def test_video_smoothing_removes_jitter_not_motion(dancer_clip):
     raw = estimate_video(dancer_clip, smooth=False)
     smooth = estimate_video(dancer_clip)

@@ -19,6 +19,8 @@ from motion2video.stages.clips import load_clip
 from tests.test_pipeline import TINY_MOTION, train_body_motion_model, train_face_motion_model
 from tests.test_pose import _cut_video
 
+pytestmark = pytest.mark.slow  # tiny models trained and real video decoded: seconds each
+
 J = {name: i for i, name in enumerate(H36M_17.joints)}
 
 
@@ -134,3 +136,18 @@ def test_2d_keypoints_go_to_the_2d_model_and_are_refused_by_3d_models(models, tm
     assert clip.data.shape[1:] == (17, 3)
     with pytest.raises(InputError, match="2D model"):
         load_clip(load_model(models["body"]), folder / "clip_000000000000_keypoints.json")
+
+
+def test_sample_reads_an_openpose_folder_at_its_true_fps(models, tmp_path):
+    from motion2video.stages.clips import load_clip
+
+    folder = tmp_path / "op"
+    _write_openpose(folder, 100)
+    bundle = load_model(models["body2d"])
+    at_25 = load_clip(bundle, folder)
+    at_50 = load_clip(bundle, folder, fps=50.0)
+    assert at_25.source_fps == 25.0 and at_50.source_fps == 50.0
+    assert at_50.num_frames < 0.6 * at_25.num_frames  # the same 100 frames last half as long
+    out = tmp_path / "op.mp4"
+    assert main(["sample", str(folder), "--model", str(models["body2d"]), "--fps", "50", "--samples", "1",
+                 "--observed", "8", "--horizon", "4", "--size", "64", "-o", str(out)]) == 0

@@ -25,10 +25,11 @@ from motion2video.stages.structure import check_style, renderer_for
 STYLES = ("skeleton", "mesh")
 
 
-def load_clip_for(bundle: ModelBundle, path: str | Path) -> np.ndarray:
-    """The clip at ``path`` as the model's data at its frame rate (:func:`motion2video.stages.clips.load_clip`):
-    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models."""
-    return load_clip(bundle, path).data
+def load_clip_for(bundle: ModelBundle, path: str | Path, *, fps: float | None = None) -> np.ndarray:
+    """The clip at ``path`` as the model's data at its frame rate (:func:`motion2video.stages.clips.load_clip`,
+    ``fps`` the file's true rate when given): (T, 17, 3) world joints for body models, (T, 58) face parameters
+    for face models."""
+    return load_clip(bundle, path, fps=fps).data
 
 
 def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> np.ndarray:

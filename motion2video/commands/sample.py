@@ -31,7 +31,10 @@ Every cell of the grid plays the observed frames framed in green, then one sampl
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "sample", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="checkpoint path, shipped model name, or a baseline name")
-    p.add_argument("input", help="observed clip: .bvh / motion .npz (body models), .csv / FaceMotion .npz (face)")
+    p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (body models; 2D body "
+                   "models also an OpenPose JSON folder), .csv / FaceMotion .npz (face)")
+    p.add_argument("--fps", type=float, default=None,
+                   help="the clip's true frame rate, for files without one (an OpenPose folder: default 25)")
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("--observed", type=int, default=None, help="observed frames (default: the model's, 16)")
     p.add_argument("--horizon", type=int, default=None, help="future frames (default: the model's, 48)")
@@ -62,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         bundle = baseline_bundle(args.model, DatasetConfig())
     else:
         bundle = load_model(args.model)
-    clip = load_clip_for(bundle, args.input)
+    clip = load_clip_for(bundle, args.input, fps=args.fps)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
                   start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
     chunks = iter_forecast(fc, style=args.style, size=args.size)

@@ -106,8 +106,11 @@ def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion
     return pose_motion_2d(pose, path) if layout == "body2d" else pose_motion_3d(pose, path)
 
 
-def load_clip(bundle, path: str | Path) -> LoadedClip:
+def load_clip(bundle, path: str | Path, *, fps: float | None = None) -> LoadedClip:
     """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.checkpoint.ModelBundle`).
+
+    ``fps``: the clip's true frame rate, overriding what the file says (an OpenPose folder has none: 25
+    without it); not for videos, whose rate is their own.
 
     Returns:
         A :class:`LoadedClip` at the model's rate.
@@ -121,9 +124,11 @@ def load_clip(bundle, path: str | Path) -> LoadedClip:
     if path.is_dir() and bundle.data_config.layout != "body2d":
         raise InputError("a model takes one clip file, not a folder (OpenPose folders: 2D body models only)", path)
     if is_video_path(path):
+        if fps is not None:
+            raise InputError("a video has its own frame rate; --fps is for files without one (OpenPose)", path)
         motion = video_motion(bundle, path)
     else:
-        motion = load_motion(path)
+        motion = load_motion(path, fps=fps)
     data = LOADERS[bundle.data_config.layout](bundle, motion, path)
     identity = dict(motion.identity) if isinstance(motion, FaceMotion) else {}
     source_frames = motion.num_frames
