@@ -14,7 +14,7 @@ from motion2video import __version__
 from motion2video.core.errors import InputError
 
 # Sub-command modules, in the order `--help` lists them. A module that does not exist yet is skipped.
-COMMANDS = ("render", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
+COMMANDS = ("render", "pose", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
             "transfer", "analogy", "corpus_stats", "batch", "doctor")
 
 

@@ -105,3 +105,18 @@ def link_clips(root: Path, mocap_dir: Path, clips: tuple[str, ...]) -> Path:
         target.parent.mkdir(parents=True, exist_ok=True)
         target.symlink_to(mocap_dir / rel)
     return root
+
+
+@pytest.fixture(scope="session")
+def photos_dir(shared_dir: Path) -> Path:
+    """Three real photos of people (``shared/data/photos``: skier, man_by_truck, three_walking)."""
+    return _existing(shared_dir / "data" / "photos")
+
+
+@pytest.fixture(scope="session")
+def dancer_video(shared_dir: Path) -> Path:
+    """A real 63 s, 25 fps video of one dancer (``shared/data/video/dancer.avi``)."""
+    path = shared_dir / "data" / "video" / "dancer.avi"
+    if not path.is_file():
+        pytest.fail(f"shared video not found: {path}")
+    return path

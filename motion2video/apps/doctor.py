@@ -150,6 +150,27 @@ def check_anny_cache() -> Check:
                  "the first mesh or face render: about 40 s)", essential=False)
 
 
+def check_pose_estimator() -> Check:
+    """The bundled BlazePose models (photos and videos of people) load in LiteRT and run one detection."""
+    import time
+
+    import numpy as np
+
+    try:
+        from motion2video.pose.blazepose import BlazePose, DETECTOR_FILE, LANDMARK_FILE
+        start = time.perf_counter()
+        model = BlazePose(num_threads=1)
+        model.detect(np.zeros((64, 64, 3), np.uint8))
+        ms = (time.perf_counter() - start) * 1000
+    except (ImportError, ValueError, RuntimeError, OSError) as err:
+        return Check("pose estimator (BlazePose)", False, f"cannot run ({type(err).__name__}: {err})",
+                     "pip install ai-edge-litert==2.3.0; the two .tflite files belong in motion2video/weights/ "
+                     "(weights/blazepose.md)", essential=False)
+    size = (DETECTOR_FILE.stat().st_size + LANDMARK_FILE.stat().st_size) / 2**20
+    return Check("pose estimator (BlazePose)", True, f"LiteRT runs the bundled models ({size:.1f} MB), loaded and "
+                 f"ran in {ms:.0f} ms", essential=False)
+
+
 def check_checkpoints() -> list[Check]:
     """Every shipped checkpoint loads (motion models and frame generators)."""
     from motion2video.models.checkpoint import WEIGHTS_DIR, load_model
@@ -177,6 +198,7 @@ def run_checks() -> list[Check]:
     checks = [check_python(), check_torch(), check_ffmpeg(), check_pyav(), check_gl_default()]
     checks += [probe_gl(platform) for platform in ("osmesa", "egl")]
     checks.append(check_anny_cache())
+    checks.append(check_pose_estimator())
     checks += check_checkpoints()
     return checks
 

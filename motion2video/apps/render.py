@@ -17,6 +17,7 @@ from motion2video.core.atomic import check_output_path
 from motion2video.core.errors import InputError
 from motion2video.formats.io import load_motion, resample_motion
 from motion2video.core.motion import FaceMotion, Motion
+from motion2video.formats.mocap import is_deepmimic_file
 from motion2video.formats.video import VIDEO_SUFFIXES
 
 STYLES = ("skeleton", "heatmap", "mesh", "face")
@@ -33,7 +34,8 @@ class RenderRequest:
         output: the .mp4 or .gif to write.
         style: one of :data:`STYLES`.
         size: frame width and height in pixels, 32..2048.
-        fps: output frame rate (the motion is resampled to it); None keeps the clip's rate.
+        fps: output frame rate (the motion is resampled to it); None keeps the clip's rate. An OpenPose
+            folder (or JSON file) has no rate of its own: ``fps`` is then its true rate (default 25).
         start, frames: the frame range to render, counted at the output rate.
         palette: skeleton palette, ``"leftright"`` or ``"openpose"``.
         progress: show a progress bar.
@@ -208,7 +210,13 @@ def render_file(request: RenderRequest) -> RenderResult:
         raise InputError(f"--fps must be positive, got {request.fps}")
     if request.input_fps is not None and not request.input_fps > 0:
         raise InputError(f"--input-fps must be positive, got {request.input_fps}")
-    futures = _joint_futures(request.input, request.input_fps)
+    src = Path(request.input)
+    input_fps = request.input_fps
+    if (input_fps is None and request.fps is not None and (src.is_dir() or src.suffix.lower() == ".json")
+            and not (src.is_file() and is_deepmimic_file(src))):
+        # OpenPose keypoints carry no frame rate: --fps is the rate of the video they came from.
+        input_fps = float(request.fps)
+    futures = _joint_futures(request.input, input_fps)
     if futures is not None:
         if request.style != "skeleton":
             raise InputError(f"a joint array of {len(futures)} clips renders as a skeleton grid only, not "
@@ -220,7 +228,7 @@ def render_file(request: RenderRequest) -> RenderResult:
         motion = futures[0]
         frames = iter_futures_grid(futures, size=size, palette=request.palette)
     else:
-        motion = load_motion(request.input, fps=request.input_fps, character=request.character)
+        motion = load_motion(src, fps=input_fps, character=request.character)
         if request.fps is not None:
             motion = resample_motion(motion, float(request.fps))
         if request.start != 0 or request.frames is not None:

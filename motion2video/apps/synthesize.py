@@ -190,6 +190,8 @@ class SynthesisConfig:
             :func:`motion2video.stages.sampling.forecast`).
         character: the character file of a DeepMimic input (None: found beside it, else the standard one).
         input_fps: the input's true frame rate when the file states none (joint arrays) or a wrong one.
+        crop_person: cut the reference photo to a square around its person first
+            (:func:`motion2video.stages.reference.crop_to_person`).
     """
 
     samples: int = 5
@@ -206,6 +208,7 @@ class SynthesisConfig:
     rigid_bones: bool = False
     character: str | None = None
     input_fps: float | None = None
+    crop_person: bool = False
 
 
 @dataclass
@@ -279,7 +282,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     Args:
         motion_model: a checkpoint path / shipped name, or a loaded ModelBundle.
         frame_model: a checkpoint path / shipped name, or a loaded frame model (LoadedFrameModel).
-        input_path: the observed clip (.bvh / body .npz for body models; FaceMotion .npz / .csv for face).
+        input_path: the observed clip (.bvh / body .npz / a video of a person for body models; FaceMotion
+            .npz / .csv for face).
         reference: the reference appearance image.
         output: ``OUT.mp4``.
         config: the options.
@@ -310,7 +314,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
         raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
                          f"{gen_config.image_size} px frames only)")
     clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps).data
-    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
+    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose,
+                         crop_person=config.crop_person)
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -197,7 +197,7 @@ def style_for(layout: str, style: str | None) -> str:
 
 
 def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, reference: str | Path | None = None,
-                       reference_pose: str | Path | None = None):
+                       reference_pose: str | Path | None = None, crop_person: bool = False):
     """The frame generator (default ``frames-<domain>-128`` for the model's domain) and the reference for
     ``style="frames"``.
 
@@ -220,7 +220,7 @@ def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, r
                          f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
     if reference:
         return loaded, load_reference(reference, size=loaded.config.image_size, domain=domain,
-                                      pose_path=reference_pose)
+                                      pose_path=reference_pose, crop_person=crop_person)
     if layout != "body3d":
         raise InputError("--style frames needs --reference for this model (only 3D body models can render "
                          "their own reference)")

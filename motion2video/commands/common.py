@@ -33,14 +33,18 @@ def add_command(sub: argparse._SubParsersAction, name: str, run: Callable[[argpa
 CHARACTER_HELP = ("DeepMimic motion files: their character file (default: humanoid3d_character.txt beside or above "
                   "the motion, ../characters/humanoid3d.txt as in the DeepMimic repository, else the standard "
                   "humanoid3d character shipped with motion2video)")
-INPUT_FPS_HELP = ("the input's true frame rate, for files that state none or a wrong one (joint arrays .npy: "
+INPUT_FPS_HELP = ("the input's true frame rate, for files that state none or a wrong one (an OpenPose folder: 25 "
+                  "by default; joint arrays .npy: "
                   "20 fps for (T, 22, 3) SMPL/HumanML3D joints, 50 for H36M-17 ones, by default)")
 
 
 def add_motion_input_arguments(parser: argparse.ArgumentParser) -> None:
     """``--character FILE`` and ``--input-fps FPS``: how the commands that read motion files read them."""
     parser.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
-    parser.add_argument("--input-fps", metavar="FPS", type=float, default=None, help=INPUT_FPS_HELP)
+    # Where --fps means nothing else (every command but render, whose --fps is the output rate), it is another
+    # spelling of --input-fps: an OpenPose folder's true rate is what users pass as --fps.
+    names = ["--input-fps"] + (["--fps"] if "--fps" not in parser._option_string_actions else [])
+    parser.add_argument(*names, dest="input_fps", metavar="FPS", type=float, default=None, help=INPUT_FPS_HELP)
 
 
 BVH_HELP = ("also write each {what} as a BVH file into this folder (a standard Hips-rooted hierarchy, metres, "

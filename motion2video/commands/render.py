@@ -39,7 +39,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--style", choices=STYLES, default="skeleton", help="what to draw (default: skeleton)")
     p.add_argument("--size", type=int, default=256, help="frame width and height in pixels, 32..2048 (default 256)")
     p.add_argument("--fps", type=float, default=None,
-                   help="output frame rate; the motion is resampled to it (default: the clip's own rate)")
+                   help="output frame rate; the motion is resampled to it (default: the clip's own rate). An "
+                   "OpenPose folder has no rate of its own: --fps is its true rate (default 25)")
     p.add_argument("--start", type=int, default=0, help="first frame to render (default 0)")
     p.add_argument("--frames", type=int, default=None, help="number of frames to render (default: all)")
     p.add_argument("--palette", choices=("leftright", "openpose"), default="leftright",

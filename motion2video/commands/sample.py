@@ -32,7 +32,8 @@ Every cell of the grid plays the observed frames framed in green, then one sampl
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "sample", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="checkpoint path, shipped model name, or a baseline name")
-    p.add_argument("input", help="observed clip: .bvh / motion .npz (body models), .csv / FaceMotion .npz (face)")
+    p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (body models; 2D body "
+                   "models also an OpenPose JSON folder), .csv / FaceMotion .npz (face)")
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("--observed", type=int, default=None, help="observed frames (default: the model's, 16)")
     p.add_argument("--horizon", type=int, default=None, help="future frames (default: the model's, 48)")

@@ -55,7 +55,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "(default when --reference is given); skeleton: limb maps")
     p.add_argument("--reference", default=None, help="reference image of the target person (--style frames)")
     p.add_argument("--reference-pose", default=None,
-                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image, if any)")
+                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image; without one "
+                   "the pose is estimated)")
+    p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
+                   "in a large photo fills the generator's frame")
     p.add_argument("--frame-model", default=None,
                    help="frame-generator checkpoint or shipped name for --style frames (default frames-body-128, "
                    "or frames-face-128 for face models)")
@@ -89,9 +92,10 @@ def run(args: argparse.Namespace) -> int:
     frame_model = reference = None
     if style == "frames":
         frame_model, reference = frame_style_inputs(bundle, frame_model=args.frame_model, reference=args.reference,
-                                                    reference_pose=args.reference_pose)
-    elif args.reference_pose or args.frame_model:
-        raise InputError("--frame-model and --reference-pose are only used with --style frames")
+                                                    reference_pose=args.reference_pose,
+                                                    crop_person=args.crop_person)
+    elif args.reference_pose or args.frame_model or args.crop_person:
+        raise InputError("--frame-model, --reference-pose and --crop-person are only used with --style frames")
     target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
     if args.behavior is not None:
         source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)

@@ -9,9 +9,10 @@ reference image's true pose when it is known, from a *reference pose file* besid
 - body: ``points`` (17, 2), the image's canonical H36M-17 joints in its pixels;
 - face: ``face`` (58,) parameters, ``identity`` and the camera that rendered the image.
 
-Without one, the reference image is assumed to show the person in the first observed pose, framed as the
-default renderers frame a single frame (body: a camera fitted to that pose; face: the Anny close-up
-camera), and a note says so. With the true pose, the generated first observed frame matches the
+Without one, a body reference gets its pose estimated (BlazePose, :mod:`motion2video.pose`; a note says
+so). A face reference, or a body reference where nobody is found, is assumed to show the person in the
+first observed pose, framed as the default renderers frame a single frame (body: a camera fitted to that
+pose; face: the Anny close-up camera), and a note says so. With the true pose, the generated first observed frame matches the
 reference picture; with the assumption, it does when the assumption holds.
 
 """
@@ -29,6 +30,7 @@ from motion2video.core.atomic import save_npz
 from motion2video.core.errors import InputError
 
 REFERENCE_POSE_SUFFIX = ".pose.npz"
+PERSON_CROP_MARGIN = 0.1  # --crop-person: of the square's side, on every side
 
 
 def reference_pose_path(image: str | Path) -> Path:
@@ -217,42 +219,103 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
     return ReferencePose("face", size, size, face=pose.face, identity=dict(pose.identity), camera=camera)
 
 
+def estimate_reference_pose(image: np.ndarray, path: str | Path) -> ReferencePose | None:
+    """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`);
+    None when nobody is found."""
+    from motion2video.pose.estimate import estimate_image
+
+    try:
+        person = estimate_image(image, source=path)
+    except InputError:
+        return None
+    return ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d)
+
+
+def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PERSON_CROP_MARGIN
+                   ) -> tuple[np.ndarray, ReferencePose, tuple[int, int, int]]:
+    """A square of ``image`` around the person of a body pose, and the pose moved into it.
+
+    The square holds the joints' bounding box grown by 12% of the body's height above the head joint (the top
+    of the head) and 6% below the lowest ankle (the feet), then ``margin`` of its larger side on every side;
+    outside the image the border is replicated.
+
+    Returns:
+        (side, side, 3) crop, its :class:`ReferencePose` and the box (x0, y0, side) in the image's pixels.
+    """
+    h, w = image.shape[:2]
+    pts = np.asarray(pose.points, np.float64) * (w / pose.width, h / pose.height)
+    x0, y0 = pts.min(axis=0)
+    x1, y1 = pts.max(axis=0)
+    tall = max(y1 - y0, 1.0)
+    y0, y1 = y0 - 0.12 * tall, y1 + 0.06 * tall
+    side = int(round(max(x1 - x0, y1 - y0) * (1 + 2 * margin)))
+    left, top = int(round((x0 + x1 - side) / 2)), int(round((y0 + y1 - side) / 2))
+    pad = max(0, -left, -top, left + side - w, top + side - h)
+    padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_REPLICATE) if pad else image
+    crop = np.ascontiguousarray(padded[top + pad:top + pad + side, left + pad:left + pad + side])
+    moved = ReferencePose("body", side, side, points=pts - (left, top))
+    return crop, moved, (left, top, side)
+
+
 def load_reference(path: str | Path, *, size: int, domain: str,
-                   pose_path: str | Path | None = None) -> Reference:
+                   pose_path: str | Path | None = None, crop_person: bool = False) -> Reference:
     """The reference image at ``size`` x ``size`` and its pose (see the module docstring).
+
+    A body reference with no pose file gets its pose estimated (BlazePose, a note says so); when nobody is
+    found, the image is assumed to show the first observed pose (a note says so too).
 
     Args:
         path: the image.
         size: the generator's image size.
         domain: ``"body"`` or ``"face"`` (the pose file must be of this kind).
         pose_path: the reference pose file; None looks for ``IMAGE.pose.npz`` beside the image.
+        crop_person: body: cut a square around the person first (:func:`crop_to_person`), so that a person
+            small in a large photo fills the generator's frame.
     Raises:
         InputError: unreadable image, a pose file that is malformed or of the other domain, or (body) a pose
-        with joints outside the image or no person, or an image that shows nothing along the pose's limbs.
+        with joints outside the image or no person, or an image that shows nothing along the pose's limbs;
+        ``crop_person`` for a face model or with no person found.
     """
     path = Path(path)
     image, notes = read_reference_image(path)
-    h, w = image.shape[:2]
-    fitted, fit = fit_square(image, size)
     notes = list(notes)
-    if (h, w) != (size, size):
-        how = f"padded to {max(h, w)}x{max(h, w)} and " if h != w else ""
-        notes.append(f"reference image is {w}x{h}: {how}resized to {size}x{size} for the frame generator")
+    if crop_person and domain != "body":
+        raise InputError("--crop-person is for body references (this frame model makes face frames)", path)
     explicit = pose_path is not None
     pose_path = Path(pose_path) if explicit else reference_pose_path(path)
     pose = None
-    if explicit or pose_path.is_file():
+    from_file = explicit or pose_path.is_file()
+    if from_file:
         pose = load_reference_pose(pose_path)
         if pose.kind != domain:
             raise InputError(f"this reference pose is a {pose.kind} pose, but the frame model makes {domain} "
                              "frames", pose_path)
+    elif domain == "body":
+        pose = estimate_reference_pose(image, path)
+        if pose is not None:
+            notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
+                         f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "
+                         "saves it and shows it)")
+    if crop_person:
+        if pose is None:
+            raise InputError("--crop-person: no person found in the reference image", path)
+        h0, w0 = image.shape[:2]
+        image, pose, (left, top, side) = crop_to_person(image, pose)
+        notes.append(f"reference cut to the person: a {side}x{side} square at ({left}, {top}) of the {w0}x{h0} image")
+    h, w = image.shape[:2]
+    fitted, fit = fit_square(image, size)
+    if (h, w) != (size, size):
+        how = f"padded to {max(h, w)}x{max(h, w)} and " if h != w else ""
+        notes.append(f"reference image is {w}x{h}: {how}resized to {size}x{size} for the frame generator")
+    if pose is not None:
         pose = _fit_pose(pose, fit, size, (h, w))
         if domain == "body":  # a person to move: joints inside the image, and the image shows them
             from motion2video.frames.warp import check_reference_person, check_reference_points
 
-            check_reference_points(pose.points, width=size, height=size, path=pose_path)
+            check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
             check_reference_person(fitted, pose.points, path=path)
     else:
-        notes.append(f"no reference pose file ({pose_path.name}): assuming the reference image shows the first "
-                     "observed pose, framed like the default renderer")
+        nobody = " and no person found in it" if domain == "body" else ""
+        notes.append(f"no reference pose file ({pose_path.name}){nobody}: assuming the reference image shows the "
+                     "first observed pose, framed like the default renderer")
     return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path)
