@@ -132,3 +132,73 @@ def test_warp_settings_without_the_warp_model_are_refused_before_any_rendering(t
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "settings of --model-kind warp" in err
     assert not cache.exists() and not (tmp_path / "x.safetensors").exists()
+
+
+# --- evaluate-frames --poses: held-out identities posed by real mocap (issue 22) ----------------------------
+
+WALK = DATA / "mocap" / "cmu" / "08_01.bvh"  # a held-out clip of the frame data (is_test_clip)
+
+
+def test_pose_windows_spread_over_the_clip():
+    from motion2video.frames.poses import PoseEvalSpec, window_frames
+
+    spec = PoseEvalSpec(windows_per_clip=3, frames_per_window=5, window_seconds=1.0)
+    w = window_frames(273, 120.0, spec)
+    assert w.shape == (3, 5) and w[0, 0] == 0 and w[-1, -1] == 272 and np.all(np.diff(w, axis=1) == 30)
+    short = window_frames(10, 25.0, spec)  # shorter than a window: every window is the whole clip
+    assert np.all(short[:, 0] == 0) and np.all(short[:, -1] == 9)
+
+
+@pytest.mark.slow
+def test_posed_windows_render_visible_heads():
+    from motion2video.frames.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
+
+    assert is_test_clip("cmu/08_01.bvh")
+    spec = PoseEvalSpec(image_size=64, windows_per_clip=2, frames_per_window=3, num_identities=2)
+    posed = render_posed_sequences(load_body_clips(WALK), spec)
+    seqs, heads = posed.sequences, posed.head_masks
+    assert seqs.images.shape == (2, 3, 64, 64, 3) and heads.shape == seqs.masks.shape == (2, 3, 64, 64)
+    assert list(seqs.identity) == [0, 1] and list(seqs.clip) == ["08_01.bvh"] * 2
+    # The head is part of the silhouette, seen in every frame, small, and at its top.
+    assert not np.any(heads & ~seqs.masks)
+    head_px, body_px = heads.sum(axis=(2, 3)), seqs.masks.sum(axis=(2, 3))
+    assert np.all(head_px > 0) and np.all(head_px < 0.3 * body_px)
+    rows = np.arange(64)[None, None, :, None]
+    assert np.all((rows * heads).sum(axis=(2, 3)) / head_px < (rows * seqs.masks).sum(axis=(2, 3)) / body_px)
+
+
+@pytest.mark.slow
+def test_evaluate_frames_posed_by_real_motion(tmp_path, capsys):
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+
+    ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
+    out = tmp_path / "real.json"
+    rc = main(["evaluate-frames", "--model", str(ckpt), "--poses", str(WALK), "--windows", "1", "--json", str(out),
+               "--no-progress"])
+    assert rc == 0
+    payload = json.loads(out.read_text())
+    assert payload["pairs"] == "poses" and payload["num_pairs"] == 8  # one window of 9 frames
+    assert payload["poses"]["clips"] == [{"name": "08_01.bvh", "frames": 273, "fps": 120.0, "window_starts": [0]}]
+    keys = {"psnr", "ssim", "person_psnr", "person_ssim", "person_sharpness", "moving_psnr", "moving_sharpness",
+            "head_psnr", "head_ssim"}
+    assert set(payload["results"]) == {"generator", "copy-reference", "limb-warp"}  # the 128 px v1 is left out
+    for scores in payload["results"].values():
+        assert set(scores) == keys and all(np.isfinite(v) for v in scores.values())
+        assert 0 < scores["head_ssim"] < 1 and scores["head_psnr"] < 60
+    assert set(payload["targets_met"]) == {"person_psnr_vs_limb_warp_3db", "head_psnr_vs_limb_warp_3db",
+                                           "person_sharpness_0.9"}
+    assert json.loads(capsys.readouterr().out[: -1].split("\nwrote")[0]) == payload
+
+
+def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+
+    ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=32)), tmp_path / "warp.safetensors", step=0)
+    repo = Path(__file__).resolve().parents[1]
+    for poses, words in ((tmp_path / "missing.bvh", "no such file"), (repo / "demo_inputs" / "smile.npz", "face"),
+                         (tmp_path, "no motion files")):
+        assert main(["evaluate-frames", "--model", str(ckpt), "--poses", str(poses), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and words in err and str(poses) in err

@@ -15,12 +15,20 @@ Render (or reuse from the cache) the held-out split (held-out identities and cli
 size, and report whole-frame PSNR and SSIM (scikit-image) and person metrics (PSNR, SSIM and sharpness ratio
 inside the target's silhouette, PSNR and sharpness where the person moved) for the generator, copy-reference,
 limb-warp and the previous generator on the same pairs.
+
+With --poses PATH (a body motion file or a folder of them, any format the readers know), the pairs come from
+real motion instead: the frame test split's held-out identities, posed by windows spread evenly over each clip
+(--windows per clip, the test split's 9 frames over 1.2 s each), rendered with the Anny body renderer as the
+training data is; frame 0 of a window is the reference, every later frame a target whose truth is its render.
+These runs also report head_psnr and head_ssim over the target's visible head (the silhouette of Anny's head
+vertices). A named baseline still trained on the previous canonical skeleton is left out, with a note.
 """
 
 EXAMPLES = """\
 examples:
   motion2video evaluate-frames --model frames-body-128 --json out/eval_frames_body.json
   motion2video evaluate-frames --model out/frames-face-128.safetensors --contact-sheet out/face_sheet.png
+  motion2video evaluate-frames --model frames-body-128 --poses ../shared/data/mocap/cmu/08_01.bvh --json out/real.json
 """
 
 
@@ -40,39 +48,41 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--baseline-model", action="append", default=None, metavar="MODEL",
                    help="also score this generator (checkpoint or shipped name) as a named baseline on the same "
                    "pairs; repeatable (default for body models: the previous generator frames-body-128-v1)")
+    p.add_argument("--poses", default=None, metavar="PATH",
+                   help="pose the held-out identities by the body motion file(s) at PATH (a file or a folder) "
+                   "instead of the held-out pairs; adds head_psnr / head_ssim")
+    p.add_argument("--windows", type=int, default=4,
+                   help="with --poses: windows per clip, spread evenly over it (default 4, 8 pairs each)")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
 DEFAULT_BASELINE = {"body": "frames-body-128-v1"}  # the previous body generator, scored next to every new one
 
 
-def run(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
-    import imageio.v3 as iio
-
+def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str]]:
+    """Named baseline generators: name -> model, and name -> why it was left out (the default baseline only:
+    another size, or refused for its skeleton version). An explicit --baseline-model that cannot be used
+    raises InputError."""
     from motion2video.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
-    from motion2video.frames.evaluate import evaluate_sequences, evaluation_contact_sheet, write_json
 
-    if args.pairs is not None:
-        check_at_least("--pairs", args.pairs)
-    loaded = load_frame_model(args.model)
     cfg = loaded.config
-    spec = default_spec(cfg.domain, "test", cfg.image_size)
-    if args.test_sequences is not None:
-        check_at_least("--test-sequences", args.test_sequences)
-        spec = replace(spec, num_sequences=args.test_sequences,
-                       num_identities=min(spec.num_identities, args.test_sequences))
-    cache = Path(args.cache) if args.cache else default_cache_dir()
-    names = args.baseline_model
     explicit = names is not None
     if names is None:
         names = [DEFAULT_BASELINE[cfg.domain]] if cfg.domain in DEFAULT_BASELINE else []
-    baselines = {}
+    baselines, left_out = {}, {}
     for name in names:
-        other = load_frame_model(name)
+        if not explicit:  # the default baseline only goes with models of its size: look before loading it
+            config = load_frame_model(name, any_skeleton=True).config
+            if (config.domain, config.image_size) != (cfg.domain, cfg.image_size):
+                continue
+        try:
+            other = load_frame_model(name)
+        except InputError as err:
+            if explicit:
+                raise
+            left_out[str(name)] = str(err)
+            continue
         if other.path.resolve() == loaded.path.resolve():
             continue
         same = (other.config.domain, other.config.image_size) == (cfg.domain, cfg.image_size)
@@ -82,20 +92,81 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"baseline model is {other.config.domain}/{other.config.image_size}, the evaluated "
                              f"model {cfg.domain}/{cfg.image_size}", other.path)
         baselines[other.path.name.removesuffix(".safetensors")] = other.model
-    seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
-    evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs, baseline_models=baselines)
-    payload = evaluation.to_dict()
-    payload["targets_met"] = evaluation.targets_met()
-    payload["model"] = str(loaded.path)
-    payload["model_kind"] = loaded.kind
-    payload["model_step"] = loaded.step
-    print(json.dumps(payload, indent=2, sort_keys=True))
+    return baselines, left_out
+
+
+def run(args: argparse.Namespace) -> int:
+    import sys
+    from dataclasses import replace
+
+    import imageio.v3 as iio
+
+    from motion2video.errors import InputError
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
+    from motion2video.frames.evaluate import (evaluate_sequences, evaluation_contact_sheet, json_payload,
+                                              write_json)
+
+    if args.pairs is not None:
+        check_at_least("--pairs", args.pairs)
+    check_at_least("--windows", args.windows)
+    loaded = load_frame_model(args.model)
+    cfg = loaded.config
+    clips = None
+    if args.poses is not None:
+        from motion2video.frames.poses import load_body_clips
+
+        if cfg.domain != "body":
+            raise InputError("--poses needs a body frame model", loaded.path)
+        clips = load_body_clips(args.poses)
+    baselines, left_out = load_baselines(args.baseline_model, loaded)
+    for name, why in left_out.items():
+        print(f"note: baseline {name} left out: {why}", file=sys.stderr)
+    extra = {"model": str(loaded.path), "model_kind": loaded.kind, "model_step": loaded.step}
+    if left_out:
+        extra["baselines_left_out"] = left_out
+    if args.poses is not None:
+        evaluation, poses = evaluate_posed(loaded.model, clips, args, baselines)
+        extra["poses"] = poses
+    else:
+        spec = default_spec(cfg.domain, "test", cfg.image_size)
+        if args.test_sequences is not None:
+            check_at_least("--test-sequences", args.test_sequences)
+            spec = replace(spec, num_sequences=args.test_sequences,
+                           num_identities=min(spec.num_identities, args.test_sequences))
+        cache = Path(args.cache) if args.cache else default_cache_dir()
+        seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
+        evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs, baseline_models=baselines)
+    print(json.dumps(json_payload(evaluation, extra=extra), indent=2, sort_keys=True))
     if args.json:
-        write_json(evaluation, args.json, extra={"model": str(loaded.path), "model_kind": loaded.kind,
-                                                 "model_step": loaded.step})
+        write_json(evaluation, args.json, extra=extra)
     if args.contact_sheet:
         out = Path(args.contact_sheet)
         out.parent.mkdir(parents=True, exist_ok=True)
         iio.imwrite(out, evaluation_contact_sheet(evaluation))
         print(f"wrote {out}")
     return 0
+
+
+def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict):
+    """Render the --poses pairs of ``clips`` ((name, Motion) pairs) and score them; returns the evaluation and a
+    summary of the clips (name, frames, fps, window starts)."""
+    from tqdm import tqdm
+
+    from motion2video.frames.evaluate import evaluate_sequences
+    from motion2video.frames.poses import PoseEvalSpec, render_posed_sequences
+
+    spec = PoseEvalSpec.for_size(model.config.image_size, windows_per_clip=args.windows)
+    with tqdm(total=len(clips) * spec.windows_per_clip, desc="rendering posed windows", unit="window",
+              disable=args.no_progress, leave=False) as bar:
+        posed = render_posed_sequences(clips, spec, on_window=bar.update)
+    evaluation = evaluate_sequences(model, posed.sequences, max_pairs=args.pairs, baseline_models=baselines,
+                                    head_masks=posed.head_masks, pairs="poses")
+    seqs = posed.sequences
+    poses = {"path": str(args.poses), "windows_per_clip": spec.windows_per_clip,
+             "frames_per_window": spec.frames_per_window, "window_seconds": spec.window_seconds,
+             "identities": spec.num_identities,
+             "clips": [{"name": name, "frames": motion.num_frames, "fps": motion.fps,
+                        "window_starts": [int(st) for c, st in zip(seqs.clip, seqs.start) if c == name]}
+                       for name, motion in clips]}
+    return evaluation, poses

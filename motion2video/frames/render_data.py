@@ -145,33 +145,53 @@ def identity_vertex_colors(identity: Identity, palette: np.ndarray) -> np.ndarra
 def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
     """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, masks (T, S, S) bool,
     clip index, start)."""
-    from motion2video.core.camera import project
     from motion2video.motion import Motion
-    from renderers.body import BodyStyle
-    from renderers.registry import renderer_for
 
     spec = source.spec
-    size = spec.image_size
     ci = int(rng.integers(len(source.clip_paths)))
     clip = source.clip(ci)
     times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
                          seconds=spec.window_seconds)
     motion = Motion(clip.joints[times], clip.fps, source=clip.source)
+    rendered = render_body_window(motion, identity, rng, source.backgrounds, spec.image_size)
+    return rendered.images, rendered.points, rendered.masks, ci, int(times[0])
+
+
+@dataclass
+class BodyWindow:
+    """A rendered body window: images (T, S, S, 3) uint8, points (T, 17, 2) float32 projected joints,
+    masks (T, S, S) bool silhouettes, head_masks (T, S, S) bool visible head or None."""
+
+    images: np.ndarray
+    points: np.ndarray
+    masks: np.ndarray
+    head_masks: np.ndarray | None = None
+
+
+def render_body_window(motion, identity: Identity, rng: np.random.Generator, backgrounds: list[np.ndarray],
+                       size: int, *, head: bool = False) -> BodyWindow:
+    """Render the frames of ``motion`` (canonical 3D) as ``identity`` the way the training data is made: a
+    background crop, camera yaw and elevation and a light level drawn from ``rng`` (in that order), the
+    camera fitted over the window; ``head`` also renders the visible head masks."""
+    from motion2video.core.camera import project
+    from renderers.body import BodyStyle
+    from renderers.registry import renderer_for
+
     look = dict(
         phenotype=dict(identity.phenotype),
         skin=_rgb255(identity.skin), top=_rgb255(identity.top), trousers=_rgb255(identity.trousers),
         shoes=_rgb255(identity.shoes), hair=_rgb255(identity.hair),
-        background=background_crop(rng, source.backgrounds, size),
+        background=background_crop(rng, backgrounds, size),
         azimuth_deg=float(rng.uniform(*BODY_AZIMUTH_DEG)),
         elevation_deg=float(rng.uniform(*BODY_ELEVATION_DEG)),
     )
     look["vertex_colors"] = identity_vertex_colors(identity, BodyStyle(size=(size, size), **look).region_colors())
     gain = light_jitter(rng)
     with renderer_for("body3d", "mesh", size=size, **look) as renderer:
-        out = renderer.renderer.render_with_masks(motion)
+        out = renderer.renderer.render_with_masks(motion, head=head)
     images = relight(out.frames, out.masks, gain)
     points = project(motion.joints, out.camera)[..., :2].astype(np.float32)  # (T, 17, 2)
-    return images, points, out.masks, ci, int(times[0])
+    return BodyWindow(images, points, out.masks, out.head_masks)
 
 
 def render_shard(source: SequenceSource, shard: int, *,
