@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     if left_out:
         extra["baselines_left_out"] = left_out
     if args.poses is not None:
-        evaluation, poses = evaluate_posed(loaded.model, clips, args, baselines)
+        evaluation, poses, _ = evaluate_posed(loaded.model, clips, args, baselines)
         extra["poses"] = poses
     else:
         spec = default_spec(cfg.domain, "test", cfg.image_size)
@@ -149,8 +149,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict):
-    """Render the --poses pairs of ``clips`` ((name, Motion) pairs) and score them; returns the evaluation and a
-    summary of the clips (name, frames, fps, window starts)."""
+    """Render the --poses pairs of ``clips`` ((name, Motion) pairs) and score them; returns the evaluation, a
+    summary of the clips (name, frames, fps, window starts) and the rendered windows
+    (:class:`motion2video.frames.poses.PosedPairs`)."""
     from tqdm import tqdm
 
     from motion2video.frames.evaluate import evaluate_sequences
@@ -169,4 +170,4 @@ def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict
              "clips": [{"name": name, "frames": motion.num_frames, "fps": motion.fps,
                         "window_starts": [int(st) for c, st in zip(seqs.clip, seqs.start) if c == name]}
                        for name, motion in clips]}
-    return evaluation, poses
+    return evaluation, poses, posed
