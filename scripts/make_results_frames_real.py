@@ -137,7 +137,7 @@ def targets(payloads: dict[str, dict]) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def section(payloads: dict[str, dict], model: str, minutes: float) -> str:
+def section(payloads: dict[str, dict], model: str, minutes: float, note: str = "") -> str:
     left_out = {k: v for p in payloads.values() for k, v in p.get("baselines_left_out", {}).items()}
     old = ("" if not left_out else
            f" The previous generator (`{', '.join(left_out)}`) is left out: it was trained on the previous canonical "
@@ -158,6 +158,8 @@ elevation, light); the truth is the render of each pose. None of these clips is 
 (`motion2video.frames.specs.is_test_clip`; `cmu/02_01.bvh`, named in the issue, is a training clip, so a held-out
 walk is used instead). The head is the target's visible head: the pixels where Anny's head vertices (dominant
 bone `head` or below it) are the front surface, by a depth test, so a hand in front of the face is not head.{old}
+
+{note}
 
 {table(payloads, model)}
 
@@ -188,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--sheet", default=str(ROOT / "docs" / "images" / "frames_real_motion.png"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames_real.json"))
+    parser.add_argument("--note", default="", help="a paragraph added to the section (e.g. which checkpoint --model is)")
     args = parser.parse_args(argv)
 
     from motion2video.frames.specs import is_test_clip
@@ -205,7 +208,8 @@ def main(argv: list[str] | None = None) -> int:
     sheet.parent.mkdir(parents=True, exist_ok=True)
     iio.imwrite(sheet, contact_sheet(merged, label_height=22))
     write_json(args.json, payloads)
-    write_section(args.doc, BEGIN, END, section(payloads, args.model, (time.perf_counter() - start) / 60))
+    write_section(args.doc, BEGIN, END, section(payloads, args.model, (time.perf_counter() - start) / 60,
+                                                args.note))
     print(f"wrote {args.doc}, {sheet} and {args.json}")
     return 0
 
