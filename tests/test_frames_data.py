@@ -202,3 +202,35 @@ def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
         assert main(["evaluate-frames", "--model", str(ckpt), "--poses", str(poses), "--no-progress"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and words in err and str(poses) in err
+
+
+@pytest.mark.slow
+def test_held_out_split_with_heads_renders_the_cached_frames(tmp_path):
+    """The head masks of the held-out pairs come from rendering the split again: the same frames as its
+    cached shards, with the heads inside the silhouettes."""
+    from motion2video.frames.render_data import render_body_split_with_heads
+
+    spec = tiny_spec("body", "test")
+    cached = load_or_generate(spec, cache_dir=tmp_path, progress=False)
+    seqs, heads = render_body_split_with_heads(spec)
+    np.testing.assert_array_equal(seqs.images, cached.images)
+    np.testing.assert_array_equal(seqs.masks, cached.masks)
+    np.testing.assert_array_equal(seqs.points, cached.points)
+    assert heads.shape == seqs.masks.shape and heads.any(axis=(2, 3)).all() and not np.any(heads & ~seqs.masks)
+
+
+@pytest.mark.slow
+def test_evaluate_frames_head_on_held_out_pairs(tmp_path):
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+
+    ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
+    out = tmp_path / "eval.json"
+    assert main(["evaluate-frames", "--model", str(ckpt), "--test-sequences", "1", "--head", "--json", str(out),
+                 "--no-progress"]) == 0
+    payload = json.loads(out.read_text())
+    assert payload["pairs"] == "held-out" and payload["num_pairs"] == 8
+    for scores in payload["results"].values():
+        assert np.isfinite(scores["head_psnr"]) and 0 < scores["head_ssim"] < 1
+    # The held-out targets, not the real-motion ones.
+    assert "psnr_29db" in payload["targets_met"] and "head_psnr_vs_limb_warp_3db" not in payload["targets_met"]

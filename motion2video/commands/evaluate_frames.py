@@ -21,7 +21,7 @@ real motion instead: the frame test split's held-out identities, posed by window
 (--windows per clip, the test split's 9 frames over 1.2 s each), rendered with the Anny body renderer as the
 training data is; frame 0 of a window is the reference, every later frame a target whose truth is its render.
 These runs also report head_psnr and head_ssim over the target's visible head (the silhouette of Anny's head
-vertices). A named baseline still trained on the previous canonical skeleton is left out, with a note.
+vertices); on the held-out pairs, --head adds them (the split is rendered again with head masks). A named baseline still trained on the previous canonical skeleton is left out, with a note.
 """
 
 EXAMPLES = """\
@@ -53,6 +53,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "instead of the held-out pairs; adds head_psnr / head_ssim")
     p.add_argument("--windows", type=int, default=4,
                    help="with --poses: windows per clip, spread evenly over it (default 4, 8 pairs each)")
+    p.add_argument("--head", action="store_true",
+                   help="body models on the held-out pairs: also report head_psnr / head_ssim (renders the held-out "
+                   "split again with head masks, bypassing the cache: as long as rendering it, a few minutes)")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
@@ -134,9 +137,22 @@ def run(args: argparse.Namespace) -> int:
             check_at_least("--test-sequences", args.test_sequences)
             spec = replace(spec, num_sequences=args.test_sequences,
                            num_identities=min(spec.num_identities, args.test_sequences))
-        cache = Path(args.cache) if args.cache else default_cache_dir()
-        seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
-        evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs, baseline_models=baselines)
+        heads = None
+        if args.head:
+            from tqdm import tqdm
+
+            from motion2video.frames.render_data import render_body_split_with_heads
+
+            if cfg.domain != "body":
+                raise InputError("--head needs a body frame model", loaded.path)
+            with tqdm(total=spec.num_sequences, desc="rendering held-out sequences with heads", unit="seq",
+                      disable=args.no_progress, leave=False) as bar:
+                seqs, heads = render_body_split_with_heads(spec, data_root=args.data_root, on_sequence=bar.update)
+        else:
+            cache = Path(args.cache) if args.cache else default_cache_dir()
+            seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
+        evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs, baseline_models=baselines,
+                                        head_masks=heads)
     print(json.dumps(json_payload(evaluation, extra=extra), indent=2, sort_keys=True))
     if args.json:
         write_json(evaluation, args.json, extra=extra)

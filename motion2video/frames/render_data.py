@@ -145,6 +145,13 @@ def identity_vertex_colors(identity: Identity, palette: np.ndarray) -> np.ndarra
 def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
     """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, masks (T, S, S) bool,
     clip index, start)."""
+    rendered, ci, start = _body_sequence(source, rng, identity)
+    return rendered.images, rendered.points, rendered.masks, ci, start
+
+
+def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity, *,
+                   head: bool = False) -> tuple["BodyWindow", int, int]:
+    """One body sequence as a :class:`BodyWindow` (with head masks when ``head``), its clip index and start."""
     from motion2video.motion import Motion
 
     spec = source.spec
@@ -153,8 +160,34 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
     times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
                          seconds=spec.window_seconds)
     motion = Motion(clip.joints[times], clip.fps, source=clip.source)
-    rendered = render_body_window(motion, identity, rng, source.backgrounds, spec.image_size)
-    return rendered.images, rendered.points, rendered.masks, ci, int(times[0])
+    return render_body_window(motion, identity, rng, source.backgrounds, spec.image_size, head=head), ci, int(times[0])
+
+
+def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | None = None,
+                                 on_sequence: Callable[[int], object] | None = None
+                                 ) -> tuple[FrameSequences, np.ndarray]:
+    """Every sequence of a body split rendered as its shards are (the same frames as :func:`render_shard`),
+    with the visible head masks (T, S, S) of each: returns the sequences and (N, T, S, S) bool head masks.
+    Nothing is cached: it takes as long as rendering the split."""
+    if spec.domain != "body":
+        raise ValueError("head masks are rendered for body splits only")
+    source = SequenceSource.create(spec, data_root=data_root)
+    parts, heads = [], []
+    try:
+        for i in range(spec.num_sequences):
+            rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
+            ident_index = i % spec.num_identities
+            out, ci, start = _body_sequence(source, rng, source.identities[ident_index], head=True)
+            parts.append(FrameSequences(domain="body", images=out.images[None], points=out.points[None],
+                                        structure_images=None, identity=np.asarray([ident_index], np.int64),
+                                        clip=np.asarray([source.clip_names[ci]]),
+                                        start=np.asarray([start], np.int64), masks=out.masks[None]))
+            heads.append(out.head_masks)
+            if on_sequence is not None:
+                on_sequence(1)
+    finally:
+        source.close()
+    return FrameSequences.concatenate(parts), np.stack(heads)
 
 
 @dataclass
