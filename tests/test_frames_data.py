@@ -202,6 +202,15 @@ def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
         assert main(["evaluate-frames", "--model", str(ckpt), "--poses", str(poses), "--no-progress"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and words in err and str(poses) in err
+    from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
+
+    face = save_frame_model(FrameGenerator(FrameGeneratorConfig(domain="face", structure_channels=1, image_size=32,
+                                                                channels=(8, 12, 16))),
+                            tmp_path / "face.safetensors", step=0)
+    for flags in (["--poses", str(WALK)], ["--head"]):
+        assert main(["evaluate-frames", "--model", str(face), *flags, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "needs a body frame model" in err and "face.safetensors" in err
 
 
 @pytest.mark.slow

@@ -88,10 +88,7 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
             continue
         if other.path.resolve() == loaded.path.resolve():
             continue
-        same = (other.config.domain, other.config.image_size) == (cfg.domain, cfg.image_size)
-        if not same and not explicit:  # the default baseline only goes with models of its size
-            continue
-        if not same:
+        if (other.config.domain, other.config.image_size) != (cfg.domain, cfg.image_size):
             raise InputError(f"baseline model is {other.config.domain}/{other.config.image_size}, the evaluated "
                              f"model {cfg.domain}/{cfg.image_size}", other.path)
         baselines[other.path.name.removesuffix(".safetensors")] = other.model
@@ -115,12 +112,12 @@ def run(args: argparse.Namespace) -> int:
     check_at_least("--windows", args.windows)
     loaded = load_frame_model(args.model)
     cfg = loaded.config
+    if cfg.domain != "body" and (args.poses is not None or args.head):
+        raise InputError(f"{'--poses' if args.poses is not None else '--head'} needs a body frame model", loaded.path)
     clips = None
     if args.poses is not None:
         from motion2video.frames.poses import load_body_clips
 
-        if cfg.domain != "body":
-            raise InputError("--poses needs a body frame model", loaded.path)
         clips = load_body_clips(args.poses)
     baselines, left_out = load_baselines(args.baseline_model, loaded)
     for name, why in left_out.items():
@@ -143,8 +140,6 @@ def run(args: argparse.Namespace) -> int:
 
             from motion2video.frames.render_data import render_body_split_with_heads
 
-            if cfg.domain != "body":
-                raise InputError("--head needs a body frame model", loaded.path)
             with tqdm(total=spec.num_sequences, desc="rendering held-out sequences with heads", unit="seq",
                       disable=args.no_progress, leave=False) as bar:
                 seqs, heads = render_body_split_with_heads(spec, data_root=args.data_root, on_sequence=bar.update)
