@@ -59,11 +59,13 @@ def evaluate_clip(model_name: str, clip: Path):
     loaded = load_frame_model(model_name)
     baselines, left_out = load_baselines(None, loaded)
     args = argparse.Namespace(poses=str(clip), windows=WINDOWS, pairs=None, no_progress=True)
-    evaluation, poses, posed = evaluate_posed(loaded.model, load_body_clips(clip), args, baselines)
-    index = evaluation_pair_index(posed.sequences)  # (N, 3) sequence, reference, target: the evaluated pairs
-    heads = np.stack([posed.head_masks[index[:, 0], index[:, 2]], posed.head_masks[index[:, 0], index[:, 1]]], axis=1)
+    posed = evaluate_posed(loaded.model, load_body_clips(clip), args, baselines)
+    evaluation, rendered = posed.evaluation, posed.rendered
+    index = evaluation_pair_index(rendered.sequences)  # (N, 3) sequence, reference, target: the evaluated pairs
+    heads = np.stack([rendered.head_masks[index[:, 0], index[:, 2]], rendered.head_masks[index[:, 0], index[:, 1]]],
+                     axis=1)  # (N, 2, H, W)
     extra = {"model": str(loaded.path.relative_to(ROOT)) if loaded.path.is_relative_to(ROOT) else str(loaded.path),
-             "model_kind": loaded.kind, "model_step": loaded.step, "poses": poses}
+             "model_kind": loaded.kind, "model_step": loaded.step, "poses": posed.poses}
     if left_out:
         extra["baselines_left_out"] = left_out
     return evaluation, json_payload(evaluation, extra=extra), heads

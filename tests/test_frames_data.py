@@ -221,7 +221,8 @@ def test_held_out_split_with_heads_renders_the_cached_frames(tmp_path):
 
     spec = tiny_spec("body", "test")
     cached = load_or_generate(spec, cache_dir=tmp_path, progress=False)
-    seqs, heads = render_body_split_with_heads(spec)
+    rendered = render_body_split_with_heads(spec)
+    seqs, heads = rendered.sequences, rendered.head_masks
     np.testing.assert_array_equal(seqs.images, cached.images)
     np.testing.assert_array_equal(seqs.masks, cached.masks)
     np.testing.assert_array_equal(seqs.points, cached.points)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 from motion2video.commands.common import add_command, check_at_least
@@ -126,8 +127,9 @@ def run(args: argparse.Namespace) -> int:
     if left_out:
         extra["baselines_left_out"] = left_out
     if args.poses is not None:
-        evaluation, poses, _ = evaluate_posed(loaded.model, clips, args, baselines)
-        extra["poses"] = poses
+        posed = evaluate_posed(loaded.model, clips, args, baselines)
+        evaluation = posed.evaluation
+        extra["poses"] = posed.poses
     else:
         spec = default_spec(cfg.domain, "test", cfg.image_size)
         if args.test_sequences is not None:
@@ -142,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
 
             with tqdm(total=spec.num_sequences, desc="rendering held-out sequences with heads", unit="seq",
                       disable=args.no_progress, leave=False) as bar:
-                seqs, heads = render_body_split_with_heads(spec, data_root=args.data_root, on_sequence=bar.update)
+                rendered = render_body_split_with_heads(spec, data_root=args.data_root, on_sequence=bar.update)
+            seqs, heads = rendered.sequences, rendered.head_masks
         else:
             cache = Path(args.cache) if args.cache else default_cache_dir()
             seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
@@ -159,10 +162,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict):
-    """Render the --poses pairs of ``clips`` ((name, Motion) pairs) and score them; returns the evaluation, a
-    summary of the clips (name, frames, fps, window starts) and the rendered windows
-    (:class:`motion2video.frames.poses.PosedPairs`)."""
+@dataclass
+class PosedEvaluation:
+    """``evaluate-frames --poses``: the evaluation, the JSON summary of the clips (name, frames, fps, window
+    starts) and the rendered windows (:class:`motion2video.frames.render_data.SequencesWithHeads`)."""
+
+    evaluation: object
+    poses: dict
+    rendered: object
+
+
+def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict) -> PosedEvaluation:
+    """Render the --poses pairs of ``clips`` ((name, Motion) pairs) and score them."""
     from tqdm import tqdm
 
     from motion2video.frames.evaluate import evaluate_sequences
@@ -181,4 +192,4 @@ def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict
              "clips": [{"name": name, "frames": motion.num_frames, "fps": motion.fps,
                         "window_starts": [int(st) for c, st in zip(seqs.clip, seqs.start) if c == name]}
                        for name, motion in clips]}
-    return evaluation, poses, posed
+    return PosedEvaluation(evaluation, poses, posed)

@@ -15,13 +15,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.core.motion import FaceMotion, Motion
 from motion2video.frames.specs import FrameSequences, background_images, default_spec, identities
+
+if TYPE_CHECKING:  # pragma: no cover
+    from motion2video.frames.render_data import SequencesWithHeads
 
 # Files a --poses folder may hold (body motions); other files (manifest.csv, READMEs, face captures) are
 # passed over.
@@ -117,20 +120,12 @@ def window_frames(num_frames: int, fps: float, spec: PoseEvalSpec) -> np.ndarray
     return starts[:, None] + offsets[None, :]
 
 
-@dataclass
-class PosedPairs:
-    """The rendered windows: ``sequences`` (one per window; ``clip`` holds the clip names, ``start`` the
-    first source frame) and ``head_masks`` (N, T, S, S) bool, the visible head of every frame."""
-
-    sequences: FrameSequences
-    head_masks: np.ndarray
-
-
 def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, *,
-                           on_window: Callable[[int], object] | None = None) -> PosedPairs:
+                           on_window: Callable[[int], object] | None = None) -> "SequencesWithHeads":
     """Render every window of every clip (:func:`window_frames`) as the held-out identities in turn; window
-    ``i`` draws its look from ``np.random.default_rng([spec.seed, 3, i])``."""
-    from motion2video.frames.render_data import render_body_window
+    ``i`` draws its look from ``np.random.default_rng([spec.seed, 3, i])``. The sequences' ``clip`` holds the
+    clip names, ``start`` each window's first source frame."""
+    from motion2video.frames.render_data import SequencesWithHeads, render_body_window
 
     people = identities("test", spec.num_identities, seed=spec.seed)
     pool = background_images()
@@ -153,4 +148,4 @@ def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, 
     seqs = FrameSequences(domain="body", images=np.stack(images), points=np.stack(points), structure_images=None,
                           identity=np.asarray(who, np.int64), clip=np.asarray(names),
                           start=np.asarray(starts, np.int64), masks=np.stack(masks))
-    return PosedPairs(seqs, np.stack(heads))
+    return SequencesWithHeads(seqs, np.stack(heads))

@@ -163,12 +163,19 @@ def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: I
     return render_body_window(motion, identity, rng, source.backgrounds, spec.image_size, head=head), ci, int(times[0])
 
 
+@dataclass
+class SequencesWithHeads:
+    """Rendered body sequences and the visible head of every frame: ``head_masks`` (N, T, S, S) bool, the pixels
+    where Anny's head vertices are the front surface (:meth:`renderers.body.BodyRenderer.render_with_masks`)."""
+
+    sequences: FrameSequences
+    head_masks: np.ndarray
+
+
 def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | None = None,
-                                 on_sequence: Callable[[int], object] | None = None
-                                 ) -> tuple[FrameSequences, np.ndarray]:
+                                 on_sequence: Callable[[int], object] | None = None) -> SequencesWithHeads:
     """Every sequence of a body split rendered as its shards are (the same frames as :func:`render_shard`),
-    with the visible head masks (T, S, S) of each: returns the sequences and (N, T, S, S) bool head masks.
-    Nothing is cached: it takes as long as rendering the split."""
+    with the visible head masks. Nothing is cached: it takes as long as rendering the split."""
     if spec.domain != "body":
         raise ValueError("head masks are rendered for body splits only")
     source = SequenceSource.create(spec, data_root=data_root)
@@ -187,7 +194,7 @@ def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | N
                 on_sequence(1)
     finally:
         source.close()
-    return FrameSequences.concatenate(parts), np.stack(heads)
+    return SequencesWithHeads(FrameSequences.concatenate(parts), np.stack(heads))
 
 
 @dataclass
