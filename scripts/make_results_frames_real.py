@@ -14,13 +14,17 @@ the Anny render of each pose) and writes:
   limb-warp, two pairs per clip, each frame at twice its size with the head region enlarged beside it;
 - out/results_frames_real.json: the evaluate-frames JSON of each clip.
 
-About 2 minutes on 2 cores.
+With ``--held-out``, also runs ``motion2video evaluate-frames --model MODEL --head`` (the project's held-out pairs,
+rendered again with head masks) and adds its person and head metrics to the section, for comparison.
+
+About 2 minutes on 2 cores, plus about 3 with ``--held-out``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -139,7 +143,19 @@ def targets(payloads: dict[str, dict]) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def section(payloads: dict[str, dict], model: str, minutes: float, note: str = "") -> str:
+def held_out_text(payload: dict | None, model: str) -> str:
+    """The held-out pairs' person and head metrics (``evaluate-frames --head``), or nothing."""
+    if payload is None:
+        return ""
+    return f"""For comparison, the project's held-out pairs (poses of held-out clips drawn like the training data's, the same
+identities), `motion2video evaluate-frames --model {model} --head` ({payload['num_pairs']} pairs):
+
+{table({'held-out pairs': payload}, model)}
+"""
+
+
+def section(payloads: dict[str, dict], model: str, minutes: float, note: str = "",
+            held_out: dict | None = None) -> str:
     left_out = {k: v for p in payloads.values() for k, v in p.get("baselines_left_out", {}).items()}
     old = ("" if not left_out else
            f" The previous generator (`{', '.join(left_out)}`) is left out: it was trained on the previous canonical "
@@ -167,6 +183,7 @@ bone `head` or below it) are the front surface, by a depth test, so a hand in fr
 
 {margins(payloads)}
 
+{held_out_text(held_out, model)}
 Issue 22's targets driven by real motion:
 
 {targets(payloads)}
@@ -192,6 +209,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--sheet", default=str(ROOT / "docs" / "images" / "frames_real_motion.png"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames_real.json"))
+    parser.add_argument("--held-out", action="store_true",
+                        help="also run evaluate-frames --head on the held-out pairs and add it to the section")
     parser.add_argument("--note", default="", help="a paragraph added to the section (e.g. which checkpoint --model is)")
     args = parser.parse_args(argv)
 
@@ -205,13 +224,19 @@ def main(argv: list[str] | None = None) -> int:
         payloads[clip] = payload
         columns.append(sheet_columns(evaluation, heads, list(SHEET_ROWS)))
         print(f"{clip}: {json.dumps({k: v['person_psnr'] for k, v in payload['results'].items()})}", flush=True)
+    held_out = None
+    if args.held_out:
+        held_json = Path(args.json).with_name("results_frames_head.json")
+        subprocess.run([sys.executable, "-m", "motion2video.cli", "evaluate-frames", "--model", args.model, "--head",
+                        "--json", str(held_json), "--no-progress"], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+        held_out = json.loads(held_json.read_text())
     merged = {k: np.concatenate([c[k] for c in columns]) for k in columns[0]}
     sheet = Path(args.sheet)
     sheet.parent.mkdir(parents=True, exist_ok=True)
     iio.imwrite(sheet, contact_sheet(merged, label_height=22))
     write_json(args.json, payloads)
     write_section(args.doc, BEGIN, END, section(payloads, args.model, (time.perf_counter() - start) / 60,
-                                                args.note))
+                                                args.note, held_out))
     print(f"wrote {args.doc}, {sheet} and {args.json}")
     return 0
 
