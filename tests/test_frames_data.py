@@ -244,3 +244,21 @@ def test_evaluate_frames_head_on_held_out_pairs(tmp_path):
         assert np.isfinite(scores["head_psnr"]) and 0 < scores["head_ssim"] < 1
     # The held-out targets, not the real-motion ones.
     assert "psnr_29db" in payload["targets_met"] and "head_psnr_vs_limb_warp_3db" not in payload["targets_met"]
+
+
+def test_pose_clips_from_a_folder_pass_over_what_is_not_a_body_motion(tmp_path):
+    """A folder's face motions and non-motion text files are skipped with a note; its body motions load in
+    name order."""
+    import shutil
+
+    from motion2video.frames.poses import load_body_clips
+
+    repo = Path(__file__).resolve().parents[1]
+    for name in ("jump.npz", "smile.npz", "wave.npz", "reference_body.pose.npz"):
+        shutil.copy(repo / "demo_inputs" / name, tmp_path / name)
+    (tmp_path / "notes.txt").write_text("not a motion\n")
+    skipped = []
+    clips = load_body_clips(tmp_path, on_skip=lambda file, why: skipped.append(file.name))
+    assert [name for name, _ in clips] == ["jump.npz", "wave.npz"]
+    assert sorted(skipped) == ["notes.txt", "smile.npz"]
+    assert clips[0][1].num_frames == 102 and clips[0][1].skeleton == "h36m-17"

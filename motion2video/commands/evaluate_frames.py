@@ -119,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     if args.poses is not None:
         from motion2video.frames.poses import load_body_clips
 
-        clips = load_body_clips(args.poses)
+        clips = load_body_clips(args.poses, on_skip=lambda file, why: print(f"note: skipped {why}", file=sys.stderr))
     baselines, left_out = load_baselines(args.baseline_model, loaded)
     for name, why in left_out.items():
         print(f"note: baseline {name} left out: {why}", file=sys.stderr)

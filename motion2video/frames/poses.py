@@ -82,70 +82,36 @@ def motion_files(path: str | Path) -> list[Path]:
     return files
 
 
-def load_body_clips(path: str | Path) -> list[tuple[str, Motion]]:
+def load_body_clips(path: str | Path, *,
+                    on_skip: Callable[[Path, str], object] | None = None) -> list[tuple[str, Motion]]:
     """(name, motion) for every clip at ``path``, each a 3D canonical (h36m-17) body motion.
 
-    A single file that is not one raises InputError; in a folder, face motions are passed over (and an error
-    raised when nothing is left).
+    A single file that is not one raises InputError. In a folder, files that are not (face motions, unreadable
+    or 2D files, text files that are no motion) are passed over, each reported to ``on_skip(file, why)``, and
+    an error is raised when nothing is left.
     """
     from motion2video.formats.io import load_motion
 
     path = Path(path)
     clips = []
     for file in motion_files(path):
-        motion = load_motion(file)
-        if isinstance(motion, FaceMotion):
-            if path.is_file():
+        try:
+            motion = load_motion(file)
+            if isinstance(motion, FaceMotion):
                 raise InputError("a face motion; --poses needs body motions", file)
+            if motion.skeleton != "h36m-17" or motion.dim != 3:
+                raise InputError(f"--poses needs 3D body motions on the canonical skeleton, got {motion.skeleton} "
+                                 f"with {motion.dim}D joints", file)
+            if motion.num_frames < 2:
+                raise InputError("the clip has fewer than 2 frames", file)
+        except InputError as err:
+            if path.is_file():
+                raise
+            if on_skip is not None:
+                on_skip(file, str(err))
             continue
-        if motion.skeleton != "h36m-17" or motion.dim != 3:
-            raise InputError(f"--poses needs 3D body motions on the canonical skeleton, got {motion.skeleton} "
-                             f"with {motion.dim}D joints", file)
-        if motion.num_frames < 2:
-            raise InputError("the clip has fewer than 2 frames", file)
         name = file.name if path.is_file() else file.relative_to(path).as_posix()
         clips.append((name, motion))
     if not clips:
         raise InputError("no body motions in this folder", path)
     return clips
-
-
-def window_frames(num_frames: int, fps: float, spec: PoseEvalSpec) -> np.ndarray:
-    """(windows, frames) source frame indices: ``spec.windows_per_clip`` windows of ``spec.window_seconds``
-    (or the whole clip) with evenly spaced starts from the first frame to the last possible one, each with
-    ``spec.frames_per_window`` evenly spread frames (rounded to source frames)."""
-    span = min(num_frames - 1, int(round(spec.window_seconds * fps)))
-    starts = np.round(np.linspace(0, num_frames - 1 - span, spec.windows_per_clip)).astype(np.int64)
-    offsets = np.round(np.linspace(0, span, spec.frames_per_window)).astype(np.int64)
-    return starts[:, None] + offsets[None, :]
-
-
-def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, *,
-                           on_window: Callable[[int], object] | None = None) -> "SequencesWithHeads":
-    """Render every window of every clip (:func:`window_frames`) as the held-out identities in turn; window
-    ``i`` draws its look from ``np.random.default_rng([spec.seed, 3, i])``. The sequences' ``clip`` holds the
-    clip names, ``start`` each window's first source frame."""
-    from motion2video.frames.render_data import SequencesWithHeads, render_body_window
-
-    people = identities("test", spec.num_identities, seed=spec.seed)
-    pool = background_images()
-    images, points, masks, heads, names, starts, who = [], [], [], [], [], [], []
-    for name, motion in clips:
-        for frames in window_frames(motion.num_frames, motion.fps, spec):
-            i = len(images)
-            rng = np.random.default_rng([spec.seed, 3, i])
-            window = Motion(motion.joints[frames], motion.fps, source=motion.source)
-            out = render_body_window(window, people[i % len(people)], rng, pool, spec.image_size, head=True)
-            images.append(out.images)
-            points.append(out.points)
-            masks.append(out.masks)
-            heads.append(out.head_masks)
-            names.append(name)
-            starts.append(int(frames[0]))
-            who.append(i % len(people))
-            if on_window is not None:
-                on_window(1)
-    seqs = FrameSequences(domain="body", images=np.stack(images), points=np.stack(points), structure_images=None,
-                          identity=np.asarray(who, np.int64), clip=np.asarray(names),
-                          start=np.asarray(starts, np.int64), masks=np.stack(masks))
-    return SequencesWithHeads(seqs, np.stack(heads))
