@@ -115,3 +115,44 @@ def load_body_clips(path: str | Path, *,
     if not clips:
         raise InputError("no body motions in this folder", path)
     return clips
+
+
+def window_frames(num_frames: int, fps: float, spec: PoseEvalSpec) -> np.ndarray:
+    """(windows, frames) source frame indices: ``spec.windows_per_clip`` windows of ``spec.window_seconds``
+    (or the whole clip) with evenly spaced starts from the first frame to the last possible one, each with
+    ``spec.frames_per_window`` evenly spread frames (rounded to source frames)."""
+    span = min(num_frames - 1, int(round(spec.window_seconds * fps)))
+    starts = np.round(np.linspace(0, num_frames - 1 - span, spec.windows_per_clip)).astype(np.int64)
+    offsets = np.round(np.linspace(0, span, spec.frames_per_window)).astype(np.int64)
+    return starts[:, None] + offsets[None, :]
+
+
+def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, *,
+                           on_window: Callable[[int], object] | None = None) -> "SequencesWithHeads":
+    """Render every window of every clip (:func:`window_frames`) as the held-out identities in turn; window
+    ``i`` draws its look from ``np.random.default_rng([spec.seed, 3, i])``. The sequences' ``clip`` holds the
+    clip names, ``start`` each window's first source frame."""
+    from motion2video.frames.render_data import SequencesWithHeads, render_body_window
+
+    people = identities("test", spec.num_identities, seed=spec.seed)
+    pool = background_images()
+    images, points, masks, heads, names, starts, who = [], [], [], [], [], [], []
+    for name, motion in clips:
+        for frames in window_frames(motion.num_frames, motion.fps, spec):
+            i = len(images)
+            rng = np.random.default_rng([spec.seed, 3, i])
+            window = Motion(motion.joints[frames], motion.fps, source=motion.source)
+            out = render_body_window(window, people[i % len(people)], rng, pool, spec.image_size, head=True)
+            images.append(out.images)
+            points.append(out.points)
+            masks.append(out.masks)
+            heads.append(out.head_masks)
+            names.append(name)
+            starts.append(int(frames[0]))
+            who.append(i % len(people))
+            if on_window is not None:
+                on_window(1)
+    seqs = FrameSequences(domain="body", images=np.stack(images), points=np.stack(points), structure_images=None,
+                          identity=np.asarray(who, np.int64), clip=np.asarray(names),
+                          start=np.asarray(starts, np.int64), masks=np.stack(masks))
+    return SequencesWithHeads(seqs, np.stack(heads))
