@@ -1,18 +1,20 @@
-# Two commands on a fresh machine: `make demo` and `make test`. Both set everything up first.
+# Two commands on a fresh machine: `make demo` and `make test`. Both set everything up first: `setup` what the
+# demo needs (OSMesa, the venv), `setup-test` that plus the browser the batch gallery test opens.
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+TEST_STAMP := $(VENV)/.installed-test
 SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
 export PYOPENGL_PLATFORM ?= osmesa
 
-.PHONY: setup demo test test-fast fuzz golden bench clean
+.PHONY: setup setup-test demo test test-fast fuzz golden bench clean
 
 setup: $(STAMP)
 
+setup-test: $(TEST_STAMP)
+
 $(STAMP): pyproject.toml
 	@dpkg -s libosmesa6 >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libosmesa6; }
-	@# Debian's chromium: the batch gallery test opens index.html in it (Playwright drives the system browser)
-	@command -v chromium >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq chromium; }
 	@[ -x $(PY) ] || python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install
@@ -20,14 +22,20 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[dev,ray]'
 	@touch $@
 
+# Debian's chromium, for the tests only: the batch gallery test opens index.html in it (Playwright drives the
+# system browser)
+$(TEST_STAMP): $(STAMP)
+	@command -v chromium >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq chromium; }
+	@touch $@
+
 demo: setup
 	$(PY) scripts/demo.py --out out
 
-test: setup
+test: setup-test
 	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -q
 
-test-fast: setup
+test-fast: setup-test
 	$(VENV)/bin/lint-imports
 	$(PY) -m pytest -q -m "not slow"
 

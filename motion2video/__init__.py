@@ -1,3 +1,46 @@
-"""motion2video: human motion in, video out."""
+"""motion2video: human motion in, video out.
+
+The public API, importable from here::
+
+    from motion2video import load_motion, save_motion, render_motion, iter_frames, write_video, Motion, InputError
+
+Each name is the one defined in its layer (see docs/architecture.md): ``load_motion`` / ``save_motion`` in
+:mod:`motion2video.formats.io`, ``render_motion`` / ``iter_frames`` in :mod:`motion2video.apps.render`,
+``write_video`` in :mod:`motion2video.formats.video`, ``Motion`` / ``FaceMotion`` in :mod:`motion2video.core.motion`,
+``InputError`` in :mod:`motion2video.core.errors`. They load on first use, so ``import motion2video`` stays cheap
+(no OpenCV, no renderer, no torch).
+"""
+
+from __future__ import annotations
+
+import importlib
 
 __version__ = "0.1.0"
+
+# public name -> the module that defines it
+_PUBLIC = {
+    "load_motion": "motion2video.formats.io",
+    "save_motion": "motion2video.formats.io",
+    "render_motion": "motion2video.apps.render",
+    "iter_frames": "motion2video.apps.render",
+    "write_video": "motion2video.formats.video",
+    "read_video": "motion2video.formats.video",
+    "Motion": "motion2video.core.motion",
+    "FaceMotion": "motion2video.core.motion",
+    "InputError": "motion2video.core.errors",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name: str):
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'motion2video' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

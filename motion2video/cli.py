@@ -1,6 +1,6 @@
 """`motion2video ...`: a thin command line. Each sub-command lives in ``motion2video/commands/<name>.py``
 with two functions, ``add_parser(subparsers)`` and ``run(args) -> int``; this file only dispatches and turns
-:class:`~motion2video.errors.InputError` into a one-line message with exit code 2."""
+:class:`~motion2video.core.errors.InputError` into a one-line message with exit code 2."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import sys
 import threading
 
 from motion2video import __version__
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 # Sub-command modules, in the order `--help` lists them. A module that does not exist yet is skipped.
-COMMANDS = ("render", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
+COMMANDS = ("render", "pose", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
             "transfer", "analogy", "corpus_stats", "batch", "doctor")
 
 

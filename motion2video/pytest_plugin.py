@@ -5,7 +5,7 @@
   file (``.mp4`` / ``.gif``) or a ``Motion`` rendered in a style (``style=``, ``size=``, ``palette=``) with the
   golden named after the test (``name=`` to choose), in ``golden_root`` (default ``golden/`` beside the test file;
   override the ``golden_root`` fixture in a conftest to move it). ``indices=`` / ``every=`` keep chosen frames.
-  It calls :func:`motion2video.testing.assert_frames_match`; see there for the metrics and the checks.
+  It calls :func:`motion2video.testing.golden.assert_frames_match`; see there for the metrics and the checks.
 - ``--update-golden`` (or ``UPDATE_GOLDEN=1``) writes the goldens instead of comparing.
 - ``--golden-results DIR``: failing comparisons write ``actual_XXX.png`` and ``diff_XXX.png`` (golden | actual |
   diff with the numbers) to ``DIR/<golden name>/`` (default ``$MOTION2VIDEO_TEST_OUTPUT`` or ``./test_output``).
@@ -76,7 +76,7 @@ class GoldenFrames:
 
     @property
     def update(self) -> bool:
-        from motion2video.testing import update_requested
+        from motion2video.testing.golden import update_requested
 
         return bool(self._config.getoption("update_golden")) or update_requested()
 
@@ -87,17 +87,17 @@ class GoldenFrames:
 
         Args:
             source: (T, H, W, 3) / (H, W, 3) uint8 frames, a ``.mp4`` / ``.gif`` path, or a Motion / FaceMotion
-                (rendered with ``style``, ``size``, ``palette`` by ``motion2video.render.render_motion``).
+                (rendered with ``style``, ``size``, ``palette`` by ``motion2video.apps.render.render_motion``).
             tolerance, metric: largest allowed per-frame error in ``"max"``, ``"rel_l1"`` or ``"ssim"``
                 (1 - SSIM).
             name: the golden's directory name under ``golden_root``.
             indices, every: compare chosen frame indices, or every k-th frame (default all).
             fps: a frame array's fps (videos and motions carry their own).
         Returns:
-            :class:`motion2video.testing.GoldenResult`.
+            :class:`motion2video.testing.golden.GoldenResult`.
         """
         __tracebackhide__ = True
-        from motion2video.testing import assert_frames_match, golden_clip
+        from motion2video.testing.golden import assert_frames_match, golden_clip
 
         state = self._config.stash[_SESSION]
         name = self.default_name if name is None else str(name)
@@ -147,7 +147,7 @@ def golden_frames(request: pytest.FixtureRequest, golden_root: Path) -> GoldenFr
 def unused_goldens(roots: set[Path], used: set[Path]) -> list[Path]:
     """Golden directories in ``roots`` (directories holding ``frame_*.png`` or ``golden.json``) not in ``used``
     (resolved paths). A root that is missing, a file or unreadable contributes nothing."""
-    from motion2video.testing import is_golden_dir
+    from motion2video.testing.golden import is_golden_dir
 
     unused = []
     for root in sorted(roots):

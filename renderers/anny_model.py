@@ -1,7 +1,7 @@
 """One Anny body model per process, and the rest-pose facts the mesh renderers need.
 
 Anny (NAVER, Apache-2.0) is a MakeHuman-based body model in PyTorch: 13,718 vertices, 27,420 triangles,
-104 bones, 52 ARKit facial actions (in :data:`motion2video.motion.ARKIT_NAMES` order) and 6 phenotype
+104 bones, 52 ARKit facial actions (in :data:`motion2video.core.motion.ARKIT_NAMES` order) and 6 phenotype
 parameters. Its frame is the project's world frame: metres, z up, the body faces -y, its left side is +x.
 
 Building the model the first time on a machine takes ~40 s and writes a cache under ``~/.cache/anny``;
@@ -109,7 +109,7 @@ def _check_facial_actions(model) -> None:
     from motion2video.core.motion import ARKIT_NAMES
 
     if tuple(model.facial_action_labels) != ARKIT_NAMES:
-        raise RuntimeError("Anny's facial_action_labels differ from motion2video.motion.ARKIT_NAMES")
+        raise RuntimeError("Anny's facial_action_labels differ from motion2video.core.motion.ARKIT_NAMES")
 
 
 def bone_names() -> tuple[str, ...]:

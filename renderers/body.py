@@ -38,10 +38,7 @@ import numpy as np
 from motion2video.core.camera import PinholeCamera, fit_camera
 from motion2video.core.errors import InputError
 from motion2video.core.motion import Motion
-from motion2video.core.rotations import (  # noqa: F401 (the rotation helpers' old import path)
-    _normalize, axis_angle_to_matrix, frame_from_axes, matrix_from_quaternion, quaternion_from_matrix,
-    slerp_rotations, swing_rotation,
-)
+from motion2video.core.rotations import frame_from_axes, slerp_rotations, swing_rotation
 from motion2video.core.skeletons import (
     PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE, SPINE, NECK, HEAD,
     L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST,

@@ -1,4 +1,4 @@
-"""The Anny head and face driven by a :class:`~motion2video.motion.FaceMotion`, rendered close up.
+"""The Anny head and face driven by a :class:`~motion2video.core.motion.FaceMotion`, rendered close up.
 
 - Expressions: the 52 ARKit coefficients are Anny's facial actions (same names, same order), so they go
   straight into Anny's forward.

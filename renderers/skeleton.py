@@ -2,13 +2,13 @@
 
 Everything here is deterministic (same input -> same pixels) so golden-frame tests stay stable.
 
-Placement. 3D joints (world metres, z up) are projected with :mod:`renderers.camera`: one camera is fitted
-to the whole sequence (:func:`renderers.camera.fit_camera`) unless one is passed, so there is no per-frame
-zoom jitter. 2D joints (pixels, y down) are placed with one :func:`renderers.camera.fit_image_framing` per
+Placement. 3D joints (world metres, z up) are projected with :mod:`motion2video.core.camera`: one camera is fitted
+to the whole sequence (:func:`motion2video.core.camera.fit_camera`) unless one is passed, so there is no per-frame
+zoom jitter. 2D joints (pixels, y down) are placed with one :func:`motion2video.core.camera.fit_image_framing` per
 sequence unless a framing is passed.
 
 Pixel convention. Continuous image coordinates put pixel centres at integer + 0.5 (see
-:mod:`renderers.camera`); OpenCV draws with pixel centres at integers, so every coordinate is shifted by
+:mod:`motion2video.core.camera`); OpenCV draws with pixel centres at integers, so every coordinate is shifted by
 -0.5 before drawing, with 4 bits of sub-pixel precision (``shift=4``, 1/16 pixel) and anti-aliased
 (``cv2.LINE_AA``) lines and circles. Heatmaps use the same convention: a joint at (10.5, 20.5) peaks at
 exactly 1.0 in pixel row 20, column 10.
@@ -228,7 +228,7 @@ def to_openpose18(joints: np.ndarray, skeleton: Skeleton | str) -> np.ndarray:
         joints: (..., J, D) joints in ``skeleton`` order.
         skeleton: their skeleton.
     Returns:
-        (..., 18, D) joints in :data:`~motion2video.skeletons.OPENPOSE_18` order.
+        (..., 18, D) joints in :data:`~motion2video.core.skeletons.OPENPOSE_18` order.
     """
     skel = _skeleton(skeleton)
     joints = np.asarray(joints, dtype=np.float64)

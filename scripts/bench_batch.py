@@ -43,10 +43,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from motion2video.atomic import write_json
-from motion2video.batch import (BatchConfig, Job, LocalPool, init_ray, jobs_from_template, run_ray, warm_ray)
-from motion2video.benchtools import bench_parser, report
-from motion2video.video import ENCODER_ENV
+from motion2video.core.atomic import write_json
+from motion2video.apps.batch import (BatchConfig, Job, LocalPool, init_ray, jobs_from_template, run_ray, warm_ray)
+from motion2video.evaluation.benchtools import bench_parser, report
+from motion2video.formats.video import ENCODER_ENV
 
 MOCAP = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
 FPS = 30

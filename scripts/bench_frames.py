@@ -14,8 +14,8 @@ import numpy as np
 import torch
 
 from motion2video import __version__
-from motion2video.benchtools import median_seconds as _median_time
-from motion2video.atomic import write_json
+from motion2video.evaluation.benchtools import median_seconds as _median_time
+from motion2video.core.atomic import write_json
 from motion2video.frames.data import structure_channels
 from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate,
                                        reconstruction_loss)

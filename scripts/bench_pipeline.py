@@ -5,7 +5,7 @@
 Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2video/weights``):
 
 - ``generator``: the frame generator at 128x128 (torch.inference_mode), frames/s by batch size, with and
-  without channels_last, through the pipeline's path (:func:`motion2video.pipeline.generate_frames`, which
+  without channels_last, through the pipeline's path (:func:`motion2video.stages.frames.generate_frames`, which
   encodes the reference once per video) and through the plain per-frame model call
   (:func:`motion2video.frames.model.generate`), at 1 thread and at the pipeline's default thread count.
   ``generator_fps_128`` = the pipeline path at its defaults (batch 8, channels_last, default threads);
@@ -15,7 +15,7 @@ Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2v
   its pipeline path at the pipeline's defaults (a warp generator through ``encode_reference`` /
   ``decode``: person crop, generation, paste, on the demo reference and poses moved around it).
 - ``end_to_end``: K=5 futures x 48 frames after 16 observed, body and face: the wall time of
-  :func:`motion2video.pipeline.synthesize` (checkpoint loading included) and each stage timed alone
+  :func:`motion2video.apps.synthesize.synthesize` (checkpoint loading included) and each stage timed alone
   (sampling, structure rendering, generation, encoding of the three outputs); ``overhead_ratio`` =
   wall / sum of the stages (target <= 1.3), and each stage's share of that sum. Medians over --repeats
   runs after one warm-up run (Anny, the GL context and the imports are loaded once per process).
@@ -48,8 +48,14 @@ sys.path.insert(0, str(REPO / "scripts"))
 import demo  # noqa: E402  (scripts/demo.py: the demo's inputs and checkpoint names)
 
 from motion2video import __version__  # noqa: E402
-from motion2video.benchtools import median_seconds  # noqa: E402
-from motion2video import pipeline as P  # noqa: E402
+from motion2video.evaluation.benchtools import median_seconds  # noqa: E402
+from motion2video.apps.synthesize import (  # noqa: E402
+    SynthesisConfig, compose_video, contact_sheet, output_paths, synthesize, write_outputs,
+)
+from motion2video.stages.frames import default_generator_threads, generate_frames, generate_video_frames  # noqa: E402
+from motion2video.stages.reference import load_reference  # noqa: E402
+from motion2video.stages.structure import render_structures, split_rows, structure_previews  # noqa: E402
+from motion2video.stages.sampling import sample_forecast, torch_threads  # noqa: E402
 
 SAMPLES, OBSERVED, HORIZON = 5, 16, 48
 BATCHES = (1, 4, 8, 16)
@@ -69,7 +75,7 @@ def machine() -> dict:
         "opencv": cv2.__version__,
         "motion2video": __version__,
         "torch_default_threads": torch.get_num_threads(),
-        "pipeline_generator_threads": P.default_generator_threads(),
+        "pipeline_generator_threads": default_generator_threads(),
     }
 
 
@@ -86,20 +92,20 @@ def bench_generator(frame_model, *, repeats: int, frames: int = 16) -> dict:
     tgt = rng.random((frames, channels, size, size), dtype=np.float32)
     refs, ref_ss = np.repeat(ref[None], frames, 0), np.repeat(ref_s[None], frames, 0)
     table = []
-    for threads in sorted({1, P.default_generator_threads()}):
-        with P.torch_threads(threads):
+    for threads in sorted({1, default_generator_threads()}):
+        with torch_threads(threads):
             for batch in BATCHES:
                 for channels_last in (False, True):
-                    sec = median_seconds(lambda: P.generate_frames(net, ref, ref_s, tgt, batch_size=batch,
+                    sec = median_seconds(lambda: generate_frames(net, ref, ref_s, tgt, batch_size=batch,
                                                                    channels_last=channels_last), repeats=repeats)
                     table.append({"path": "pipeline", "threads": threads, "batch": batch,
                                   "channels_last": channels_last, "fps": round(frames / sec, 2)})
                 sec = median_seconds(lambda: generate(net, refs, ref_ss, tgt, batch_size=batch), repeats=repeats)
                 table.append({"path": "model.generate", "threads": threads, "batch": batch, "channels_last": True,
                               "fps": round(frames / sec, 2)})
-    default_threads = P.default_generator_threads()
+    default_threads = default_generator_threads()
     mine = [r for r in table if r["path"] == "pipeline" and r["threads"] == default_threads]
-    default = next(r for r in mine if r["batch"] == P.SynthesisConfig.batch_size and r["channels_last"])
+    default = next(r for r in mine if r["batch"] == SynthesisConfig.batch_size and r["channels_last"])
     best = max(mine, key=lambda r: r["fps"])
     batch1 = max((r for r in mine if r["batch"] == 1), key=lambda r: r["fps"])
     plain = [r for r in table if r["path"] == "model.generate" and r["threads"] == default_threads]
@@ -122,7 +128,7 @@ def bench_warp_generator(frame_model, *, repeats: int, frames: int = 16) -> dict
     the crop is the size the pipeline would use)."""
     import cv2
 
-    from motion2video.reference import load_reference_pose
+    from motion2video.stages.reference import load_reference_pose
 
     net = frame_model.model
     size = net.config.image_size
@@ -133,14 +139,14 @@ def bench_warp_generator(frame_model, *, repeats: int, frames: int = 16) -> dict
     rng = np.random.default_rng(0)
     targets = points[None] + rng.normal(0.0, 0.02 * size, (frames, 17, 2)).astype(np.float32)
     table = []
-    for threads in sorted({1, P.default_generator_threads()}):
-        with P.torch_threads(threads):
+    for threads in sorted({1, default_generator_threads()}):
+        with torch_threads(threads):
             state = net.encode_reference(image, points)
             for batch in (1, 4, 8):
                 sec = median_seconds(lambda: net.decode(state, targets, batch_size=batch), repeats=repeats)
                 table.append({"path": "decode", "threads": threads, "batch": batch, "fps": round(frames / sec, 2)})
-    mine = [r for r in table if r["threads"] == P.default_generator_threads()]
-    default = next(r for r in mine if r["batch"] == P.SynthesisConfig.batch_size)
+    mine = [r for r in table if r["threads"] == default_generator_threads()]
+    default = next(r for r in mine if r["batch"] == SynthesisConfig.batch_size)
     return {
         "image_size": size,
         "kind": "warp",
@@ -161,18 +167,18 @@ def bench_any_generator(frame_model, *, repeats: int) -> dict:
 
 def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> dict:
     """Wall time of synthesize vs the sum of its stages timed alone, for one demo clip."""
-    from motion2video.checkpoint import load_model
-    from motion2video.forecast import load_clip_for
+    from motion2video.models.checkpoint import load_model
+    from motion2video.apps.sample import load_clip_for
     from motion2video.frames.checkpoint import load_frame_model
 
     clip_path = demo.DEMO_INPUTS / spec["clip"]
     ref_path = demo.DEMO_INPUTS / spec["reference"]
     motion_ckpt, frame_ckpt = files[spec["motion_model"]], files[spec["frame_model"]]
-    config = P.SynthesisConfig(samples=SAMPLES, observed=OBSERVED, horizon=HORIZON, start=spec["start"])
+    config = SynthesisConfig(samples=SAMPLES, observed=OBSERVED, horizon=HORIZON, start=spec["start"])
     out = work / f"bench_{spec['clip']}.mp4"
 
     def whole() -> None:
-        P.synthesize(motion_model=motion_ckpt, frame_model=frame_ckpt, input_path=clip_path, reference=ref_path,
+        synthesize(motion_model=motion_ckpt, frame_model=frame_ckpt, input_path=clip_path, reference=ref_path,
                      output=out, config=config)
 
     # The stages alone, on inputs prepared outside the timers.
@@ -180,23 +186,23 @@ def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> di
     frames_model = load_frame_model(frame_ckpt)
     size, domain = frames_model.config.image_size, frames_model.config.domain
     clip = load_clip_for(bundle, clip_path)
-    ref = P.load_reference(ref_path, size=size, domain=domain)
-    threads = P.default_generator_threads()
+    ref = load_reference(ref_path, size=size, domain=domain)
+    threads = default_generator_threads()
     state: dict = {}
 
     def sampling() -> None:
-        state["fc"] = P.sample_futures(bundle, clip, samples=SAMPLES, observed=OBSERVED, horizon=HORIZON,
+        state["fc"] = sample_forecast(bundle, clip, samples=SAMPLES, observed=OBSERVED, horizon=HORIZON,
                                        start=spec["start"], seed=0)
 
     def structures() -> None:
-        state["st"] = P.render_structures(state["fc"], domain=domain, size=size, reference=ref)
+        state["st"] = render_structures(state["fc"], domain=domain, size=size, reference=ref)
 
     def generation() -> None:
-        state["gen"] = P.generate_video_frames(frames_model, ref, state["st"], batch_size=config.batch_size,
+        state["gen"] = generate_video_frames(frames_model, ref, state["st"], batch_size=config.batch_size,
                                                threads=threads)
 
     def encoding() -> None:
-        P.write_outputs(P.output_paths(work / "bench_stage.mp4"), state["video"], state["structure_video"],
+        write_outputs(output_paths(work / "bench_stage.mp4"), state["video"], state["structure_video"],
                         state["sheet"], fps=state["fc"].fps)
 
     whole()  # warm-up: imports, Anny, the GL context, ffmpeg
@@ -211,9 +217,9 @@ def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> di
             fn()
             times[name] = time.perf_counter() - t0
         g, st = state["gen"], state["st"]
-        ref_prev, obs_prev, fut_prev = P.split_rows(P.structure_previews(st), st)
-        state.update(video=P.compose_video(g.observed, g.futures), structure_video=P.compose_video(obs_prev, fut_prev),
-                     sheet=P.contact_sheet(g.observed, g.futures, header=((ref.image, "reference"),
+        ref_prev, obs_prev, fut_prev = split_rows(structure_previews(st), st)
+        state.update(video=compose_video(g.observed, g.futures), structure_video=compose_video(obs_prev, fut_prev),
+                     sheet=contact_sheet(g.observed, g.futures, header=((ref.image, "reference"),
                                                                           (ref_prev, "ref. structure"))))
         t0 = time.perf_counter()
         encoding()

@@ -9,7 +9,7 @@ Keys of the JSON record:
   existing ``Line2D`` objects, ``fig.canvas.draw()`` + ``buffer_rgba``), frames/s and the ratio, plus the
   share of OpenCV's drawn pixels that matplotlib also drew (a check that both draw the same picture).
 - ``heatmaps_fps``: 17 separable Gaussian heatmaps per frame at 256x256.
-- ``mp4_fps``: :func:`motion2video.video.write_video` of 256x256 skeleton maps (libx264), default preset
+- ``mp4_fps``: :func:`motion2video.formats.video.write_video` of 256x256 skeleton maps (libx264), default preset
   and ``ultrafast``.
 - ``mesh_fps``, ``mesh_reuse_vs_recreate``: the posed Anny body (:class:`renderers.body.BodyRenderer`) with
   one reused renderer, and with a new renderer per frame (sharing the process-wide GL context, and also
@@ -22,7 +22,7 @@ Keys of the JSON record:
   ``--no-long`` skips them.
 - ``machine``, ``versions``, ``config``: where and how it was measured.
 
-Input: a synthetic human-like H36M-17 walk (:func:`motion2video.testing.synthetic_walk`, fixed seed), or a
+Input: a synthetic human-like H36M-17 walk (:func:`motion2video.testing.golden.synthetic_walk`, fixed seed), or a
 real clip with ``--bvh PATH``.
 """
 
@@ -39,13 +39,13 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.benchtools import bench_parser, median_seconds, report
-from motion2video.motion import Motion
-from motion2video.skeletons import H36M_17
-from motion2video.atomic import write_json
-from motion2video.testing import synthetic_walk
-from motion2video.video import write_video
-from renderers.camera import fit_camera
+from motion2video.evaluation.benchtools import bench_parser, median_seconds, report
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import H36M_17
+from motion2video.core.atomic import write_json
+from motion2video.testing.golden import synthetic_walk
+from motion2video.formats.video import write_video
+from motion2video.core.camera import fit_camera
 from renderers.skeleton import SkeletonRenderer, SkeletonStyle, draw_skeleton, gaussian_heatmaps, place_joints
 
 SIZE = 256
@@ -93,7 +93,7 @@ class MatplotlibSkeleton:
         self.canvas = FigureCanvasAgg(self.fig)
         ax = self.fig.add_axes((0, 0, 1, 1))
         ax.set_xlim(0, width)
-        ax.set_ylim(height, 0)  # pixel frame: y down, pixel centres at +0.5 as in renderers.camera
+        ax.set_ylim(height, 0)  # pixel frame: y down, pixel centres at +0.5 as in motion2video.core.camera
         ax.set_axis_off()
         ax.set_facecolor(np.array(style.background) / 255)
         points_per_pixel = 72.0 / dpi
@@ -217,8 +217,8 @@ def bench_mesh(motion: Motion, *, frames: int, recreate_frames: int, repeats: in
 
 def bench_long_clip(path: Path, *, size: int) -> dict:
     """Peak RSS of ``render`` on ``path`` and on the clip tiled 4x, each in a fresh process."""
-    from motion2video.io import load_motion, save_motion
-    from motion2video.testing import command_peak_rss_mb, tiled_motion
+    from motion2video.formats.io import load_motion, save_motion
+    from motion2video.testing.golden import command_peak_rss_mb, tiled_motion
 
     motion = load_motion(path)
     with tempfile.TemporaryDirectory() as tmp:

@@ -27,8 +27,8 @@ import torch
 def run_benchmark(*, samples: int = 50, horizon: int = 48, repeats: int = 7, threads: int = 1,
                   data: str | None = None, seed: int = 0) -> dict:
     """Time batched and one-at-a-time sampling; returns the JSON record."""
-    from motion2video.benchtools import median_ms
-    from motion2video.checkpoint import WEIGHTS_DIR, load_model
+    from motion2video.evaluation.benchtools import median_ms
+    from motion2video.models.checkpoint import WEIGHTS_DIR, load_model
     from motion2video.data.dataset import DEFAULT_MOCAP, DatasetConfig, build_dataset
     from motion2video.models.base import build_model
 

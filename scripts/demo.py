@@ -56,9 +56,10 @@ def peak_memory_mb() -> float:
 
 def run_demo(out: Path, *, samples: int = 5, seed: int = 0, weights: Path = WEIGHTS) -> dict[str, Path]:
     """Write the demo videos into ``out`` using the checkpoints in ``weights``; returns name -> path."""
-    from motion2video.pipeline import (SynthesisConfig, compose_video, contact_sheet, render_mesh_frames,
-                                      synthesize)
-    from motion2video.video import write_image, write_video
+    from motion2video.apps.synthesize import (
+        SynthesisConfig, compose_video, contact_sheet, render_mesh_frames, synthesize,
+    )
+    from motion2video.formats.video import write_image, write_video
 
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Path] = {}
@@ -93,12 +94,12 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     import numpy as np
 
     from motion2video.apps.transfer import iter_transfer, transfer_behavior
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.core.atomic import save_npz
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.reference import load_reference
+    from motion2video.stages.reference import load_reference
     from motion2video.stages.clips import load_clip
-    from motion2video.video import VideoWriter, write_image
+    from motion2video.formats.video import VideoWriter, write_image
 
     t0 = time.perf_counter()
     spec = TRANSFER
@@ -136,10 +137,10 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
 def render_inputs(out: Path, *, size: int = 128) -> dict[str, Path]:
     """Render every demo input in every style that fits it (body: skeleton, heatmap, mesh; face: face) into
     ``out/inputs/<clip>_<style>.mp4``: the structure renderers on their own, as ``motion2video render`` does."""
-    from motion2video.io import load_motion
-    from motion2video.motion import FaceMotion
-    from motion2video.render import render_motion
-    from motion2video.video import write_video
+    from motion2video.formats.io import load_motion
+    from motion2video.core.motion import FaceMotion
+    from motion2video.apps.render import render_motion
+    from motion2video.formats.video import write_video
 
     written: dict[str, Path] = {}
     (out / "inputs").mkdir(parents=True, exist_ok=True)
@@ -183,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
               "are trained with `motion2video train` and `motion2video train-frames`; see the model cards)",
               file=sys.stderr)
         return 2
-    from motion2video.errors import InputError
+    from motion2video.core.errors import InputError
 
     t0 = time.perf_counter()
     try:

@@ -32,9 +32,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from motion2video.frames.baselines import run_baseline  # noqa: E402
 from motion2video.frames.checkpoint import load_frame_model  # noqa: E402
-from motion2video.frames.data import (default_cache_dir, default_spec, evaluation_pair_index,  # noqa: E402
-                                      load_or_generate, make_pairs)
-from motion2video.atomic import write_json  # noqa: E402
+from motion2video.frames.data import (  # noqa: E402
+    default_cache_dir, evaluation_pair_index, load_or_generate, make_pairs,
+)
+from motion2video.frames.specs import default_spec  # noqa: E402
+from motion2video.core.atomic import write_json  # noqa: E402
 from motion2video.frames.evaluate import frame_metrics, region_psnr, sharpness_ratio  # noqa: E402
 from motion2video.frames.model import images_to_tensor, tensor_to_images  # noqa: E402
 from motion2video.frames.warp import WarpGenerator, warp_image  # noqa: E402

@@ -1,9 +1,7 @@
 """How tall the import graph is: the longest import chain between the project's packages, with grimp.
 
-Modules are grouped by package (``motion2video.X.*`` -> ``motion2video.X``; ``renderers.*`` -> ``renderers``);
-the thin re-export modules kept for old import paths (``motion2video.motion``, ``.skeletons``, ``.errors``,
-``.atomic``, ``renderers.camera``) count with the core they re-export, ``motion2video.io`` with the formats. Prints the height, the longest chain and
-any cycle (strongly connected groups), as JSON with ``--json``.
+Modules are grouped by package (``motion2video.X.*`` -> ``motion2video.X``; ``renderers.*`` -> ``renderers``).
+Prints the height, the longest chain and any cycle (strongly connected groups), as JSON with ``--json``.
 
     PYTHONPATH=. python scripts/import_graph_height.py
 """
@@ -16,16 +14,13 @@ import json
 import grimp
 import networkx as nx
 
-ALIASES_OF_CORE = {"motion2video.motion", "motion2video.skeletons", "motion2video.errors", "motion2video.atomic"}
-ALIASES = {"motion2video.io": "motion2video.formats"}  # old path of formats/io.py
 
 
 def group(module: str) -> str:
     parts = module.split(".")
     if parts[0] == "renderers":
         return "renderers"
-    name = ".".join(parts[:2])
-    return "motion2video.core" if name in ALIASES_OF_CORE else ALIASES.get(name, name)
+    return ".".join(parts[:2])
 
 
 def measure() -> dict:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from motion2video.data.face_dynamics import generate_face
 from motion2video.data.procedural import ModeSpec, generate
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.npz import save_face_npz, save_motion_npz
 
 FPS = 25.0
@@ -123,6 +123,9 @@ def readme_text() -> str:
         "(body: `points` (17, 2) joints in its pixels; face: `face` (58,) params, `identity` and the camera that",
         "rendered it), which `motion2video synthesize` uses as the reference structure.",
         "",
+        "- `jobs.jsonl`: three batch jobs over these files (the README's `motion2video batch demo_inputs/jobs.jsonl` "
+        "example; input paths are relative to the repository root, where the command runs).",
+        "",
     ]
     return "\n".join(lines)
 
@@ -214,10 +217,10 @@ def write_references(out: Path) -> list[Path]:
 def write_reference_poses(out: Path) -> list[Path]:
     """Write ``<image>.pose.npz`` beside each reference image: the pose it shows, in its pixels (body
     joints) or with the camera that rendered it (face), so ``synthesize`` knows the reference structure
-    exactly (:mod:`motion2video.pipeline`). Needs the Anny renderers; renders one frame per body size."""
-    from motion2video.reference import ReferencePose, reference_pose_path, save_reference_pose
+    exactly (:mod:`motion2video.apps.synthesize`). Needs the Anny renderers; renders one frame per body size."""
+    from motion2video.stages.reference import ReferencePose, reference_pose_path, save_reference_pose
     from renderers.body import BodyRenderer, BodyStyle
-    from renderers.camera import project
+    from motion2video.core.camera import project
     from renderers.face import FaceRenderer, FaceStyle
 
     walk = generate(list(BODY_DEMOS["walk_to_run.npz"][0]), fps=FPS, seed=SEED).slice(0, 1)

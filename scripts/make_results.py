@@ -40,9 +40,9 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from motion2video import metrics as M  # noqa: E402
-from motion2video.atomic import write_section  # noqa: E402
-from motion2video.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
+from motion2video.evaluation import metrics as M  # noqa: E402
+from motion2video.core.atomic import write_section  # noqa: E402
+from motion2video.models.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_FACE,
     DEFAULT_MOCAP,
@@ -52,10 +52,11 @@ from motion2video.data.dataset import (  # noqa: E402
     decode_samples,
 )
 from motion2video.data.windows import metric_vectors  # noqa: E402
-from motion2video.evaluation import EvalProtocol, evaluate_bundles, sample_futures  # noqa: E402
+from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
+from motion2video.stages.sampling import sample_futures  # noqa: E402
 from motion2video.models.base import MODEL_REGISTRY  # noqa: E402
 from motion2video.models.baselines import BASELINES  # noqa: E402
-from motion2video.training import TrainConfig, train_model  # noqa: E402
+from motion2video.models.training import TrainConfig, train_model  # noqa: E402
 
 BEGIN, END = "<!-- issue3:begin -->", "<!-- issue3:end -->"
 SHIPPED = ("mtvae-add", "mtvae-add-2d", "mtvae-add-face", "lcpvae", "behavior")

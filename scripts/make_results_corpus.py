@@ -32,8 +32,8 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from motion2video.atomic import write_section  # noqa: E402
-from motion2video.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
+from motion2video.core.atomic import write_section  # noqa: E402
+from motion2video.models.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model  # noqa: E402
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_MOCAP,
     MULTIMODAL_SOURCE,
@@ -42,9 +42,10 @@ from motion2video.data.dataset import (  # noqa: E402
     build_dataset,
     decode_samples,
 )
-from motion2video.evaluation import EvalProtocol, evaluate_bundles, sample_futures  # noqa: E402
+from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
+from motion2video.stages.sampling import sample_futures  # noqa: E402
 from motion2video.models.baselines import BASELINES  # noqa: E402
-from motion2video.training import TrainConfig, train_model  # noqa: E402
+from motion2video.models.training import TrainConfig, train_model  # noqa: E402
 
 BEGIN, END = "<!-- issue8-models:begin -->", "<!-- issue8-models:end -->"
 NEW = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior")
@@ -101,7 +102,7 @@ RATIO_HEADER = ["method", "ADE", "FDE", "ADE / ZV", "FDE / ZV", "MMADE", "MMFDE"
 
 
 def heldout_section(weights: Path, record: dict, *, samples: int, images: Path) -> tuple[str, dict, WindowSet]:
-    from motion2video.plots import plot_ade_per_frame
+    from motion2video.evaluation.plots import plot_ade_per_frame
 
     new = {n: load_model(weights / f"{n}.safetensors") for n in NEW if (weights / f"{n}.safetensors").is_file()}
     ref = new["mtvae-add"]
@@ -226,7 +227,7 @@ def old_vs_new_section(weights: Path, runs: Path, rev: str, test: WindowSet, new
 def lcp_diagnosis(old: Path, new: Path, windows: WindowSet, record: dict, *, samples: int = 50) -> str:
     """Why the 5-minute LCP-VAE collapsed: the width of its learned prior q(z_c | obs), and APD when the same
     decoder samples z from the learned prior or from N(0, I)."""
-    from motion2video import metrics as M
+    from motion2video.evaluation import metrics as M
     from motion2video.data.windows import metric_vectors
     from motion2video.models.blocks import repeat_batch
 
@@ -329,10 +330,11 @@ def known_answer_section(weights: Path, runs: Path, record: dict, *, steps: int,
 
 def sheet_section(new: dict, images: Path, *, samples: int = 5) -> str:
     """Observed, recorded and K sampled futures of three held-out clips (skeletons, one camera per clip)."""
-    from motion2video.atomic import atomic_output
-    from motion2video.apps.sample import forecast, load_clip_for
-    from motion2video.video import GREEN, RED, add_border, grid
-    from renderers.camera import fit_camera
+    from motion2video.core.atomic import atomic_output
+    from motion2video.stages.sampling import forecast
+    from motion2video.apps.sample import load_clip_for
+    from motion2video.formats.video import GREEN, RED, add_border, grid
+    from motion2video.core.camera import fit_camera
     from renderers.skeleton import SkeletonRenderer, SkeletonStyle
 
     bundle = new.get("mtvae-add-dlow") or new["mtvae-add"]

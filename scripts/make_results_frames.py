@@ -31,7 +31,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from motion2video.atomic import write_section  # noqa: E402
+from motion2video.core.atomic import write_section  # noqa: E402
 
 BEGIN, END = "<!-- issue10-frames:begin -->", "<!-- issue10-frames:end -->"
 ORDER = ("generator", "frames-body-128-v1", "copy-reference", "limb-warp")

@@ -34,7 +34,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from motion2video.atomic import write_json, write_section  # noqa: E402
+from motion2video.core.atomic import write_json, write_section  # noqa: E402
 
 BEGIN, END = "<!-- issue22-real-motion:begin -->", "<!-- issue22-real-motion:end -->"
 # Held-out real captures (none is in the frame generator's training clips), one walk, one jump, one dance.

@@ -3,9 +3,9 @@
     python scripts/measure_golden_h264.py --json out/golden_h264.json [--shared ../shared] [--frames 50]
 
 Real clips from ``shared/data/mocap`` (CMU 08_01 walk, MASS run) are rendered in each body style at 96 and 256
-pixels (25 fps), then written with :func:`motion2video.video.write_video` and read back with
-:func:`motion2video.video.read_video`. Per frame it measures the three golden metrics of
-:mod:`motion2video.testing` (max grey-level difference, rel_l1, 1 - SSIM) for:
+pixels (25 fps), then written with :func:`motion2video.formats.video.write_video` and read back with
+:func:`motion2video.formats.video.read_video`. Per frame it measures the three golden metrics of
+:mod:`motion2video.testing.golden` (max grey-level difference, rel_l1, 1 - SSIM) for:
 
 - ``raw_vs_h264``: the rendered frames against the decoded mp4 (default crf 18, preset medium): a golden taken
   from the renderer compared with a video the pipeline wrote;
@@ -29,11 +29,11 @@ from pathlib import Path
 import imageio_ffmpeg
 import numpy as np
 
-from motion2video.atomic import write_json
-from motion2video.io import load_motion, resample_motion
-from motion2video.render import render_motion
-from motion2video.testing import METRICS, frame_error
-from motion2video.video import read_video, write_video
+from motion2video.core.atomic import write_json
+from motion2video.formats.io import load_motion, resample_motion
+from motion2video.apps.render import render_motion
+from motion2video.testing.golden import METRICS, frame_error
+from motion2video.formats.video import read_video, write_video
 
 CLIPS = {"cmu_08_01_walk": "mocap/cmu/08_01.bvh", "mass_run": "mocap/mass/mass_run.bvh"}
 STYLES = ("skeleton", "heatmap", "mesh")

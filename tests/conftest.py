@@ -17,8 +17,9 @@ settings.load_profile("ci")
 
 from motion2video.formats.canonical import CanonicalClip, floor_height
 from motion2video.formats.manifest import ManifestEntry, read_manifest
-from motion2video.formats.mocap import default_trim, load_mocap, mocap_canonical
-from motion2video.motion import Motion
+from motion2video.formats.manifest import default_trim
+from motion2video.formats.mocap import load_mocap, mocap_canonical
+from motion2video.core.motion import Motion
 
 SHARED_DIR = Path(__file__).resolve().parents[2] / "shared"
 
@@ -104,3 +105,18 @@ def link_clips(root: Path, mocap_dir: Path, clips: tuple[str, ...]) -> Path:
         target.parent.mkdir(parents=True, exist_ok=True)
         target.symlink_to(mocap_dir / rel)
     return root
+
+
+@pytest.fixture(scope="session")
+def photos_dir(shared_dir: Path) -> Path:
+    """Three real photos of people (``shared/data/photos``: skier, man_by_truck, three_walking)."""
+    return _existing(shared_dir / "data" / "photos")
+
+
+@pytest.fixture(scope="session")
+def dancer_video(shared_dir: Path) -> Path:
+    """A real 63 s, 25 fps video of one dancer (``shared/data/video/dancer.avi``)."""
+    path = shared_dir / "data" / "video" / "dancer.avi"
+    if not path.is_file():
+        pytest.fail(f"shared video not found: {path}")
+    return path

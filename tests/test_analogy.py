@@ -8,21 +8,18 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from motion2video.analogy import (
-    known_answer_labels,
-    procedural_analogy_case,
-    procedural_transition_dataset,
-    stitch_after,
-)
-from motion2video.checkpoint import load_model
+from motion2video.evaluation.analogy import known_answer_labels, procedural_analogy_case, procedural_transition_dataset
+from motion2video.stages.latents import stitch_after
+from motion2video.models.checkpoint import load_model
 from motion2video.cli import main
 from motion2video.data.dataset import DatasetConfig, build_dataset
-from motion2video.data.procedural import BodyParams, generate, heading_of
+from motion2video.data.procedural import BodyParams, generate
+from motion2video.core.rotations import heading_of
 from motion2video.data.windows import resample
-from motion2video.io import load_motion, save_motion
-from motion2video.motion import Motion
-from motion2video.training import TrainConfig, train_model
-from motion2video.video import read_video
+from motion2video.formats.io import load_motion, save_motion
+from motion2video.core.motion import Motion
+from motion2video.models.training import TrainConfig, train_model
+from motion2video.formats.video import read_video
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh")
 OBSERVED, HORIZON = 8, 12
@@ -70,7 +67,10 @@ def test_analogy_of_consecutive_windows(ckpts, clips, tmp_path, capsys):
     code = main(["analogy", "--model", str(ckpts["mtvae"]), clips["walk"], clips["walk"], clips["jump"],
                  "--a-start", "480", "--c-start", "240", "--size", "48", "-o", str(out), "--npz", str(npz)])
     assert code == 0
-    assert "B placed after A" not in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "B placed after A" not in printed
+    # the model the user gave (mtvae.safetensors), not its architecture's name (mtvae-add)
+    assert "(A:B::C:D with mtvae;" in printed and "mtvae-add" not in printed, printed
     frames, fps = read_video(out)
     assert fps == 25.0 and frames.shape == (OBSERVED + HORIZON, 48, 98, 3)
     saved = np.load(npz)
@@ -175,8 +175,20 @@ def test_bad_input(case, ckpts, clips, tmp_path, capsys):
     assert code == 2, err
     assert len(err.splitlines()) == 1 and err.startswith("motion2video analogy: error:"), err
     assert not out.exists() and not npz.exists()
-    expected = {"pred-lstm": "'pred-lstm' is a deterministic model", "baseline": "baseline",
-                "face-model-body-clip": "body motion", "body-model-face-clip": "face motion",
+    expected = {"pred-lstm": "pred is a deterministic 'pred-lstm' model", "baseline": "baseline",
+                "face-model-body-clip": "face is a face model, but this file holds body motion",
+                "body-model-face-clip": "mtvae is a body model, but this file holds face motion",
                 "c-start-out-of-range": "the C start frame 99999 is outside", "a-too-short": "needs",
                 "other-skeleton": "coco-17", "observed-1": "--observed must be >= 2"}[case]
     assert expected in err
+
+
+def test_errors_name_the_shipped_model_given(clips, tmp_path, capsys):
+    """Body motion given to the shipped mtvae-add-face names mtvae-add-face, not its architecture mtvae-add."""
+    out = tmp_path / "a.mp4"
+    code = main(["analogy", "--model", "mtvae-add-face", clips["walk"], clips["walk"], clips["jump"],
+                 "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and not out.exists()
+    assert "mtvae-add-face is a face model, but this file holds body motion" in err, err
+    assert "131_01.bvh" in err and "mtvae-add is" not in err, err

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from motion2video.checkpoint import baseline_bundle
+from motion2video.models.checkpoint import baseline_bundle
 from motion2video.data.dataset import DatasetConfig, build_dataset, decode_samples
 from motion2video.models.base import MODEL_REGISTRY, build_model
 from motion2video.models.baselines import BASELINES
@@ -74,9 +74,9 @@ def test_loss_reports_mse_and_has_no_gradient(walk_windows):
 
 def test_evaluation_scores_zero_velocity_by_hand(walk_windows):
     """evaluate_bundles on real windows == the metric computed directly from the raw windows."""
-    from motion2video import metrics as M
+    from motion2video.evaluation import metrics as M
     from motion2video.data.windows import metric_vectors
-    from motion2video.evaluation import EvalProtocol, evaluate_bundles
+    from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
 
     ds, w = walk_windows
     bundles = [baseline_bundle(n, ds.config, stats=ds.stats) for n in BASELINES]

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from motion2video.batch import (BatchConfig, jobs_from_jsonl, jobs_from_template, read_results, run_batch,
-                                video_frame_count)
+from motion2video.apps.batch import BatchConfig, jobs_from_jsonl, jobs_from_template, read_results, run_batch
+from motion2video.formats.video import video_frame_count
 from motion2video.cli import main
-from motion2video.errors import InputError
-from motion2video.gallery import write_gallery
-from motion2video.video import read_video
+from motion2video.core.errors import InputError
+from motion2video.apps.gallery import write_gallery
+from motion2video.formats.video import read_video
 from tests.batch_helpers import CLIPS, WorkerKiller, clip_folder
 
 TEMPLATE = "render {input} -o {output} --style skeleton --size 64 --frames 24"
@@ -170,7 +170,7 @@ def test_killed_worker_without_retries_fails_its_row_only(mocap_dir, tmp_path):
 def _chromium() -> str:
     path = shutil.which("chromium") or shutil.which("chromium-browser")
     if path is None:
-        pytest.fail("Debian's chromium is needed for the gallery test (make setup installs it: apt-get install chromium)")
+        pytest.fail("Debian's chromium is needed for the gallery test (make setup-test, which make test runs, installs it: apt-get install chromium)")
     return path
 
 

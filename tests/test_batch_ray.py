@@ -8,8 +8,9 @@ import json
 import pytest
 import ray  # the ray extra: `make test` installs it
 
-from motion2video.batch import BatchConfig, init_ray, jobs_from_jsonl, jobs_from_template, run_batch, video_frame_count
-from motion2video.video import read_video
+from motion2video.apps.batch import BatchConfig, init_ray, jobs_from_jsonl, jobs_from_template, run_batch
+from motion2video.formats.video import video_frame_count
+from motion2video.formats.video import read_video
 from tests.batch_helpers import CLIPS, WorkerKiller, clip_folder
 
 pytestmark = pytest.mark.slow

@@ -11,12 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from renderers.body import (
-    axis_angle_to_matrix,
-    frame_from_axes,
-    matrix_from_quaternion,
-    quaternion_from_matrix,
-    slerp_rotations,
+from motion2video.core.rotations import (
+    axis_angle_to_matrix, frame_from_axes, matrix_from_quaternion, quaternion_from_matrix, slerp_rotations,
     swing_rotation,
 )
 

@@ -10,7 +10,7 @@ import torch
 from safetensors.torch import save_file
 
 from motion2video.cli import main
-from motion2video.checkpoint import load_model
+from motion2video.models.checkpoint import load_model
 from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_02.bvh", "cmu/01_01.bvh", "mass/mass_pirouette.bvh",
@@ -59,8 +59,11 @@ def test_evaluate_writes_the_json_table(trained, small_data, tmp_path, capsys):
                  "--stride", "32", "--json", str(out)])
     assert code == 0
     result = json.loads(out.read_text())
-    assert set(result) == {"protocol", "results", "ade_per_frame"}
+    assert set(result) == {"protocol", "results", "per_action", "macro", "ade_per_frame"}
     assert list(result["results"]) == ["cvae", "zero-velocity", "last-step", "sequence-motion"]
+    assert list(result["per_action"]) == list(result["macro"]) == list(result["results"])
+    counts = {a: row["windows"] for a, row in result["per_action"]["cvae"].items()}
+    assert counts == result["protocol"]["actions"] and sum(counts.values()) == result["protocol"]["windows"]
     for row in result["results"].values():
         assert {"ade", "fde", "mmade", "mmfde", "apd"} <= set(row)
         assert all(np.isfinite(v) for v in row.values())
@@ -200,7 +203,7 @@ def test_sample_mesh_style(trained, mocap_dir, tmp_path):
     out = tmp_path / "mesh.mp4"
     assert main(["sample", "--model", str(trained), str(mocap_dir / "cmu" / "131_02.bvh"), "--samples", "1",
                  "--horizon", "2", "--style", "mesh", "--size", "64", "-o", str(out)]) == 0
-    from motion2video.video import read_video
+    from motion2video.formats.video import read_video
 
     frames, fps = read_video(out)
     assert frames.shape[0] == 18 and fps == pytest.approx(25.0)

@@ -10,9 +10,9 @@ import pytest
 
 from motion2video.cli import main
 from motion2video.formats.manifest import read_manifest
-from motion2video.io import load_motion, resample_motion
-from motion2video.render import render_motion
-from motion2video.video import probe_frame_rate, read_video
+from motion2video.formats.io import load_motion, resample_motion
+from motion2video.apps.render import render_motion
+from motion2video.formats.video import probe_frame_rate, read_video
 
 REPO = Path(__file__).resolve().parents[1]
 

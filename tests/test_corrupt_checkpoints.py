@@ -10,7 +10,7 @@ import pytest
 from safetensors import safe_open
 from safetensors.torch import load_file, save_file
 
-from motion2video.checkpoint import WEIGHTS_DIR
+from motion2video.models.checkpoint import WEIGHTS_DIR
 from motion2video.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
@@ -128,7 +128,7 @@ def test_frame_checkpoint_is_refused(case, tmp_path, capsys):
 
 def test_written_checkpoints_record_their_format_version(tmp_path):
     """What save_checkpoint / save_frame_model write carries format_version, and reads back."""
-    from motion2video.checkpoint import load_model, save_checkpoint
+    from motion2video.models.checkpoint import load_model, save_checkpoint
     from motion2video.frames.checkpoint import load_frame_model, save_frame_model
 
     bundle = load_model("mtvae-add")

@@ -22,9 +22,9 @@ from motion2video.data.dataset import (
     make_split,
 )
 from motion2video.data.face_data import face_mirror_permutation, mirror_face
-from motion2video.errors import InputError
-from motion2video.motion import ARKIT_NAMES
-from motion2video.skeletons import H36M_17
+from motion2video.core.errors import InputError
+from motion2video.core.motion import ARKIT_NAMES
+from motion2video.core.skeletons import H36M_17
 
 
 @pytest.fixture(scope="module")

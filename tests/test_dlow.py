@@ -11,8 +11,8 @@ import pytest
 import torch
 from safetensors import safe_open
 
-from motion2video import metrics as M
-from motion2video.checkpoint import load_model
+from motion2video.evaluation import metrics as M
+from motion2video.models.checkpoint import load_model
 from motion2video.cli import main
 from motion2video.models.base import build_model
 from motion2video.models.dlow import best_of_k_sse, pairwise_diversity

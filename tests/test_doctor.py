@@ -49,7 +49,8 @@ def test_doctor_on_this_machine(tmp_path):
     assert run.returncode == 0, run.stdout + run.stderr
     out = run.stdout
     for line in ("ok      torch:", "ok      ffmpeg:", "ok      PyAV:", "ok      GL osmesa (libOSMesa): renders",
-                 "ok      Anny body model:", "ok      checkpoint mtvae-add: loads", "ok      checkpoint frames-body-128",
+                 "ok      Anny body model:", "ok      pose estimator (BlazePose):", "ok      checkpoint mtvae-add: loads",
+                 "ok      checkpoint frames-body-128",
                  "mesh and face styles: available"):
         assert line in out, out
     assert (tmp_path / "doctor.json").is_file()

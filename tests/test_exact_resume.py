@@ -43,7 +43,7 @@ def _kill_when(proc: subprocess.Popen, ready, timeout: float = 300.0) -> None:
 
 
 def _motion_steps_done(last: Path) -> int:
-    from motion2video.checkpoint import read_meta
+    from motion2video.models.checkpoint import read_meta
 
     if not last.exists():
         return 0

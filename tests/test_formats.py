@@ -8,12 +8,12 @@ import os
 import numpy as np
 import pytest
 
-from motion2video import atomic
-from motion2video.errors import InputError
+from motion2video.core import atomic
+from motion2video.core.errors import InputError
 from motion2video.formats import face_csv, npz, openpose, videopose3d
-from motion2video.io import load_motion, save_motion
-from motion2video.motion import ARKIT_NAMES, FACE_DIM, FaceMotion, Motion
-from motion2video.skeletons import BODY_25, H36M_32_TO_17, OPENPOSE_18, convert_openpose_to_h36m
+from motion2video.formats.io import load_motion, save_motion
+from motion2video.core.motion import ARKIT_NAMES, FACE_DIM, FaceMotion, Motion
+from motion2video.core.skeletons import BODY_25, H36M_32_TO_17, OPENPOSE_18, convert_openpose_to_h36m
 
 FACE_FILES = ["livelinkface/S07-001.csv", "livelinkface/S88-001.csv", "livelinkface/alex_rom_3.csv",
               "livelinkface/alex_rom_4.csv", "livelinkface/apfel.csv", "llv/dao.csv"]
@@ -78,7 +78,8 @@ def test_overwrite_is_atomic_and_keeps_the_old_file_on_failure(tmp_path):
         ({"face": np.zeros((4, 57), np.float32), "fps": 30.0, "identity": "{}"}, "shape (T, 58)"),
         ({"face": np.zeros((4, 58), np.float32), "fps": 30.0, "identity": "[1"}, "not valid JSON"),
         ({"face": np.full((4, 58), np.inf, np.float32), "fps": 30.0, "identity": "{}"}, "NaN or Inf"),
-        ({"something": np.zeros(3)}, "unknown .npz layout"),
+        ({"something": np.zeros(3)}, "expected joints of shape (T, J, 3)"),  # one array: a joint array
+        ({"something": np.zeros(3), "else": np.zeros(3)}, "unknown .npz layout"),
     ],
 )
 def test_bad_npz_raises_input_error(tmp_path, arrays, message):

@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats import bvh
+from motion2video.formats.canonical import Y_UP_TO_Z_UP
 from motion2video.formats.manifest import find_manifest_entry, read_manifest
 from motion2video.formats.mocap import load_mocap_folder
 from motion2video.formats.resample import resample_linear
-from motion2video.skeletons import H36M_17
+from motion2video.core.skeletons import H36M_17
 from tests.conftest import link_clips
 
 J = {name: i for i, name in enumerate(H36M_17.joints)}
@@ -105,7 +106,7 @@ def test_axis_rotations_are_right_handed():
 
 
 def test_y_up_to_z_up_is_a_rotation():
-    assert np.isclose(np.linalg.det(bvh.Y_UP_TO_Z_UP), 1.0)
+    assert np.isclose(np.linalg.det(Y_UP_TO_Z_UP), 1.0)
     np.testing.assert_allclose(bvh.to_project_frame(np.array([1.0, 2.0, 3.0]), 0.5), [0.5, -1.5, 1.0])
 
 

@@ -14,17 +14,20 @@ import torch
 from safetensors import safe_open
 from skimage.metrics import structural_similarity
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.frames.baselines import border_anchors, copy_reference, limb_warp, run_baseline
 from motion2video.frames.checkpoint import (load_frame_model, resolve_model_path, save_frame_model,
                                             state_path)
-from motion2video.frames.data import (BODY_STRUCTURE_CHANNELS, body_structures, evaluation_pair_index,
-                                      identities, make_pairs, sample_pair_index, toy_sequences)
+from motion2video.frames.data import (
+    BODY_STRUCTURE_CHANNELS, body_structures, evaluation_pair_index, make_pairs, sample_pair_index, toy_sequences,
+)
+from motion2video.frames.specs import identities
 from motion2video.frames.evaluate import (METHODS, contact_sheet, evaluate_sequences, evaluation_contact_sheet,
                                           frame_metrics, write_json)
 from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate, ssim)
-from motion2video.frames.train import TrainFramesConfig, learning_rate, train_frames
-from motion2video.skeletons import H36M_17
+from motion2video.frames.train import TrainFramesConfig, train_frames
+from motion2video.core.schedule import learning_rate
+from motion2video.core.skeletons import H36M_17
 
 TINY = dict(image_size=32, channels=(8, 12, 16))
 

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from motion2video.cli import main
-from motion2video.frames.data import (DatasetSpec, body_structures, cache_folder, evaluation_pair_index,
-                                      is_test_clip, load_or_generate, make_pairs)
+from motion2video.frames.specs import DatasetSpec, is_test_clip
+from motion2video.frames.data import body_structures, cache_folder, evaluation_pair_index, load_or_generate, make_pairs
 from motion2video.frames.render_data import is_test_face_clip
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.frames.checkpoint import load_frame_model, save_frame_model
 from motion2video.frames.data import body_structures, evaluation_pair_index, make_pairs, toy_sequences
 from motion2video.frames.evaluate import (evaluate_sequences, gradient_energy, person_metrics, region_psnr,

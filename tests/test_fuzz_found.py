@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.io import load_motion
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"

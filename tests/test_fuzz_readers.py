@@ -27,9 +27,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.io import load_motion
-from motion2video.motion import FaceMotion, Motion
+from motion2video.core.motion import FaceMotion, Motion
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 MAX_CPU_S = 2.0
@@ -193,7 +193,7 @@ def _real_joints() -> np.ndarray:
 
 def _npz_seeds() -> dict[str, dict]:
     from motion2video.formats.face_csv import load_face_csv
-    from motion2video.skeletons import H36M_32_TO_17
+    from motion2video.core.skeletons import H36M_32_TO_17
 
     joints = _real_joints()
     face = load_face_csv(SHARED / "face" / "llv" / "dao.csv")

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion2video.io import load_motion, resample_motion
-from motion2video.render import render_motion
+from motion2video.formats.io import load_motion, resample_motion
+from motion2video.apps.render import render_motion
 
 REPO = Path(__file__).resolve().parents[1]
 SIZE = 96

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion2video.io import load_motion, resample_motion
-from motion2video.render import render_motion
-from motion2video.testing import panel_layout
-from motion2video.video import read_image, write_image
+from motion2video.formats.io import load_motion, resample_motion
+from motion2video.apps.render import render_motion
+from motion2video.testing.golden import panel_layout
+from motion2video.formats.video import read_image, write_image
 
 pytest_plugins = ["pytester"]
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from motion2video.batch import video_frame_count
+from motion2video.formats.video import video_frame_count
 
 REPO = Path(__file__).resolve().parents[1]
 DEMO = REPO / "demo_inputs"

@@ -8,7 +8,7 @@ import pytest
 import torch
 from torch.distributions import Normal, kl_divergence
 
-from motion2video.models import build_model
+from motion2video.models.base import build_model
 from motion2video.models.base import LatentPosterior
 from motion2video.models.behavior import dual_ascent
 from motion2video.models.blocks import (

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motion2video.errors import InputError
-from motion2video.motion import ARKIT_NAMES, FACE_DIM, FaceMotion, Motion
+from motion2video.core.errors import InputError
+from motion2video.core.motion import ARKIT_NAMES, FACE_DIM, FaceMotion, Motion
 from renderers.mesh import as_unit_colors, vertex_normals
 
 SIZE = 256
@@ -81,7 +81,7 @@ def _joint_coverage(joints: np.ndarray, masks: np.ndarray, camera, radius: int =
 @pytest.mark.slow
 def test_mesh_render_is_deterministic_and_matches_the_camera_projection(rest):
     from renderers import anny_model
-    from renderers.camera import fit_camera
+    from motion2video.core.camera import fit_camera
     from renderers.mesh import MeshRenderer
 
     renderer = MeshRenderer(SIZE, SIZE)
@@ -97,7 +97,7 @@ def test_mesh_render_is_deterministic_and_matches_the_camera_projection(rest):
     assert 0.03 < a.mask.mean() < 0.5
     np.testing.assert_array_equal(a.color[~a.mask], np.broadcast_to([10, 20, 30], a.color[~a.mask].shape))
     assert np.all(a.depth[a.mask] > 0) and np.all(a.depth[~a.mask] == 0)
-    # GL rasterisation and renderers.camera.project agree: the mesh's bounding box in the image.
+    # GL rasterisation and motion2video.core.camera.project agree: the mesh's bounding box in the image.
     uv = camera.project(rest.vertices)[:, :2]
     rows, cols = np.nonzero(a.mask)
     assert abs(cols.min() - uv[:, 0].min()) < 1.5 and abs(cols.max() + 1 - uv[:, 0].max()) < 1.5
@@ -107,7 +107,7 @@ def test_mesh_render_is_deterministic_and_matches_the_camera_projection(rest):
 @pytest.mark.slow
 def test_failed_renders_raise(rest):
     from renderers import anny_model
-    from renderers.camera import fit_camera
+    from motion2video.core.camera import fit_camera
     from renderers.mesh import MeshRenderer, RenderError
 
     renderer = MeshRenderer(SIZE, SIZE)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motion2video import metrics as M
+from motion2video.evaluation import metrics as M
 
 
 def _pred_gt():

@@ -28,7 +28,7 @@ import pytest
 
 from motion2video.formats.canonical import ANKLE_HEIGHT
 from motion2video.formats.manifest import read_manifest
-from motion2video.formats.mocap import default_trim
+from motion2video.formats.manifest import default_trim
 from motion2video.core.skeletons import H36M_17, proportion_ratios
 
 J = {name: i for i, name in enumerate(H36M_17.joints)}

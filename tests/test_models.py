@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from motion2video.models import MODEL_REGISTRY, build_model
+from motion2video.models.base import MODEL_REGISTRY, build_model
 from motion2video.models.flow import AffineCoupling, Flow, fit_flow
 
 FACE_CSV = Path(__file__).parents[2] / "shared" / "data" / "face" / "livelinkface" / "alex_rom_3.csv"
@@ -246,7 +246,7 @@ def test_behavior_issue13_options_velocities_z_at_every_step_and_root_weight() -
 def test_motion_stats_error_penalises_sluggish_motion_and_not_a_phase_shift() -> None:
     """The liveliness term is 0 for the true sequence and for a time-shifted copy of a periodic one (same
     speed, other phase), and positive for a slowed-down (half-amplitude) copy."""
-    from motion2video.models.behavior import motion_stats_error
+    from motion2video.models.blocks import motion_stats_error
 
     t = torch.arange(49, dtype=torch.float32)
     wave = torch.sin(2 * np.pi * t / 12)[None, :, None].repeat(2, 1, F)  # (2, 49, F), period 12 frames

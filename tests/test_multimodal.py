@@ -21,7 +21,7 @@ from motion2video.data.multimodal import (
     score_futures,
 )
 from motion2video.data.procedural import MODES
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 
 @pytest.fixture(scope="module")

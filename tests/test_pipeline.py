@@ -1,4 +1,4 @@
-"""The multimodal future-video pipeline (motion2video.pipeline): its pure geometry, the reference image and
+"""The multimodal future-video pipeline (motion2video.apps.synthesize): its pure geometry, the reference image and
 pose handling, the cached-reference generator path, and end to end on tiny checkpoints trained here
 (motion models through the `train` CLI on real clips, frame generators by the real training loop on the toy
 set) with the committed demo inputs and reference images."""
@@ -15,11 +15,16 @@ import numpy as np
 import pytest
 import torch
 
-from motion2video import pipeline as P
-from motion2video import reference as R
+from motion2video.apps.synthesize import (
+    SynthesisConfig, compose_chunk, compose_video, contact_sheet, contact_sheet_of, output_paths, render_mesh_frames,
+    synthesize,
+)
+from motion2video.stages.structure import face_camera_front, follow_on_ground, place_body, similarity_fit
+from motion2video.stages.frames import generate_frames
+from motion2video.stages import reference as R
 from motion2video.cli import main
-from motion2video.errors import InputError
-from motion2video.video import GREEN, RED, read_image, read_video
+from motion2video.core.errors import InputError
+from motion2video.formats.video import GREEN, RED, read_image, read_video
 
 REPO = Path(__file__).resolve().parents[1]
 DEMO = REPO / "demo_inputs"
@@ -103,26 +108,26 @@ def checkpoints(tmp_path_factory, mocap_dir) -> dict[str, Path]:
 # --- pure parts ---------------------------------------------------------------------------------------
 
 def test_output_names():
-    assert P.output_paths("out/x.mp4") == (Path("out/x.mp4"), Path("out/x-structure.mp4"), Path("out/x-sheet.png"))
+    assert output_paths("out/x.mp4") == (Path("out/x.mp4"), Path("out/x-structure.mp4"), Path("out/x-sheet.png"))
     assert R.reference_pose_path("a/ref.png") == Path("a/ref.pose.npz")
 
 
 def test_similarity_fit_recovers_scale_and_shift():
     rng = np.random.default_rng(0)
     src = rng.normal(size=(11, 2))
-    scale, shift = P.similarity_fit(src, src * 2.5 + [3.0, -4.0])
+    scale, shift = similarity_fit(src, src * 2.5 + [3.0, -4.0])
     assert scale == pytest.approx(2.5) and np.allclose(shift, [3.0, -4.0])
 
 
 def test_front_facing_and_following_the_pelvis():
     joints = np.load(DEMO / "walk_to_run.npz")["joints"][:40].astype(np.float64)  # walks towards -y
     turned = joints @ np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]).T  # now faces +x
-    front = P.face_camera_front(turned)
+    front = face_camera_front(turned)
     hips = front[0, 4] - front[0, 1]  # right hip -> left hip
     assert hips[0] > 0 and abs(hips[1]) < 1e-6  # the body's left is +x: it faces -y
     np.testing.assert_allclose(np.linalg.norm(front - front[:, :1], axis=-1),
                                np.linalg.norm(turned - turned[:, :1], axis=-1), atol=1e-9)  # rigid
-    followed = P.follow_on_ground(front)
+    followed = follow_on_ground(front)
     np.testing.assert_allclose(followed[:, 0, :2], np.repeat(front[:1, 0, :2], 40, axis=0), atol=1e-9)
     np.testing.assert_allclose(followed[..., 2], front[..., 2])  # heights kept
 
@@ -132,7 +137,7 @@ def test_body_placement_puts_the_reference_pose_on_the_reference_picture():
     reference pose file's joints (this fails if left/right, y-down or the scale were wrong)."""
     joints = np.load(DEMO / "walk_to_run.npz")["joints"].astype(np.float64)
     ref = R.load_reference_pose(DEMO / "reference_body_128.pose.npz")
-    placed = P.place_body(joints[:8], np.stack([joints[8:14], joints[8:14] + [0.0, 0.0, 0.2]]), size=128,
+    placed = place_body(joints[:8], np.stack([joints[8:14], joints[8:14] + [0.0, 0.0, 0.2]]), size=128,
                           reference_points=ref.points)
     err = np.linalg.norm(placed.observed[0] - ref.points, axis=-1)
     assert err.max() < 2.0, err  # pixels at 128 (only the perspective of the two cameras differs)
@@ -142,7 +147,7 @@ def test_body_placement_puts_the_reference_pose_on_the_reference_picture():
     lift = placed.futures[0, :, :, 1] - placed.futures[1, :, :, 1]
     assert lift.min() > 0
     # Without a reference pose the first frame is framed like a single-frame render: centred and inside.
-    alone = P.place_body(joints[:8], joints[None, 8:14], size=128)
+    alone = place_body(joints[:8], joints[None, 8:14], size=128)
     assert np.all((alone.reference > 0) & (alone.reference < 128))
     np.testing.assert_allclose(alone.observed[0].mean(0), alone.reference.mean(0), atol=1.5)
 
@@ -221,7 +226,7 @@ def test_cached_reference_generation_matches_the_model(channels_last):
         ref = rng.integers(0, 256, (32, 32, 3), dtype=np.uint8)
         ref_s = rng.random((33, 32, 32), dtype=np.float32)
         tgt = rng.random((5, 33, 32, 32), dtype=np.float32)
-        ours = P.generate_frames(net, ref, ref_s, tgt, batch_size=2, channels_last=channels_last)
+        ours = generate_frames(net, ref, ref_s, tgt, batch_size=2, channels_last=channels_last)
         theirs = generate(net, np.repeat(ref[None], 5, 0), np.repeat(ref_s[None], 5, 0), tgt, batch_size=3)
         assert ours.shape == (5, 32, 32, 3)
         assert np.abs(ours.astype(int) - theirs).max() <= 1
@@ -231,7 +236,7 @@ def test_cached_reference_generation_matches_the_model(channels_last):
 def test_contact_sheet_layout():
     obs = np.zeros((10, 32, 32, 3), np.uint8)
     fut = np.full((3, 20, 32, 32, 3), 128, np.uint8)
-    sheet = P.contact_sheet(obs, fut, header=((obs[0], "reference"),))
+    sheet = contact_sheet(obs, fut, header=((obs[0], "reference"),))
     assert sheet.shape == (4 * 32 + 3 * 2, 8 * 32 + 7 * 2, 3)
     assert np.abs(sheet[32 + 2 + 24, 1].astype(int) - RED).max() < 5  # the left border of a future cell
 
@@ -240,8 +245,8 @@ def test_contact_sheet_layout():
 
 def test_synthesize_body_end_to_end(checkpoints, mocap_dir, tmp_path):
     out = tmp_path / "body.mp4"
-    config = P.SynthesisConfig(samples=2, observed=6, horizon=5, seed=3)
-    result = P.synthesize(motion_model=checkpoints["body"], frame_model=checkpoints["frames_body"],
+    config = SynthesisConfig(samples=2, observed=6, horizon=5, seed=3)
+    result = synthesize(motion_model=checkpoints["body"], frame_model=checkpoints["frames_body"],
                           input_path=mocap_dir / "cmu" / "131_02.bvh", reference=DEMO / "reference_body_128.png",
                           output=out, config=config)
     assert set(result.timings) == {"load", "sampling", "structures", "generation", "compose", "encoding", "total"}
@@ -265,10 +270,10 @@ def test_synthesize_face_end_to_end_and_same_seed_same_frames(face_dir, tmp_path
     folder = tmp_path / "ckpt"
     folder.mkdir()
     motion, frames_model = train_face_motion_model(face_dir, folder), train_frame_model("face", folder)
-    config = P.SynthesisConfig(samples=3, observed=4, horizon=4, seed=5)
+    config = SynthesisConfig(samples=3, observed=4, horizon=4, seed=5)
     runs = []
     for name in ("a.mp4", "b.mp4"):
-        result = P.synthesize(motion_model=motion, frame_model=frames_model, input_path=face_dir / "llv" / "dao.csv",
+        result = synthesize(motion_model=motion, frame_model=frames_model, input_path=face_dir / "llv" / "dao.csv",
                               reference=DEMO / "reference_face.png", output=tmp_path / name, config=config)
         runs.append(read_video(result.video)[0])
     frames = runs[0]
@@ -285,10 +290,10 @@ def test_synthesize_face_end_to_end_and_same_seed_same_frames(face_dir, tmp_path
 
 @pytest.mark.slow
 def test_mesh_frames_of_the_same_futures(checkpoints, mocap_dir, tmp_path):
-    result = P.synthesize(motion_model=checkpoints["body"], frame_model=checkpoints["frames_body"],
+    result = synthesize(motion_model=checkpoints["body"], frame_model=checkpoints["frames_body"],
                           input_path=mocap_dir / "cmu" / "131_02.bvh", reference=DEMO / "reference_body_128.png",
-                          output=tmp_path / "b.mp4", config=P.SynthesisConfig(samples=2, observed=4, horizon=3))
-    mesh = P.render_mesh_frames(result.structures, size=64, fps=result.fps)
+                          output=tmp_path / "b.mp4", config=SynthesisConfig(samples=2, observed=4, horizon=3))
+    mesh = render_mesh_frames(result.structures, size=64, fps=result.fps)
     assert mesh.observed.shape == (4, 64, 64, 3) and mesh.futures.shape == (2, 3, 64, 64, 3)
     body = np.abs(mesh.observed.astype(int) - 255).sum(-1) > 30
     assert 0.02 < body.mean() < 0.5  # a body, not an empty or filled frame
@@ -346,10 +351,10 @@ def test_streamed_composition_equals_the_whole_video():
     rng = np.random.default_rng(1)
     obs = rng.integers(0, 255, (5, 24, 24, 3), dtype=np.uint8)
     fut = rng.integers(0, 255, (3, 7, 24, 24, 3), dtype=np.uint8)
-    whole = P.compose_video(obs, fut)
+    whole = compose_video(obs, fut)
     steps = np.concatenate([np.repeat(obs[:, None], 3, axis=1), fut.transpose(1, 0, 2, 3, 4)])  # (12, K, ...)
-    streamed = np.concatenate([P.compose_chunk(steps[s:s + 4], s, 5) for s in range(0, 12, 4)])
+    streamed = np.concatenate([compose_chunk(steps[s:s + 4], s, 5) for s in range(0, 12, 4)])
     np.testing.assert_array_equal(streamed, whole)
     header = ((obs[0], "reference"),)
-    np.testing.assert_array_equal(P.contact_sheet_of(lambda t: obs[t], lambda k, t: fut[k, t], 5, 7, 3, header=header),
-                                  P.contact_sheet(obs, fut, header=header))
+    np.testing.assert_array_equal(contact_sheet_of(lambda t: obs[t], lambda k, t: fut[k, t], 5, 7, 3, header=header),
+                                  contact_sheet(obs, fut, header=header))

@@ -8,33 +8,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion2video.data.face_dynamics import (
-    FACE_MODES,
-    FaceModeSpec,
-    axis_angle_to_matrix,
-    generate_face,
-    head_euler_to_axis_angle,
-    head_euler_to_matrix,
-    head_pose_track,
-    matrix_to_axis_angle,
+from motion2video.data.face_dynamics import FACE_MODES, FaceModeSpec, generate_face, head_pose_track
+from motion2video.core.rotations import (
+    axis_angle_to_matrix, head_euler_to_axis_angle, head_euler_to_matrix, matrix_to_axis_angle,
 )
 from motion2video.data.procedural import (
-    MODES,
-    TURN_RATE,
-    BodyParams,
-    ModeSpec,
-    euler_to_matrix,
-    forward_kinematics,
-    generate,
-    heading_of,
-    leg_ik,
-    mirror_euler,
-    rest_offsets,
+    MODES, TURN_RATE, BodyParams, ModeSpec, forward_kinematics, generate, leg_ik, mirror_euler, rest_offsets,
 )
-from motion2video.errors import InputError
+from motion2video.core.rotations import euler_to_matrix, heading_of
+from motion2video.core.errors import InputError
 from motion2video.formats.npz import load_face_npz, load_motion_npz
-from motion2video.motion import ARKIT_NAMES, FaceMotion, Motion
-from motion2video.skeletons import H36M_17
+from motion2video.core.motion import ARKIT_NAMES, FaceMotion, Motion
+from motion2video.core.skeletons import H36M_17
 
 REPO = Path(__file__).resolve().parents[1]
 R_HIP, R_ANKLE, L_HIP, L_ANKLE, THORAX, NOSE, HEAD = 1, 3, 4, 6, 8, 9, 10

@@ -118,3 +118,103 @@ def test_feet_above_bends_the_knees_of_a_sinking_body_and_keeps_its_bones(clip):
     np.testing.assert_array_equal(fixed[0, 0], sunk[0, 0])  # the pelvis stays where it was put
     drop = (stand[0, 0, 2] - stand[0, R_ANKLE, 2]) - (fixed[0, 0, 2] - fixed[0, R_ANKLE, 2])
     assert drop == pytest.approx(0.25, abs=0.03)
+
+
+# --- root-relative signatures (issue 24): hand-made bodies whose answer is known ---------------------------
+
+
+def standing(frames: int) -> np.ndarray:
+    """(T, 17, 3) a still, upright H36M-17 body facing -y: pelvis 0.9 m up, ankles 0.1 m, thorax 1.4 m, the
+    wrists hanging 0.5 m below the thorax."""
+    pose = np.array([
+        [0.0, 0.0, 0.9],  # pelvis
+        [-0.1, 0.0, 0.9], [-0.1, 0.0, 0.5], [-0.1, 0.0, 0.1],  # right hip, knee, ankle
+        [0.1, 0.0, 0.9], [0.1, 0.0, 0.5], [0.1, 0.0, 0.1],  # left hip, knee, ankle
+        [0.0, 0.0, 1.15], [0.0, 0.0, 1.4], [0.0, 0.0, 1.52], [0.0, 0.0, 1.65],  # spine, thorax, neck, head
+        [0.15, 0.0, 1.4], [0.2, 0.0, 1.15], [0.2, 0.0, 0.9],  # left shoulder, elbow, wrist
+        [-0.15, 0.0, 1.4], [-0.2, 0.0, 1.15], [-0.2, 0.0, 0.9],  # right shoulder, elbow, wrist
+    ])
+    return np.repeat(pose[None], frames, axis=0)
+
+
+def crouch(depth: float, frames: int = 9) -> np.ndarray:
+    """The standing body lowering everything above the knees by up to ``depth`` metres (mid-sequence), feet
+    on the ground: pelvis above the ankles changes by ``depth``."""
+    j = standing(frames)
+    drop = depth * np.sin(np.linspace(0.0, np.pi, frames))  # 0 -> depth -> 0
+    upper = [0, 1, 4, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]
+    j[:, upper, 2] -= drop[:, None]
+    return j
+
+
+def test_leg_extension_of_a_crouch_is_its_depth_and_the_ratio_follows():
+    assert S.leg_extension(standing(5)) == 0.0
+    assert S.leg_extension(crouch(0.3)) == pytest.approx(0.3)
+    assert S.leg_extension(crouch(0.15)) / S.leg_extension(crouch(0.3)) == pytest.approx(0.5)
+
+
+def test_a_stiff_body_lifted_along_the_root_path_keeps_the_pelvis_excursion_not_the_legs():
+    """The failure issue 24 describes: following the source's root path carries the pelvis's range exactly
+    while the legs do nothing; only the root-relative signature tells."""
+    source = crouch(0.3)
+    stiff = standing(9)
+    stiff[..., 2] -= 0.3 * np.sin(np.linspace(0.0, np.pi, 9))[:, None]  # the whole body sinks and rises
+    assert S.pelvis_excursion(stiff) / S.pelvis_excursion(source) == pytest.approx(1.0)
+    assert S.leg_extension(stiff) == pytest.approx(0.0, abs=1e-12)
+    assert S.knee_bend(stiff) == pytest.approx(0.0, abs=1e-12) and S.arm_swing(stiff) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_arm_swing_is_the_wrist_range_relative_to_the_thorax():
+    j = standing(11)
+    j[:, S.R_WRIST, 2] = 1.4 + np.linspace(-0.5, 0.5, 11)  # right wrist from 0.5 below to 0.5 above the thorax
+    j[:, S.L_WRIST, 2] = 1.4 + np.linspace(-0.5, -0.23, 11)  # the left one rises 0.27 m
+    assert S.arm_swing(j) == pytest.approx(1.0)  # the larger of the two wrists
+    lifted = j.copy()
+    lifted[..., 2] += np.linspace(0.0, 0.7, 11)[:, None]  # rising with the whole body changes nothing
+    assert S.arm_swing(lifted) == pytest.approx(1.0)
+    half = standing(11)
+    half[:, S.L_WRIST, 2] = 1.4 + np.linspace(-0.5, -0.23, 11)
+    assert S.arm_swing(half) / S.arm_swing(j) == pytest.approx(0.27)
+
+
+def test_knee_bend_is_the_range_of_the_hip_to_ankle_distance():
+    j = standing(3)
+    j[1, S.L_ANKLE] = [0.1, 0.3, 0.5]  # shin swung back: hip-ankle distance sqrt(0.3^2 + 0.4^2) = 0.5 (from 0.8)
+    assert S.knee_bend(j) == pytest.approx(0.3)
+    j[2, S.R_ANKLE] = [-0.1, 0.4, 0.6]  # the right leg bends further: distance sqrt(0.4^2 + 0.3^2) = 0.5 -> 0.3 too
+    assert S.knee_bend(j) == pytest.approx(0.3)
+
+
+def test_ankle_lift_of_a_kick_to_hip_height():
+    j = standing(5)
+    j[:, S.R_ANKLE, 2] = [0.1, 0.4, 0.9, 0.4, 0.1]  # up to the pelvis's height: 0.8 m relative to it
+    j[:, S.R_ANKLE, 1] = [0.0, -0.4, -0.8, -0.4, 0.0]
+    assert S.ankle_lift(j) == pytest.approx(0.8)
+    low = standing(5)
+    low[:, S.L_ANKLE, 2] = [0.1, 0.2, 0.3, 0.2, 0.1]
+    assert S.ankle_lift(low) / S.ankle_lift(j) == pytest.approx(0.25)
+
+
+def test_benchmark_scores_root_relative_ratios_beside_the_root_path_one(clip):
+    """On a real held-out jump: the copy baseline carries every root-relative signature exactly (ratio 1), a
+    stiff copy of the start posture carried along the root path keeps the pelvis excursion and none of them."""
+    case = next(c for c in B.CASES if c.clip == "cmu/02_04.bvh")
+    source = clip(case.clip)[case.start:case.start + 1 + case.horizon]
+    posture = clip("cmu/07_03.bvh")[30]
+    copy = B.score("copy", case, ("cmu/07_03.bvh", 30), source, posture, B.copy_reenactment(source, posture))
+    assert copy.ratio == pytest.approx(1.0)
+    assert set(copy.relative) == set(S.ROOT_RELATIVE_SIGNATURES)
+    for name in S.ROOT_RELATIVE_SIGNATURES:
+        src, _ = copy.relative[name]
+        if src >= B.MIN_RELATIVE_AMPLITUDE:
+            assert copy.relative_ratio(name) == pytest.approx(1.0)
+        else:
+            assert np.isnan(copy.relative_ratio(name))
+    assert copy.relative["leg_extension"][0] > 0.2  # the jump's legs extend and crouch
+    stiff = source[:1] + (source[:, :1] - source[:1, :1])  # the first posture, carried along the pelvis path
+    rigid = B.score("stiff", case, ("cmu/07_03.bvh", 30), source, source[0], stiff)
+    assert rigid.ratio == pytest.approx(1.0)
+    assert rigid.relative_ratio("leg_extension") == pytest.approx(0.0, abs=1e-9)
+    rows = B.summarise([copy, rigid])
+    assert {r["method"] for r in rows} == {"copy", "stiff"}
+    assert next(r for r in rows if r["method"] == "stiff")["relative"]["knee_bend"] == pytest.approx(0.0, abs=1e-9)

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motion2video.errors import InputError
-from motion2video.motion import Motion
-from motion2video.skeletons import COCO_17, H36M_17, H36M_32, OPENPOSE_18
-from motion2video.testing import synthetic_walk
-from renderers.camera import ImageFraming, fit_camera
+from motion2video.core.errors import InputError
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import COCO_17, H36M_17, H36M_32, OPENPOSE_18
+from motion2video.testing.golden import synthetic_walk
+from motion2video.core.camera import ImageFraming, fit_camera
 from renderers.skeleton import (
     CENTRE_COLOUR,
     LEFT_COLOUR,

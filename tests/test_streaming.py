@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motion2video.io import load_motion, save_motion
-from motion2video.render import CHUNK, iter_frames, render_motion
-from motion2video.testing import command_peak_rss_mb, tiled_motion
-from motion2video.video import (VideoWriter, grid, iter_grid, iter_observed_future, observed_future_video,
+from motion2video.formats.io import load_motion, save_motion
+from motion2video.apps.render import CHUNK, iter_frames, render_motion
+from motion2video.testing.golden import command_peak_rss_mb, tiled_motion
+from motion2video.formats.video import (VideoWriter, grid, iter_grid, iter_observed_future, observed_future_video,
                                 read_video, write_video)
 
 

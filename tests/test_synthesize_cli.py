@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from motion2video.cli import main
-from motion2video.pipeline import output_paths
-from motion2video.video import read_image, read_video
+from motion2video.apps.synthesize import output_paths
+from motion2video.formats.video import read_image, read_video
 from tests.test_pipeline import (DEMO, FRAME_SIZE, assert_framed, train_body_motion_model, train_face_motion_model,
                                  train_frame_model)
 
@@ -171,7 +171,7 @@ def test_warp_model_keeps_a_full_resolution_background(ckpt, mocap_dir, tmp_path
     (lambda p: np.full_like(p, 30.0), "no visible person"),
 ])
 def test_bad_reference_poses_are_refused(body_args, tmp_path, capsys, points, message):
-    from motion2video.reference import ReferencePose, load_reference_pose, save_reference_pose
+    from motion2video.stages.reference import ReferencePose, load_reference_pose, save_reference_pose
 
     good = load_reference_pose(DEMO / "reference_body_128.pose.npz")
     bad = tmp_path / "bad.pose.npz"
@@ -186,7 +186,7 @@ def test_a_reference_image_without_a_person_is_refused(body_args, tmp_path, caps
     """A uniform image with a valid pose file beside it: one line naming the image, exit 2, nothing written."""
     import shutil
 
-    from motion2video.video import read_image, write_image
+    from motion2video.formats.video import read_image, write_image
 
     image = read_image(DEMO / "reference_body_128.png")
     blank = tmp_path / "blank.png"

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from motion2video.testing import (MANIFEST, assert_frames_match, diff_image, frame_error, golden_clip, panel_layout,
+from motion2video.testing.golden import (MANIFEST, assert_frames_match, diff_image, frame_error, golden_clip, panel_layout,
                                   select_indices, ssim, synthetic_walk)
-from motion2video.video import read_image, write_image, write_video
+from motion2video.formats.video import read_image, write_image, write_video
 
 
 @pytest.fixture(autouse=True)
@@ -180,8 +180,8 @@ def test_update_keeps_unchanged_pngs_byte_identical(tmp_path, monkeypatch):
 
 
 def test_golden_clip_sources(tmp_path, mocap_dir):
-    from motion2video.io import load_motion, resample_motion
-    from motion2video.render import render_motion
+    from motion2video.formats.io import load_motion, resample_motion
+    from motion2video.apps.render import render_motion
 
     motion = resample_motion(load_motion(mocap_dir / "cmu" / "08_01.bvh"), 25.0).slice(0, 10)
     clip = golden_clip(motion, style="skeleton", size=64)
@@ -245,8 +245,8 @@ def test_goldens_without_manifest_still_compare(tmp_path, monkeypatch):
 def test_h264_noise_within_the_documented_tolerance(tmp_path, mocap_dir):
     """The README's numbers: a real render against its mp4 stays within SSIM 0.05 but not within 1 grey level;
     an mp4 against its own golden (same encoder) matches exactly."""
-    from motion2video.io import load_motion, resample_motion
-    from motion2video.render import render_motion
+    from motion2video.formats.io import load_motion, resample_motion
+    from motion2video.apps.render import render_motion
 
     motion = resample_motion(load_motion(mocap_dir / "mass" / "mass_run.bvh"), 25.0).slice(0, 25)
     raw = render_motion(motion, style="heatmap", size=96)

@@ -10,10 +10,11 @@ import pytest
 import torch
 from safetensors.torch import save_file
 
-from motion2video import checkpoint as C
+from motion2video.models import checkpoint as C
 from motion2video.data.dataset import DatasetConfig, build_dataset
-from motion2video.errors import InputError
-from motion2video.training import TrainConfig, last_paths, learning_rate, train_model, validation_loss
+from motion2video.core.errors import InputError
+from motion2video.models.training import TrainConfig, last_paths, train_model, validation_loss
+from motion2video.core.schedule import learning_rate
 from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_02.bvh", "cmu/01_01.bvh", "mass/mass_pirouette.bvh",

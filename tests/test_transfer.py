@@ -10,24 +10,18 @@ import numpy as np
 import pytest
 import torch
 
-from motion2video.checkpoint import load_model, save_checkpoint
+from motion2video.models.checkpoint import load_model, save_checkpoint
 from motion2video.cli import main
 from motion2video.data.dataset import DatasetConfig, build_dataset
 from motion2video.data.windows import resample, rotate_about_z
-from motion2video.io import load_motion, save_motion
-from motion2video.metrics import MeanStd
-from motion2video.motion import Motion
-from motion2video.training import TrainConfig, train_model
-from motion2video.transfer import (
-    TABLE1_TIMESTEPS,
-    LoadedClip,
-    evaluate_transfer,
-    load_clip,
-    regression_error,
-    transfer_behavior,
-    transfer_pairs,
-)
-from motion2video.video import read_video, write_image
+from motion2video.formats.io import load_motion, save_motion
+from motion2video.evaluation.metrics import MeanStd
+from motion2video.core.motion import Motion
+from motion2video.models.training import TrainConfig, train_model
+from motion2video.evaluation.transfer import TABLE1_TIMESTEPS, evaluate_transfer, regression_error, transfer_pairs
+from motion2video.stages.clips import LoadedClip, load_clip
+from motion2video.apps.transfer import transfer_behavior
+from motion2video.formats.video import read_video, write_image
 from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh", "mass/mass_walk.bvh")
@@ -333,7 +327,7 @@ def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys)
     image, exit 2, no video and no npz."""
     import shutil
 
-    from motion2video.video import read_image
+    from motion2video.formats.video import read_image
 
     demo = Path(__file__).resolve().parents[1] / "demo_inputs"
     image = read_image(demo / "reference_body_128.png")

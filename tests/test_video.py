@@ -8,8 +8,8 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from motion2video.errors import InputError
-from motion2video.video import (
+from motion2video.core.errors import InputError
+from motion2video.formats.video import (
     ENCODER_ENV,
     ENCODERS,
     GREEN,

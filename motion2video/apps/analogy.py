@@ -22,7 +22,7 @@ from typing import Iterator
 
 import numpy as np
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.stages.clips import LoadedClip, model_frame
 from motion2video.stages.latents import analogy_model, analogy_windows, stitch_after, window_config
@@ -34,7 +34,7 @@ from motion2video.stages.structure import (
     iter_sequence,
 )
 from motion2video.stages.video import iter_mark_segments
-from motion2video.video import GREEN, RED, iter_grid
+from motion2video.formats.video import GREEN, RED, iter_grid
 
 STYLES = ("skeleton", "mesh")
 
@@ -79,7 +79,7 @@ def analogy(bundle: ModelBundle, a: LoadedClip, b: LoadedClip, c: LoadedClip, *,
     """D = decode(C, E(A, B)) for user clips (frame starts in each file's own numbering).
 
     Args:
-        a, b, c: clips loaded for the model (:func:`motion2video.transfer.load_clip`).
+        a, b, c: clips loaded for the model (:func:`motion2video.stages.clips.load_clip`).
         a_start, c_start: first frame of A's and C's windows.
         b_start: first frame of B's window; None: right after A's window when B is A's file, else 0.
         observed: frames of A and C (default: the model's).

@@ -14,21 +14,22 @@ from typing import Iterator
 
 import numpy as np
 
-from motion2video.atomic import save_npz
-from motion2video.checkpoint import ModelBundle
-from motion2video.errors import InputError
-from motion2video.motion import FaceMotion
+from motion2video.core.atomic import save_npz
+from motion2video.models.checkpoint import ModelBundle
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion
 from motion2video.stages.clips import load_clip
-from motion2video.stages.sampling import Forecast, forecast  # noqa: F401 (public names of this module)
-from motion2video.stages.structure import check_style, renderer_for
+from motion2video.stages.sampling import Forecast
+from renderers.registry import check_style, renderer_for
 
 STYLES = ("skeleton", "mesh")
 
 
-def load_clip_for(bundle: ModelBundle, path: str | Path) -> np.ndarray:
+def load_clip_for(bundle: ModelBundle, path: str | Path, *, character: str | Path | None = None,
+                  fps: float | None = None) -> np.ndarray:
     """The clip at ``path`` as the model's data at its frame rate (:func:`motion2video.stages.clips.load_clip`):
-    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models."""
-    return load_clip(bundle, path).data
+    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models. ``character`` and ``fps`` as in ``load_clip``."""
+    return load_clip(bundle, path, character=character, fps=fps).data
 
 
 def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> np.ndarray:
@@ -48,7 +49,7 @@ def iter_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> 
     """:func:`render_forecast` as a stream of (t, H, W, 3) uint8 chunks.
 
     The style is checked at once (InputError); the observed frames are drawn once, each future is drawn
-    lazily chunk by chunk as the grid (:func:`motion2video.video.iter_observed_future`) consumes it.
+    lazily chunk by chunk as the grid (:func:`motion2video.formats.video.iter_observed_future`) consumes it.
     """
     if style not in STYLES:
         raise InputError(f"unknown style {style!r}; choose one of {', '.join(STYLES)}")
@@ -57,7 +58,7 @@ def iter_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> 
 
 
 def _iter_forecast(fc: Forecast, style: str, size: int) -> Iterator[np.ndarray]:
-    from motion2video.video import iter_observed_future
+    from motion2video.formats.video import iter_observed_future
 
     labels = [f"sample {k + 1}" for k in range(len(fc.futures))]
     with renderer_for(fc.layout, style, size=size) as r:

@@ -2,8 +2,8 @@
 
 The stages are plain functions with typed results, so each can be called (and timed) alone:
 
-1. :func:`motion2video.reference.load_reference`: the reference appearance image at the frame generator's size, and its pose.
-2. :func:`sample_futures`: K futures of the observed clip from a motion model (:mod:`motion2video.forecast`).
+1. :func:`motion2video.stages.reference.load_reference`: the reference appearance image at the frame generator's size, and its pose.
+2. :func:`~motion2video.stages.sampling.sample_forecast`: K futures of the observed clip from a motion model.
 3. :func:`render_structures`: where the person is in every frame, in the generator's structure conventions
    (the same functions that made its training pairs, :mod:`motion2video.frames.data`):
 
@@ -21,7 +21,7 @@ The stages are plain functions with typed results, so each can be called (and ti
 :func:`synthesize` runs them all and writes ``OUT.mp4``, ``OUT-structure.mp4`` and ``OUT-sheet.png``, all
 three or none.
 
-The reference image and its pose (the reference structure) are loaded by :mod:`motion2video.reference`.
+The reference image and its pose (the reference structure) are loaded by :mod:`motion2video.stages.reference`.
 
 Placement
 ---------
@@ -47,38 +47,13 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.atomic import check_output_path
-from motion2video.errors import InputError
-from motion2video.reference import load_reference
-from motion2video.stages.frames import (  # noqa: F401 (the generation stage; old import paths)
-    GENERATE_CHUNK,
-    GeneratedFrames,
-    default_generator_threads,
-    generate_frames,
-    generate_video_frames,
-    iter_generated,
-)
-from motion2video.stages.sampling import MAX_SAMPLES, torch_threads  # noqa: F401 (old import path)
-from motion2video.stages.sampling import sample_forecast as sample_futures  # old name
-from motion2video.stages.structure import (  # noqa: F401 (the structure stage; old import paths)
-    ALIGN_JOINTS,
-    BODY_ELEVATION_DEG,
-    BODY_MARGIN,
-    BODY_YFOV_DEG,
-    DOMAIN_OF_LAYOUT,
-    BodyPlacement,
-    Structures,
-    face_camera_front,
-    follow_on_ground,
-    place_body,
-    render_structures,
-    renderer_for,
-    similarity_fit,
-    split_rows,
-    structure_maps,
-    structure_previews,
-    timeline_rows,
-)
+from motion2video.core.atomic import check_output_path
+from motion2video.core.errors import InputError
+from motion2video.stages.reference import load_reference
+from motion2video.stages.frames import GeneratedFrames, default_generator_threads, iter_generated
+from motion2video.stages.sampling import sample_forecast
+from motion2video.stages.structure import DOMAIN_OF_LAYOUT, Structures, render_structures, structure_previews
+from renderers.registry import renderer_for
 
 STRUCTURE_SUFFIX = "-structure"
 SHEET_SUFFIX = "-sheet"
@@ -108,7 +83,7 @@ def compose_video(observed: np.ndarray, futures: np.ndarray, *, border: int = BO
     Returns:
         (To + Tf, H', W', 3) uint8.
     """
-    from motion2video.video import label, observed_future_video
+    from motion2video.formats.video import label, observed_future_video
 
     obs = label(observed, "observed", inset=border)
     futs = [label(f, f"sample {k + 1}", inset=border) for k, f in enumerate(futures)]
@@ -142,7 +117,7 @@ def contact_sheet_of(observed_frame, future_frame, to: int, tf: int, k: int, *, 
                      columns: int = SHEET_COLUMNS, border: int = BORDER) -> np.ndarray:
     """:func:`contact_sheet` from frame getters: ``observed_frame(t)`` and ``future_frame(k, t)`` return
     (H, W, 3) uint8 and are only asked for the indices of :func:`sheet_steps`."""
-    from motion2video.video import GREEN, RED, add_border, grid
+    from motion2video.formats.video import GREEN, RED, add_border, grid
 
     cells = [image for image, _ in header]
     labels = [text for _, text in header]
@@ -172,7 +147,7 @@ def compose_chunk(frames: np.ndarray, start: int, observed: int, *, border: int 
     Returns:
         (t, H', W', 3) uint8, equal to the same rows of :func:`compose_video`.
     """
-    from motion2video.video import GREEN, RED, add_border, grid, label
+    from motion2video.formats.video import GREEN, RED, add_border, grid, label
 
     t, k = frames.shape[:2]
     cells = []
@@ -213,6 +188,10 @@ class SynthesisConfig:
             keeps the reference's background at this size and generates the person at its own size.
         rigid_bones: give the futures the observed bone lengths (3D body models;
             :func:`motion2video.stages.sampling.forecast`).
+        character: the character file of a DeepMimic input (None: found beside it, else the standard one).
+        input_fps: the input's true frame rate when the file states none (joint arrays) or a wrong one.
+        crop_person: cut the reference photo to a square around its person first
+            (:func:`motion2video.stages.reference.crop_to_person`).
     """
 
     samples: int = 5
@@ -227,6 +206,9 @@ class SynthesisConfig:
     preset: str = "medium"
     size: int | None = None
     rigid_bones: bool = False
+    character: str | None = None
+    input_fps: float | None = None
+    crop_person: bool = False
 
 
 @dataclass
@@ -241,7 +223,7 @@ class SynthesisResult:
         domain: ``"body"`` or ``"face"``.
         notes: conversions and assumptions (one line each).
         timings: seconds per stage: load, sampling, structures, generation, compose, encoding, total.
-        forecast: the sampled motion (:class:`motion2video.forecast.Forecast`).
+        forecast: the sampled motion (:class:`motion2video.stages.sampling.Forecast`).
         structures: the :class:`Structures` used.
     """
 
@@ -277,7 +259,7 @@ def write_outputs(paths: tuple[Path, Path, Path], video: np.ndarray, structure_v
                   sheet: np.ndarray, *, fps: float, crf: int = 18, preset: str = "medium") -> None:
     """Write the video, the structure video and the sheet, all three or none: each is written to a
     temporary name beside its destination and the three are renamed only when all succeeded."""
-    from motion2video.video import write_image, write_video
+    from motion2video.formats.video import write_image, write_video
 
     temps = [p.with_name(f".{p.stem}.{os.getpid()}.partial{p.suffix}") for p in paths]
     try:
@@ -300,7 +282,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     Args:
         motion_model: a checkpoint path / shipped name, or a loaded ModelBundle.
         frame_model: a checkpoint path / shipped name, or a loaded frame model (LoadedFrameModel).
-        input_path: the observed clip (.bvh / body .npz for body models; FaceMotion .npz / .csv for face).
+        input_path: the observed clip (.bvh / body .npz / a video of a person for body models; FaceMotion
+            .npz / .csv for face).
         reference: the reference appearance image.
         output: ``OUT.mp4``.
         config: the options.
@@ -310,10 +293,10 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     Raises:
         InputError: any user-fixable problem, before anything is written.
     """
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.stages.clips import load_clip
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.video import VideoWriter, write_image
+    from motion2video.formats.video import VideoWriter, write_image
 
     timings: dict[str, float] = {}
     t_all = t0 = time.perf_counter()
@@ -324,18 +307,19 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     domain = gen_config.domain
     layout_domain = DOMAIN_OF_LAYOUT[bundle.data_config.layout]
     if layout_domain != domain:
-        raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.name} predicts "
+        raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.label} predicts "
                          f"{layout_domain} motion: give a {layout_domain} frame model (frames-{layout_domain}-128)")
     size = gen_config.image_size if config.size is None else int(config.size)
     if size != gen_config.image_size and getattr(frames_model, "kind", "analogy") != "warp":
         raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
                          f"{gen_config.image_size} px frames only)")
-    clip = load_clip(bundle, input_path).data
-    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose)
+    clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps).data
+    ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose,
+                         crop_person=config.crop_person)
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    fc = sample_futures(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
+    fc = sample_forecast(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
                         start=config.start, seed=config.seed, threads=config.motion_threads, source=str(input_path),
                         rigid_bones=config.rigid_bones)
     timings["sampling"] = time.perf_counter() - t0

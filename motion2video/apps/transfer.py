@@ -38,7 +38,7 @@ from typing import Iterator
 import numpy as np
 import torch
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.stages.clips import LoadedClip, model_frame
@@ -60,7 +60,7 @@ from motion2video.stages.structure import (
     iter_sequence,
 )
 from motion2video.stages.video import iter_mark_segments
-from motion2video.video import GREEN, RED, iter_chunks, iter_grid
+from motion2video.formats.video import GREEN, RED, iter_chunks, iter_grid
 
 STYLES = ("mesh", "frames", "skeleton")
 
@@ -197,18 +197,18 @@ def style_for(layout: str, style: str | None) -> str:
 
 
 def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, reference: str | Path | None = None,
-                       reference_pose: str | Path | None = None):
+                       reference_pose: str | Path | None = None, crop_person: bool = False):
     """The frame generator (default ``frames-<domain>-128`` for the model's domain) and the reference for
     ``style="frames"``.
 
     Returns:
-        (loaded frame model, :class:`~motion2video.reference.Reference` or None: the start posture rendered
+        (loaded frame model, :class:`~motion2video.stages.reference.Reference` or None: the start posture rendered
         as an Anny body becomes the reference of a 3D body model).
     Raises:
         InputError: a frame generator of the other domain, or no reference for a model that cannot render one.
     """
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.reference import load_reference
+    from motion2video.stages.reference import load_reference
     from motion2video.stages.structure import DOMAIN_OF_LAYOUT
 
     layout = bundle.data_config.layout
@@ -216,11 +216,11 @@ def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, r
     loaded = load_frame_model(frame_name)
     domain = loaded.config.domain
     if domain != DOMAIN_OF_LAYOUT[layout]:
-        raise InputError(f"this frame generator makes {domain} frames, but {bundle.name} moves a "
+        raise InputError(f"this frame generator makes {domain} frames, but {bundle.label} moves a "
                          f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
     if reference:
         return loaded, load_reference(reference, size=loaded.config.image_size, domain=domain,
-                                      pose_path=reference_pose)
+                                      pose_path=reference_pose, crop_person=crop_person)
     if layout != "body3d":
         raise InputError("--style frames needs --reference for this model (only 3D body models can render "
                          "their own reference)")
@@ -287,7 +287,7 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
 
     Args:
         frame_model: a loaded frame generator (:func:`motion2video.frames.checkpoint.load_frame_model`).
-        reference: a :class:`motion2video.reference.Reference` (:func:`motion2video.reference.load_reference`),
+        reference: a :class:`motion2video.stages.reference.Reference` (:func:`motion2video.stages.reference.load_reference`),
             or None for 3D body models: the start posture rendered with the target's Anny look (and its
             exact pose) becomes the reference.
     Returns:
@@ -329,8 +329,8 @@ def rendered_reference(fc, size: int):
     look rendered through the camera a single-frame placement uses, with that exact 2D pose."""
     from motion2video.stages.structure import BODY_ELEVATION_DEG, BODY_MARGIN, BODY_YFOV_DEG, place_body
     from motion2video.core.camera import fit_camera
-    from motion2video.reference import Reference, ReferencePose
-    from motion2video.stages.structure import renderer_for
+    from motion2video.stages.reference import Reference, ReferencePose
+    from renderers.registry import renderer_for
 
     placement = place_body(fc.observed, fc.futures, size=size)
     start = placement.world_observed[0]  # (17, 3) front-facing start posture

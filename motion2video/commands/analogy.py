@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
+                                          add_video_output_arguments, check_bvh_output, check_video_and_npz,
+                                          set_threads)
+from motion2video.core.errors import InputError
 
 HELP = "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D"
 
@@ -48,19 +50,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
                    help="skeleton maps or Anny bodies (body models; face models draw the Anny face)")
     add_video_output_arguments(p, npz_help="also write A->B, C->D and z to this .npz")
+    add_motion_input_arguments(p)
+    add_bvh_argument(p, "re-enactment (C then the generated D: DIR/analogy_1.bvh)")
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
     from motion2video.apps.analogy import analogy, iter_analogy
     from motion2video.stages.latents import analogy_model
-    from motion2video.stages.structure import check_style
-    from motion2video.checkpoint import load_model
-    from motion2video.atomic import save_npz
+    from renderers.registry import check_style
+    from motion2video.models.checkpoint import load_model
+    from motion2video.core.atomic import save_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.stages.clips import load_clip
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_cell_size(args.size)
@@ -69,18 +73,20 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"analogy needs a latent-variable model (mtvae-add, ...); {args.model!r} is a baseline "
                          "without a latent space")
     bundle = load_model(args.model)
+    check_bvh_output(args.bvh, bundle.data_config.layout)
     analogy_model(bundle)  # the wrong kind of model fails before any clip is read
     check_style(bundle.data_config.layout, args.style)  # mesh needs a 3D body model
-    a = load_clip(bundle, args.a)
-    b = a if args.b == args.a else load_clip(bundle, args.b)
-    c = load_clip(bundle, args.c)
+    options = {"character": args.character, "fps": args.input_fps}
+    a = load_clip(bundle, args.a, **options)
+    b = a if args.b == args.a else load_clip(bundle, args.b, **options)
+    c = load_clip(bundle, args.c, **options)
     result = analogy(bundle, a, b, c, a_start=args.a_start, b_start=args.b_start, c_start=args.c_start,
                      observed=args.observed, horizon=args.horizon)
     chunks = iter_analogy(result, style=args.style, size=args.size)
     with VideoWriter(out, result.fps) as writer:
         for chunk in chunks:
             writer.write(chunk)
-    print(f"wrote {out} (A:B::C:D with {bundle.name}; {result.observed} observed + "
+    print(f"wrote {out} (A:B::C:D with {bundle.label}; {result.observed} observed + "
           f"{result.cd.shape[0] - result.observed} generated frames, {writer.width}x{writer.height}, "
           f"{result.fps:g} fps{'' if result.consecutive else '; B placed after A'})")
     if args.npz:
@@ -88,4 +94,9 @@ def run(args: argparse.Namespace) -> int:
                             "fps": np.float64(result.fps), "layout": np.str_(result.layout),
                             "model": np.str_(bundle.name)})
         print(f"wrote {args.npz}")
+    if args.bvh:
+        from motion2video.formats.bvh_write import write_bvh_files
+
+        paths = write_bvh_files(args.bvh, "analogy", result.cd[None], result.fps)
+        print(f"wrote {paths[0]}")
     return 0

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from motion2video.commands.common import add_command
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = ("run many render/sample/synthesize jobs (JSONL job file, or a folder/glob and a template) on a process "
         "pool or Ray, resumable, with results.jsonl and an HTML gallery")
@@ -35,7 +35,7 @@ Exit status: 0 when no job failed, 1 when some failed, 2 for a bad batch (no job
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from motion2video.batch import ENGINES
+    from motion2video.apps.batch import ENGINES
 
     p = add_command(sub, "batch", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("jobs", help="a .jsonl job file, or a folder of motion files / a glob pattern (with --template)")
@@ -55,7 +55,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.batch import BatchConfig, describe, jobs_from_jsonl, jobs_from_template, run_batch
+    from motion2video.apps.batch import BatchConfig, describe, jobs_from_jsonl, jobs_from_template, run_batch
 
     out_dir = Path(args.out)
     if out_dir.exists() and not out_dir.is_dir():

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Callable
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 RIGID_BONES_HELP = ("keep the observed bone lengths in every future frame (3D body models: the models' own futures "
                     "stretch and shrink limbs by several per cent; rigid ones are about 3%% further from the truth)")
@@ -30,6 +30,42 @@ def add_command(sub: argparse._SubParsersAction, name: str, run: Callable[[argpa
     return parser
 
 
+CHARACTER_HELP = ("DeepMimic motion files: their character file (default: humanoid3d_character.txt beside or above "
+                  "the motion, ../characters/humanoid3d.txt as in the DeepMimic repository, else the standard "
+                  "humanoid3d character shipped with motion2video)")
+INPUT_FPS_HELP = ("the input's true frame rate, for files that state none or a wrong one (an OpenPose folder: 25 "
+                  "by default; joint arrays .npy: "
+                  "20 fps for (T, 22, 3) SMPL/HumanML3D joints, 50 for H36M-17 ones, by default)")
+
+
+def add_motion_input_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--character FILE`` and ``--input-fps FPS``: how the commands that read motion files read them."""
+    parser.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
+    # Where --fps means nothing else (every command but render, whose --fps is the output rate), it is another
+    # spelling of --input-fps: an OpenPose folder's true rate is what users pass as --fps.
+    names = ["--input-fps"] + (["--fps"] if "--fps" not in parser._option_string_actions else [])
+    parser.add_argument(*names, dest="input_fps", metavar="FPS", type=float, default=None, help=INPUT_FPS_HELP)
+
+
+BVH_HELP = ("also write each {what} as a BVH file into this folder (a standard Hips-rooted hierarchy, metres, "
+            "y up, 25 fps; 3D body models only; opens in Blender: File > Import > Motion Capture (.bvh))")
+
+
+def add_bvh_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--bvh DIR``: one BVH file per ``what`` (future, re-enactment, ...)."""
+    parser.add_argument("--bvh", metavar="DIR", default=None, help=BVH_HELP.format(what=what))
+
+
+def check_bvh_output(folder: str | Path | None, layout: str) -> Path | None:
+    """Validate ``--bvh DIR`` for a model of ``layout`` before any work (InputError unless 3D body motion)."""
+    from motion2video.formats.bvh_write import check_bvh_dir
+
+    out = check_bvh_dir(folder)
+    if out is not None and layout != "body3d":
+        raise InputError(f"--bvh writes 3D body motion; this model's output is {layout}")
+    return out
+
+
 def add_video_output_arguments(parser: argparse.ArgumentParser, *, npz_help: str) -> None:
     """``--size`` (cell size, default 256), ``-o/--output`` (the video), ``--npz`` (``npz_help`` says what it
     holds) and ``--threads``: the output options of the commands that write a grid of motion cells."""
@@ -47,8 +83,8 @@ def check_at_least(option: str, value: int, minimum: int = 1) -> None:
 
 def check_video_and_npz(output: str | Path, npz: str | Path | None) -> Path:
     """Validate ``-o OUT.mp4|.gif`` and an optional ``--npz OUT.npz`` before any work; returns the video path."""
-    from motion2video.atomic import check_output_path
-    from motion2video.video import VIDEO_SUFFIXES
+    from motion2video.core.atomic import check_output_path
+    from motion2video.formats.video import VIDEO_SUFFIXES
 
     out = check_output_path(output, VIDEO_SUFFIXES)
     if npz is not None:

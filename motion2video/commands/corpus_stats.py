@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from motion2video.atomic import write_json
+from motion2video.core.atomic import write_json
 from motion2video.commands.common import add_command
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "print minutes per source, action and split of a mocap folder as the trainer uses it"
 

@@ -32,8 +32,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from motion2video.atomic import check_output_path, write_text
-    from motion2video.doctor import report, run_checks
+    from motion2video.core.atomic import check_output_path, write_text
+    from motion2video.apps.doctor import report, run_checks
 
     if args.json:
         check_output_path(args.json, (".json",))

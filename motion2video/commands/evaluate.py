@@ -5,17 +5,21 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from motion2video.atomic import write_json
+from motion2video.core.atomic import write_json
 from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "score a motion model and the zero-velocity / last-step / sequence-motion baselines"
 
 DESCRIPTION = """\
 Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
-MMFDE (DLow protocol). Prints a table; --json writes {"protocol": {...}, "results": {"<method>": {"ade": ..,
-"fde": .., "mmade": .., "mmfde": .., "apd": .., "velocity_ratio": .., "acceleration_ratio": ..}}}, the last two
-how lively the samples are (mean absolute velocity / acceleration of all features over the true futures').
+MMFDE (DLow protocol), pooled over all windows, as the macro average over actions (every action counts once)
+and per action (the action class of each clip's manifest label). Prints the three tables; --json writes
+{"protocol": {...}, "results": {"<method>": {"ade": .., "fde": .., "mmade": .., "mmfde": .., "apd": ..,
+"velocity_ratio": .., "acceleration_ratio": ..}}, "macro": {"<method>": {same keys}}, "per_action":
+{"<method>": {"<action>": {same keys, "windows": n}}}}; the ratios say how lively the samples are (mean
+absolute velocity / acceleration of all features over the true futures'). Pooled ADE / FDE / APD / MMADE /
+MMFDE are the window-weighted means of the per-action ones.
 """
 
 EXAMPLES = """\
@@ -58,9 +62,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.checkpoint import baseline_bundle, load_model
+    from motion2video.models.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import build_dataset
-    from motion2video.evaluation import EvalProtocol, evaluate_bundles
+    from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
     from motion2video.models.baselines import BASELINES
 
     set_threads(args.threads)
@@ -101,11 +105,16 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(windows)} windows from {len(result.protocol['clips'])} clip(s), best of {args.samples}, "
           f"units: {result.protocol['units']}")
     print(result.table(columns))
+    actions = result.protocol["actions"]
+    print(f"\nmacro average over {len(actions)} action(s) (each action counts once):")
+    print(result.macro_table(columns))
+    print("\nper action (windows):")
+    print(result.per_action_table(columns))
     if args.json is not None:
         out = write_json(args.json, result.to_json())
         print(f"wrote {out}")
     if args.plot is not None:
-        from motion2video.plots import plot_ade_per_frame
+        from motion2video.evaluation.plots import plot_ade_per_frame
 
         out = plot_ade_per_frame(result.ade_per_frame, args.plot, fps=cfg.fps, units=result.protocol["units"].split(" (")[0],
                                  best_of=args.samples,

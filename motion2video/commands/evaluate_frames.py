@@ -15,7 +15,12 @@ DESCRIPTION = """\
 Render (or reuse from the cache) the held-out split (held-out identities and clips) for the model's domain and
 size, and report whole-frame PSNR and SSIM (scikit-image) and person metrics (PSNR, SSIM and sharpness ratio
 inside the target's silhouette, PSNR and sharpness where the person moved) for the generator, copy-reference,
-limb-warp and the previous generator on the same pairs.
+limb-warp and the previous generator on the same pairs. With --video V (body models): the reconstruction
+protocol of FOMM / TPSMM on a real video instead: frame 0 is the reference, the later frames' estimated poses
+(BlazePose) drive the generator, the real frames are the truth, all cut to one square around the person; per
+method l1 (mean absolute error in [0, 1]), PSNR, SSIM, person PSNR / SSIM / sharpness inside BlazePose's
+segmentation of the real frame, and akd (pixels between the poses BlazePose finds on the generated and on the
+real frame; akd_missing: generated frames where it finds none).
 
 With --poses PATH (a body motion file or a folder of them, any format the readers know), the pairs come from
 real motion instead: the frame test split's held-out identities, posed by windows spread evenly over each clip
@@ -29,6 +34,7 @@ EXAMPLES = """\
 examples:
   motion2video evaluate-frames --model frames-body-128 --json out/eval_frames_body.json
   motion2video evaluate-frames --model out/frames-face-128.safetensors --contact-sheet out/face_sheet.png
+  motion2video evaluate-frames --model frames-body-128 --video ../shared/data/video/dancer.avi --json out/dancer.json
   motion2video evaluate-frames --model frames-body-128 --poses ../shared/data/mocap/cmu/08_01.bvh --json out/real.json
 """
 
@@ -49,6 +55,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--baseline-model", action="append", default=None, metavar="MODEL",
                    help="also score this generator (checkpoint or shipped name) as a named baseline on the same "
                    "pairs; repeatable (default for body models: the previous generator frames-body-128-v1)")
+    p.add_argument("--video", default=None,
+                   help="a real video of one person: score by the reconstruction protocol (body models)")
+    p.add_argument("--video-frames", type=int, default=64,
+                   help="--video: later frames scored against frame 0 (default 64, spread over the video)")
+    p.add_argument("--video-stride", type=int, default=None,
+                   help="--video: video frames between two scored frames (default: spread over the whole video)")
     p.add_argument("--poses", default=None, metavar="PATH",
                    help="pose the held-out identities by the body motion file(s) at PATH (a file or a folder) "
                    "instead of the held-out pairs; adds head_psnr / head_ssim")
@@ -67,7 +79,7 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
     """Named baseline generators: name -> model, and name -> why it was left out (the default baseline only:
     another size, or refused for its skeleton version). An explicit --baseline-model that cannot be used
     raises InputError."""
-    from motion2video.errors import InputError
+    from motion2video.core.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
 
     cfg = loaded.config
@@ -102,17 +114,26 @@ def run(args: argparse.Namespace) -> int:
 
     import imageio.v3 as iio
 
-    from motion2video.errors import InputError
+    from motion2video.core.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
+    from motion2video.frames.data import default_cache_dir, load_or_generate
     from motion2video.frames.evaluate import (evaluate_sequences, evaluation_contact_sheet, json_payload,
                                               write_json)
+    from motion2video.frames.specs import default_spec
 
     if args.pairs is not None:
         check_at_least("--pairs", args.pairs)
     check_at_least("--windows", args.windows)
+    if args.video is not None:
+        check_at_least("--video-frames", args.video_frames)
+        if args.video_stride is not None:
+            check_at_least("--video-stride", args.video_stride)
+        if not Path(args.video).is_file():
+            raise InputError("no such video file", args.video)
     loaded = load_frame_model(args.model)
     cfg = loaded.config
+    if args.video is not None and cfg.domain != "body":
+        raise InputError("--video scores body frame generators (this one makes face frames)", loaded.path)
     if cfg.domain != "body" and (args.poses is not None or args.head):
         raise InputError(f"{'--poses' if args.poses is not None else '--head'} needs a body frame model", loaded.path)
     clips = None
@@ -123,6 +144,8 @@ def run(args: argparse.Namespace) -> int:
     baselines, left_out = load_baselines(args.baseline_model, loaded)
     for name, why in left_out.items():
         print(f"note: baseline {name} left out: {why}", file=sys.stderr)
+    if args.video is not None:
+        return _run_video(args, loaded, baselines)
     extra = {"model": str(loaded.path), "model_kind": loaded.kind, "model_step": loaded.step}
     if left_out:
         extra["baselines_left_out"] = left_out
@@ -193,3 +216,26 @@ def evaluate_posed(model, clips: list, args: argparse.Namespace, baselines: dict
                         "window_starts": [int(st) for c, st in zip(seqs.clip, seqs.start) if c == name]}
                        for name, motion in clips]}
     return PosedEvaluation(evaluation, poses, posed)
+
+
+def _run_video(args: argparse.Namespace, loaded, baselines: dict) -> int:
+    """``--video``: the reconstruction protocol (:mod:`motion2video.evaluation.video_frames`)."""
+    import imageio.v3 as iio
+
+    from motion2video.core.atomic import write_json
+    from motion2video.evaluation.video_frames import evaluate_video
+    from motion2video.frames.evaluate import evaluation_contact_sheet
+
+    result = evaluate_video(loaded.model, args.video, size=loaded.config.image_size, targets=args.video_frames,
+                            stride=args.video_stride, baseline_models=baselines)
+    payload = result.to_dict()
+    payload.update(model=str(loaded.path), model_kind=loaded.kind, model_step=loaded.step)
+    print(json.dumps(payload, indent=2, sort_keys=True))
+    if args.json:
+        write_json(args.json, payload)
+    if args.contact_sheet:
+        out = Path(args.contact_sheet)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        iio.imwrite(out, evaluation_contact_sheet(result.frames))
+        print(f"wrote {out}")
+    return 0

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import add_command
-from motion2video.render import STYLES, RenderRequest, render_file
+from motion2video.commands.common import add_command, add_motion_input_arguments
+from motion2video.apps.render import STYLES, RenderRequest, render_file
 
 HELP = ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) to "
         "mp4/GIF")
@@ -24,24 +24,29 @@ examples:
   motion2video render demo_inputs/walk_to_run.npz -o out/heatmaps.mp4 --style heatmap --start 10 --frames 50
   motion2video render ../shared/data/face/llv/dao.csv -o out/dao_face.mp4 --style face
   motion2video render demo_inputs/smile.npz -o out/smile.gif --style face --fps 12.5
+  motion2video render humanml3d_joints.npy -o out/t2m.mp4            # (T, 22, 3) SMPL joints, 20 fps
+  motion2video render futures.npy -o out/futures.mp4                 # (K, T, J, 3): a grid of K cells
 """
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "render", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("input", help="a .bvh, DeepMimic motion file (.txt/.json with \"Frames\"), exp-map text file "
-                   "(.txt with a skeleton.json beside or above it), .npz (Motion or FaceMotion), OpenPose JSON "
-                   "folder, or .csv face capture")
+                   "(.txt with a skeleton.json beside or above it), .npz (Motion or FaceMotion), joint array .npy "
+                   "(or .npz with one array) of shape (T, 22, 3) SMPL, (T, 17, 3) H36M or (K, T, J, 3) futures, "
+                   "OpenPose JSON folder, or .csv face capture")
     p.add_argument("-o", "--output", required=True, help="output .mp4 or .gif")
     p.add_argument("--style", choices=STYLES, default="skeleton", help="what to draw (default: skeleton)")
     p.add_argument("--size", type=int, default=256, help="frame width and height in pixels, 32..2048 (default 256)")
     p.add_argument("--fps", type=float, default=None,
-                   help="output frame rate; the motion is resampled to it (default: the clip's own rate)")
+                   help="output frame rate; the motion is resampled to it (default: the clip's own rate). An "
+                   "OpenPose folder has no rate of its own: --fps is its true rate (default 25)")
     p.add_argument("--start", type=int, default=0, help="first frame to render (default 0)")
     p.add_argument("--frames", type=int, default=None, help="number of frames to render (default: all)")
     p.add_argument("--palette", choices=("leftright", "openpose"), default="leftright",
                    help="skeleton colours: left green / right red / spine blue, or the OpenPose (ControlNet) palette")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_motion_input_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -55,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
         frames=args.frames,
         palette=args.palette,
         progress=not args.no_progress,
+        character=args.character,
+        input_fps=args.input_fps,
     )
     result = render_file(request)
     print(f"wrote {result.path} ({result.num_frames} frames, {result.width}x{result.height}, {result.fps:g} fps)")

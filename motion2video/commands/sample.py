@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_threads_argument, check_at_least,
-                                          check_video_and_npz, set_threads)
+from motion2video.commands.common import (RIGID_BONES_HELP, add_bvh_argument, add_command,
+                                          add_motion_input_arguments, add_threads_argument, check_at_least,
+                                          check_bvh_output, check_video_and_npz, set_threads)
 
 HELP = "sample K futures of a clip from a motion model and render them as a grid video"
 
@@ -31,7 +32,8 @@ Every cell of the grid plays the observed frames framed in green, then one sampl
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "sample", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="checkpoint path, shipped model name, or a baseline name")
-    p.add_argument("input", help="observed clip: .bvh / motion .npz (body models), .csv / FaceMotion .npz (face)")
+    p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (body models; 2D body "
+                   "models also an OpenPose JSON folder), .csv / FaceMotion .npz (face)")
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("--observed", type=int, default=None, help="observed frames (default: the model's, 16)")
     p.add_argument("--horizon", type=int, default=None, help="future frames (default: the model's, 48)")
@@ -44,15 +46,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="skeleton maps or the Anny body mesh (body models; face models draw the Anny face)")
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
     add_threads_argument(p)
+    add_motion_input_arguments(p)
+    add_bvh_argument(p, "future (observed frames then the future: DIR/sample_1.bvh, ...)")
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.checkpoint import baseline_bundle, load_model
+    from motion2video.models.checkpoint import baseline_bundle, load_model
     from motion2video.data.dataset import DatasetConfig
-    from motion2video.apps.sample import forecast, iter_forecast, load_clip_for, save_forecast_npz
+    from motion2video.stages.sampling import forecast
+    from motion2video.apps.sample import iter_forecast, load_clip_for, save_forecast_npz
     from motion2video.models.baselines import BASELINES
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_at_least("--samples", args.samples)
@@ -62,7 +67,8 @@ def run(args: argparse.Namespace) -> int:
         bundle = baseline_bundle(args.model, DatasetConfig())
     else:
         bundle = load_model(args.model)
-    clip = load_clip_for(bundle, args.input)
+    check_bvh_output(args.bvh, bundle.data_config.layout)
+    clip = load_clip_for(bundle, args.input, character=args.character, fps=args.input_fps)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
                   start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
     chunks = iter_forecast(fc, style=args.style, size=args.size)
@@ -74,4 +80,13 @@ def run(args: argparse.Namespace) -> int:
     if args.npz:
         save_forecast_npz(fc, args.npz)
         print(f"wrote {args.npz}")
+    if args.bvh:
+        import numpy as np
+
+        from motion2video.formats.bvh_write import write_bvh_files
+
+        clips = np.concatenate([np.broadcast_to(fc.observed, (len(fc.futures),) + fc.observed.shape), fc.futures],
+                               axis=1)  # (K, To + Tf, 17, 3)
+        paths = write_bvh_files(args.bvh, "sample", clips, fc.fps)
+        print(f"wrote {len(paths)} BVH files to {args.bvh} ({paths[0].name} ...)")
     return 0

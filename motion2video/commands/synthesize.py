@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.commands.common import RIGID_BONES_HELP, add_command, check_at_least
-from motion2video.errors import InputError
+from motion2video.commands.common import RIGID_BONES_HELP, add_command, add_motion_input_arguments, check_at_least
+from motion2video.core.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"
 
@@ -24,6 +24,8 @@ examples:
   motion2video synthesize --motion-model runs/mtvae.safetensors --frame-model runs/frames.safetensors \\
       ../shared/data/mocap/cmu/08_01.bvh --reference me.png --reference-pose me.pose.npz --samples 3 \\
       --observed 16 --horizon 60 -o out/me.mp4
+  motion2video synthesize --motion-model mtvae-add --frame-model frames-body-128 ../shared/data/video/dancer.avi \
+      --reference ../shared/data/photos/skier.jpg --crop-person --samples 3 -o out/skier_dances.mp4
 
 Writes OUT.mp4 (every cell plays the observed frames framed green, then one sampled future framed red),
 OUT-structure.mp4 (the same grid of the structures the generator was given) and OUT-sheet.png (reference,
@@ -31,7 +33,9 @@ its structure, observed frames, and a row of future frames per sample): all thre
 
 The reference image is padded to a square and resized to the generator's size when needed (with a note);
 grey-scale images become RGB, RGBA images are composited over white. Its pose is read from IMAGE.pose.npz
-when that exists (or --reference-pose); otherwise the image is assumed to show the first observed pose.
+when that exists (or --reference-pose); otherwise a body pose is estimated in the image (BlazePose, with a
+note), and only when nobody is found is the image assumed to show the first observed pose. A video as the
+observed clip has its person's pose estimated (cached in ~/.cache/motion2video/pose by the file's hash).
 """
 
 
@@ -40,10 +44,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--motion-model", required=True, help="motion checkpoint path or shipped name (mtvae-add, ...)")
     p.add_argument("--frame-model", required=True,
                    help="frame-generator checkpoint path or shipped name (frames-body-128, frames-face-128)")
-    p.add_argument("input", help="observed clip: .bvh / motion .npz (body), FaceMotion .npz / .csv (face)")
+    p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (.mp4, .avi, .mov: its "
+                   "pose is estimated and cached) (body), FaceMotion .npz / .csv (face)")
     p.add_argument("--reference", required=True, help="reference appearance image (PNG, JPEG, ...)")
     p.add_argument("--reference-pose", default=None,
-                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image, if any)")
+                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image; without one "
+                   "the pose is estimated)")
+    p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
+                   "in a large photo fills the generator's frame")
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("-o", "--output", required=True, help="output video OUT.mp4 (also OUT-structure.mp4, OUT-sheet.png)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
@@ -57,6 +65,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "keeps the reference background at this size and generates the person at its own size")
     p.add_argument("--threads", type=int, default=None,
                    help="torch threads for the frame generator (default: half the cores, 1 to 4; sampling uses 1)")
+    add_motion_input_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -74,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
         check_at_least("--horizon", args.horizon)
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
-                             size=args.size, rigid_bones=args.rigid_bones)
+                             size=args.size, rigid_bones=args.rigid_bones, character=args.character,
+                             input_fps=args.input_fps, crop_person=args.crop_person)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 HELP = "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)"
 
@@ -105,7 +105,7 @@ def _dlow_base(base: str | None, cfg: dict) -> tuple[dict, dict]:
 
     from safetensors import safe_open
 
-    from motion2video.checkpoint import read_meta, resolve_checkpoint
+    from motion2video.models.checkpoint import read_meta, resolve_checkpoint
 
     if base is None:
         raise InputError("--model dlow needs --base CHECKPOINT (the trained model to sample from)")
@@ -124,10 +124,10 @@ def _dlow_base(base: str | None, cfg: dict) -> tuple[dict, dict]:
 
 
 def run(args: argparse.Namespace) -> int:
-    import motion2video.checkpoint  # noqa: F401  (registers every model)
+    import motion2video.models.checkpoint  # noqa: F401  (registers every model)
     from motion2video.data.dataset import DatasetConfig, build_dataset
     from motion2video.models.base import MODEL_REGISTRY
-    from motion2video.training import TrainConfig, train_model
+    from motion2video.models.training import TrainConfig, train_model
 
     set_threads(args.threads)
     if args.model not in MODEL_REGISTRY:

@@ -73,8 +73,9 @@ def default_crop(domain: str, size: int) -> int:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from motion2video.errors import InputError
-    from motion2video.frames.data import default_cache_dir, default_spec, load_or_generate
+    from motion2video.core.errors import InputError
+    from motion2video.frames.data import default_cache_dir, load_or_generate
+    from motion2video.frames.specs import default_spec
     from motion2video.frames.train import TrainFramesConfig, train_frames
 
     set_threads(args.threads)

@@ -5,9 +5,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.atomic import save_npz
-from motion2video.commands.common import add_command, add_video_output_arguments, check_video_and_npz, set_threads
-from motion2video.errors import InputError
+from motion2video.core.atomic import save_npz
+from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
+                                          add_video_output_arguments, check_bvh_output, check_video_and_npz,
+                                          set_threads)
+from motion2video.core.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
 
@@ -53,24 +55,29 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "(default when --reference is given); skeleton: limb maps")
     p.add_argument("--reference", default=None, help="reference image of the target person (--style frames)")
     p.add_argument("--reference-pose", default=None,
-                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image, if any)")
+                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image; without one "
+                   "the pose is estimated)")
+    p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
+                   "in a large photo fills the generator's frame")
     p.add_argument("--frame-model", default=None,
                    help="frame-generator checkpoint or shipped name for --style frames (default frames-body-128, "
                    "or frames-face-128 for face models)")
     p.add_argument("--seed", type=int, default=0, help="seed of the flow samples (default 0)")
     add_video_output_arguments(p, npz_help="also write source, re-enactments and latents to this .npz")
+    add_motion_input_arguments(p)
+    add_bvh_argument(p, "re-enactment (DIR/reenacted_1.bvh, ...)")
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
-    from motion2video.checkpoint import load_model
+    from motion2video.models.checkpoint import load_model
     from motion2video.models.baselines import BASELINES
     from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
                                             style_for, transfer_behavior)
     from motion2video.stages.clips import load_clip
     from motion2video.stages.latents import behavior_model
     from motion2video.stages.video import check_cell_size
-    from motion2video.video import VideoWriter
+    from motion2video.formats.video import VideoWriter
 
     set_threads(args.threads)
     check_cell_size(args.size)
@@ -79,17 +86,19 @@ def run(args: argparse.Namespace) -> int:
     if args.model in BASELINES:
         raise InputError(f"behaviour transfer needs a 'behavior' model; {args.model!r} is a baseline")
     bundle = load_model(args.model)
+    check_bvh_output(args.bvh, bundle.data_config.layout)
     behavior_model(bundle)  # the wrong kind of model fails before any clip is read
     style = style_for(bundle.data_config.layout, style)
     frame_model = reference = None
     if style == "frames":
         frame_model, reference = frame_style_inputs(bundle, frame_model=args.frame_model, reference=args.reference,
-                                                    reference_pose=args.reference_pose)
-    elif args.reference_pose or args.frame_model:
-        raise InputError("--frame-model and --reference-pose are only used with --style frames")
-    target = load_clip(bundle, args.target)
+                                                    reference_pose=args.reference_pose,
+                                                    crop_person=args.crop_person)
+    elif args.reference_pose or args.frame_model or args.crop_person:
+        raise InputError("--frame-model, --reference-pose and --crop-person are only used with --style frames")
+    target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
     if args.behavior is not None:
-        source = load_clip(bundle, args.behavior)
+        source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
         result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
                                    target_frame=args.target_frame, horizon=args.horizon)
     else:
@@ -114,4 +123,9 @@ def run(args: argparse.Namespace) -> int:
             arrays["source"] = result.source
         save_npz(args.npz, arrays)
         print(f"wrote {args.npz}")
+    if args.bvh:
+        from motion2video.formats.bvh_write import write_bvh_files
+
+        paths = write_bvh_files(args.bvh, "reenacted", result.reenacted, result.fps)
+        print(f"wrote {len(paths)} BVH files to {args.bvh} ({paths[0].name} ...)")
     return 0

@@ -6,7 +6,7 @@
   (Anny's ``facial_action_labels`` order, :data:`ARKIT_NAMES`) + head pose (3 axis-angle, 3 translation in
   metres), a frame rate and an identity (Anny phenotype values).
 
-Both validate on construction and raise :class:`~motion2video.errors.InputError`, so a bad array never
+Both validate on construction and raise :class:`~motion2video.core.errors.InputError`, so a bad array never
 reaches a renderer or a model.
 """
 

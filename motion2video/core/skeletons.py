@@ -239,6 +239,15 @@ RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
     # origin is the proximal end of that bone (lfemur = hip, ltibia = knee, lhumerus = shoulder, ...). The
     # correspondence mirrors the MotionBuilder renaming used by ``cmu-mb`` (upperback = Spine, thorax =
     # Spine1, upperneck = Neck1).
+    # The BVH files motion2video writes (formats/bvh_write.py, ``--bvh DIR``): joints on Human3.6M's body
+    # points already, so h36m_body_points is skipped for them (:data:`BODY_POINT_RIGS`).
+    "motion2video-h36m": {
+        "pelvis": "Hips", "right_hip": "RightUpLeg", "right_knee": "RightLeg", "right_ankle": "RightFoot",
+        "left_hip": "LeftUpLeg", "left_knee": "LeftLeg", "left_ankle": "LeftFoot",
+        "spine": "Spine", "thorax": "Thorax", "neck": "Neck", "head": "Head",
+        "left_shoulder": "LeftArm", "left_elbow": "LeftForeArm", "left_wrist": "LeftHand",
+        "right_shoulder": "RightArm", "right_elbow": "RightForeArm", "right_wrist": "RightHand",
+    },
     "cmu-amc": {
         "pelvis": "hip", "right_hip": "rfemur", "right_knee": "rtibia", "right_ankle": "rfoot",
         "left_hip": "lfemur", "left_knee": "ltibia", "left_ankle": "lfoot",
@@ -247,6 +256,12 @@ RIG_JOINT_MAPS: dict[str, dict[str, str | tuple[str, str]]] = {
         "right_shoulder": "rhumerus", "right_elbow": "rradius", "right_wrist": "rwrist",
     },
 }
+# Rigs whose mapped joints already are Human3.6M's body points (the canonical joints a reader would build):
+# readers take them as they are instead of rebuilding them with :func:`h36m_body_points`, whose spine split
+# and head lengths depend on whole-clip statistics (the longest pelvis-thorax distance, the median leg) that
+# a window of a clip need not share with the clip it was cut from (on a 5 s window of CMU 13_10 it moves
+# the spine by 1.2 cm). Their floor is at height 0 already, so readers keep it (no floor placement).
+BODY_POINT_RIGS = frozenset({"motion2video-h36m"})
 
 
 def bone_lengths(joints: np.ndarray, parents: tuple[int, ...] = H36M_17.parents) -> np.ndarray:

@@ -43,9 +43,9 @@ from motion2video.data import windows as W
 from motion2video.data.corpus import action_class, corpus_index, pinned_split
 from motion2video.data.corpus import clip_group as corpus_group
 from motion2video.data.face_data import face_files, load_face_clip, mirror_face
-from motion2video.errors import InputError
-from motion2video.motion import FaceMotion, Motion
-from motion2video.skeletons import H36M_17
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FaceMotion, Motion
+from motion2video.core.skeletons import H36M_17
 
 DEFAULT_MOCAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "mocap"
 DEFAULT_FACE = Path(__file__).resolve().parents[3] / "shared" / "data" / "face"

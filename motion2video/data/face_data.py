@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
+from motion2video.core.errors import InputError
+from motion2video.core.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
 
 FACE_SUFFIXES = (".csv", ".npz")
 

@@ -5,8 +5,8 @@ A clip is a list of face modes with durations (``neutral``, ``smile``, ``blink``
 mode starts). On top of every mode run spontaneous blinks, small gaze saccades and a slow head sway, all
 drawn from the seed.
 
-Output: :class:`~motion2video.motion.FaceMotion` params (T, 58) = 52 coefficients in [0, 1] in
-:data:`~motion2video.motion.ARKIT_NAMES` order, head rotation (3, axis-angle, radians) and head
+Output: :class:`~motion2video.core.motion.FaceMotion` params (T, 58) = 52 coefficients in [0, 1] in
+:data:`~motion2video.core.motion.ARKIT_NAMES` order, head rotation (3, axis-angle, radians) and head
 translation (3, metres).
 
 Head pose convention (world frame: metres, z up; the head faces -y at rest, its left is +x):
@@ -28,12 +28,12 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from motion2video.core.rotations import (  # noqa: F401 (the rotation helpers' old import path)
+from motion2video.core.rotations import (
     axis_angle_to_matrix, head_euler_to_axis_angle, head_euler_to_matrix, matrix_to_axis_angle,
 )
 from motion2video.data.procedural import segment_weights, smootherstep
-from motion2video.errors import InputError
-from motion2video.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
+from motion2video.core.errors import InputError
+from motion2video.core.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
 
 FACE_MODES: tuple[str, ...] = ("neutral", "smile", "blink", "talk", "surprise", "frown", "nod", "turn")
 _IDX = {name: i for i, name in enumerate(ARKIT_NAMES)}

@@ -24,8 +24,8 @@ import numpy as np
 
 from motion2video.core.rotations import heading_of
 from motion2video.data.procedural import MODES, BodyParams, ModeSpec, generate
-from motion2video.errors import InputError
-from motion2video.skeletons import H36M_17
+from motion2video.core.errors import InputError
+from motion2video.core.skeletons import H36M_17
 
 UNKNOWN = "unknown"
 

@@ -24,14 +24,14 @@ from typing import Sequence
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import Motion
-from motion2video.core.rotations import euler_to_matrix, heading_of  # noqa: F401 (heading_of: old import path)
-from motion2video.core.skeletons import (  # noqa: F401 (H36M-17 joint indices, also imported from here)
+from motion2video.core.errors import InputError
+from motion2video.core.motion import Motion
+from motion2video.core.rotations import euler_to_matrix
+from motion2video.core.skeletons import (
     PELVIS, R_HIP, R_KNEE, R_ANKLE, L_HIP, L_KNEE, L_ANKLE, SPINE, THORAX, NECK, HEAD,
     L_SHOULDER, L_ELBOW, L_WRIST, R_SHOULDER, R_ELBOW, R_WRIST,
 )
-from motion2video.skeletons import H36M_17
+from motion2video.core.skeletons import H36M_17
 
 MODES: tuple[str, ...] = ("stand", "idle", "walk", "run", "jump", "wave", "squat", "punch", "turn")
 GAIT_MODES: frozenset[str] = frozenset({"walk", "run", "turn"})  # share one continuous gait phase

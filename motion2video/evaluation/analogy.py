@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.data.dataset import (
     MULTIMODAL_SOURCE,
     DatasetConfig,

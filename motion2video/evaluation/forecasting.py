@@ -1,7 +1,7 @@
 """Evaluate motion models on the same windows with the DLow protocol (and MT-VAE's R-MSE / S-MSE / CLL).
 
 :func:`evaluate_bundles` runs every model on every window of a split, K samples each, and computes the
-metrics of :mod:`motion2video.metrics` on un-normalised, root-relative frame vectors
+metrics of :mod:`motion2video.evaluation.metrics` on un-normalised, root-relative frame vectors
 (:func:`motion2video.data.windows.metric_vectors`: metres for body3d, virtual-camera image heights for
 body2d, parameter units for faces). The ``evaluate`` command and ``scripts/make_results.py`` call it.
 """
@@ -14,12 +14,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from motion2video import metrics as M
-from motion2video.checkpoint import ModelBundle
+from motion2video.evaluation import metrics as M
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.data.dataset import WindowSet
 from motion2video.data.windows import FeatureLayout, metric_vectors
+from motion2video.evaluation.per_action import COUNT_KEY, group_by_action, macro_average, per_action_means
 from motion2video.stages.sampling import as_model_input, keep_bone_lengths
-from motion2video.stages.sampling import sample_futures  # noqa: F401 (public name of this module)
+from motion2video.stages.sampling import sample_futures
 
 # DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
 MM_THRESHOLDS = {"body3d": 0.5, "body2d": 0.1, "face": 0.25}
@@ -61,28 +62,53 @@ class EvalResult:
 
     Attributes:
         protocol: a JSON-able description of what was measured.
-        results: method name -> metric name -> value.
+        results: method name -> metric name -> value, pooled over all windows.
+        per_action: method name -> action -> the same metric names, over that action's windows, plus
+            ``"windows"`` (their count). Per-window metrics (ADE, FDE, MMADE, MMFDE, APD, S-MSE) are the mean
+            over the action's windows (the multimodal ground truth of MMADE / MMFDE still draws on all windows),
+            so the pooled value is their window-weighted mean; velocity / acceleration ratios are measured on
+            the action's windows alone.
+        macro: method name -> metric name -> the unweighted mean over actions of ``per_action``.
         ade_per_frame: method name -> best-of-K displacement at each future frame (see
-            :func:`motion2video.metrics.ade_per_frame`), the curve ``evaluate --plot`` draws.
+            :func:`motion2video.evaluation.metrics.ade_per_frame`), the curve ``evaluate --plot`` draws.
     """
 
     protocol: dict
     results: dict[str, dict[str, float]] = field(default_factory=dict)
+    per_action: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
+    macro: dict[str, dict[str, float]] = field(default_factory=dict)
     ade_per_frame: dict[str, list[float]] = field(default_factory=dict)
 
     def to_json(self) -> dict:
-        return {"protocol": self.protocol, "results": self.results, "ade_per_frame": self.ade_per_frame}
+        return {"protocol": self.protocol, "results": self.results, "per_action": self.per_action,
+                "macro": self.macro, "ade_per_frame": self.ade_per_frame}
 
     def table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
-        """A fixed-width text table, one row per method."""
-        names = list(self.results)
-        width = max([len("method")] + [len(n) for n in names])
-        head = f"{'method':<{width}}  " + "  ".join(f"{c:>8}" for c in columns)
-        rows = [head, "-" * len(head)]
-        for n in names:
-            vals = [self.results[n].get(c) for c in columns]
-            rows.append(f"{n:<{width}}  " + "  ".join(f"{v:8.4f}" if v is not None else f"{'-':>8}" for v in vals))
-        return "\n".join(rows)
+        """A fixed-width text table, one row per method (pooled over all windows)."""
+        return _rows_table(self.results, columns)
+
+    def macro_table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
+        """The macro average over actions, one row per method."""
+        return _rows_table(self.macro, columns)
+
+    def per_action_table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
+        """One row per (action, method), the actions in the order of ``per_action`` (most windows first)."""
+        methods = list(self.per_action)
+        actions = list(next(iter(self.per_action.values()))) if methods else []
+        rows = {f"{a} ({self.per_action[methods[0]][a][COUNT_KEY]}) {m}": self.per_action[m][a]
+                for a in actions for m in methods}
+        return _rows_table(rows, columns, first="action (windows) method")
+
+
+def _rows_table(rows: dict[str, dict[str, float]], columns: tuple[str, ...], *, first: str = "method") -> str:
+    """A fixed-width text table: one row per key of ``rows``, one column per metric name."""
+    width = max([len(first)] + [len(n) for n in rows])
+    head = f"{first:<{width}}  " + "  ".join(f"{c:>8}" for c in columns)
+    lines = [head, "-" * len(head)]
+    for n, row in rows.items():
+        vals = [row.get(c) for c in columns]
+        lines.append(f"{n:<{width}}  " + "  ".join(f"{v:8.4f}" if v is not None else f"{'-':>8}" for v in vals))
+    return "\n".join(lines)
 
 
 @torch.no_grad()
@@ -120,16 +146,33 @@ def rigid_vectors(pred: np.ndarray, last_observed: np.ndarray) -> np.ndarray:
     return np.stack(out)
 
 
-def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *, threshold: float) -> dict[str, float]:
-    """ADE, FDE, MMADE, MMFDE and APD of metric-space samples pred (N, K, T, D) against gt (N, T, D)."""
+def dlow_metrics_per_window(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
+                            threshold: float) -> dict[str, np.ndarray]:
+    """ADE, FDE, MMADE, MMFDE and APD of each window: metric-space samples pred (N, K, T, D) against gt
+    (N, T, D), the multimodal ground truth drawn from all N windows -> name -> (N,)."""
     groups = M.multimodal_ground_truth(last_observed, threshold=threshold)
     return {
-        "ade": M.ade(pred, gt),
-        "fde": M.fde(pred, gt),
-        "mmade": M.mmade(pred, gt, groups),
-        "mmfde": M.mmfde(pred, gt, groups),
-        "apd": M.apd(pred),
+        "ade": M.ade_per_window(pred, gt),
+        "fde": M.fde_per_window(pred, gt),
+        "mmade": M.multimodal_per_window(pred, gt, groups, final=False),
+        "mmfde": M.multimodal_per_window(pred, gt, groups, final=True),
+        "apd": M.apd_per_window(pred),
     }
+
+
+def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *, threshold: float) -> dict[str, float]:
+    """ADE, FDE, MMADE, MMFDE and APD of metric-space samples pred (N, K, T, D) against gt (N, T, D): the
+    means over windows of :func:`dlow_metrics_per_window`."""
+    per_window = dlow_metrics_per_window(pred, gt, last_observed, threshold=threshold)
+    return {k: float(v.mean()) for k, v in per_window.items()}
+
+
+def liveliness_ratios(samples: np.ndarray, truth: np.ndarray) -> dict[str, float]:
+    """How lively samples (N, K, T, F) are against the true futures (N, T, F), un-normalised features:
+    ``velocity_ratio`` and ``acceleration_ratio`` of their mean absolute velocity / acceleration
+    (:func:`motion2video.evaluation.metrics.liveliness`)."""
+    (v, a), (v_true, a_true) = M.liveliness(samples), M.liveliness(truth)
+    return {"velocity_ratio": v / v_true, "acceleration_ratio": a / a_true}
 
 
 def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol: EvalProtocol,
@@ -145,7 +188,7 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
             recognition-model reconstructions, latent models only) and the Parzen conditional
             log-likelihood (``cll``, nats per window; needs ``val_windows`` to choose the bandwidth).
     Returns:
-        An :class:`EvalResult`.
+        An :class:`EvalResult`: pooled, per action (the windows' ``labels``) and macro over actions.
     """
     if len(windows) == 0:
         raise ValueError("no windows to evaluate")
@@ -157,12 +200,14 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
     last = metric_vectors(windows.raw[:, obs_len - 1], layout)  # (N, D)
     threshold = protocol.threshold(layout)
     groups = M.multimodal_ground_truth(last, threshold=threshold)
+    actions = group_by_action(windows.labels)
     result = EvalResult(protocol={
         **dataclasses.asdict(protocol), "mm_threshold": threshold, "layout": layout.kind,
         "units": layout.metric_units, "observed": obs_len, "future": horizon, "windows": len(windows),
         "clips": sorted(set(windows.clip_names)),
         "mean_multimodal_futures": float(np.mean([len(g) for g in groups])),
         "best_of": protocol.samples,
+        "actions": {a: int(len(idx)) for a, idx in actions.items()},
         "metric_space": "root-relative non-root joints" if layout.is_body else "face parameters",
     })
 
@@ -183,24 +228,32 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
         pred = to_metric(samples)
         if protocol.rigid_bones and layout.kind == "body3d":
             pred = rigid_vectors(pred, last)
-        row = dlow_metrics(pred, gt, last, threshold=threshold)
-        # how lively the samples are against the true futures (all features, root included; before rigid_bones)
-        (v, a), (v_true, a_true) = M.liveliness(own.denormalize(samples)), M.liveliness(windows.raw[:, obs_len:])
-        row["velocity_ratio"], row["acceleration_ratio"] = v / v_true, a / a_true
-        result.ade_per_frame[bundle.label] = [float(v) for v in M.ade_per_frame(pred, gt)]
+        per_window = dlow_metrics_per_window(pred, gt, last, threshold=threshold)
+        bandwidth = None
         if extended:
-            row["s_mse"] = M.best_of_k_mse(pred, gt)
+            per_window["s_mse"] = M.best_of_k_mse_per_window(pred, gt)
             rec = posterior_futures(bundle.model, renorm(windows.obs), renorm(windows.future), num_samples=protocol.samples,
                                     seed=protocol.seed, batch_size=protocol.batch_size)
             if rec is not None:
-                row["r_mse"] = M.best_of_k_mse(to_metric(rec), gt)
+                per_window["r_mse"] = M.best_of_k_mse_per_window(to_metric(rec), gt)
             if val_windows is not None and len(val_windows) > 0:
                 val_pred = to_metric(sample_futures(bundle.model, renorm(val_windows.obs), num_samples=protocol.samples,
                                                     horizon=horizon, seed=protocol.seed + 1,
                                                     batch_size=protocol.batch_size))
                 val_gt = metric_vectors(val_windows.raw[:, obs_len:], layout)
-                h = M.select_parzen_bandwidth(val_pred, val_gt)
-                row["cll"] = float(M.parzen_log_likelihood(pred, gt, bandwidth=h).mean())
-                row["parzen_bandwidth"] = h
+                bandwidth = M.select_parzen_bandwidth(val_pred, val_gt)
+                per_window["cll"] = M.parzen_log_likelihood(pred, gt, bandwidth=bandwidth)
+        row = {k: float(v.mean()) for k, v in per_window.items()}
+        if bandwidth is not None:
+            row["parzen_bandwidth"] = bandwidth
+        by_action = per_action_means(per_window, actions)
+        # how lively the samples are against the true futures (all features, root included; before rigid_bones)
+        lively, truth = own.denormalize(samples), windows.raw[:, obs_len:]
+        row.update(liveliness_ratios(lively, truth))
+        for action, idx in actions.items():
+            by_action[action].update(liveliness_ratios(lively[idx], truth[idx]))
+        result.ade_per_frame[bundle.label] = [float(v) for v in M.ade_per_frame(pred, gt)]
         result.results[bundle.label] = {k: float(v) for k, v in row.items()}
+        result.per_action[bundle.label] = by_action
+        result.macro[bundle.label] = macro_average(by_action)
     return result

@@ -15,6 +15,20 @@ across in full.
 - turn: :func:`heading_change`, the absolute net change of the hips' heading, radians (unwrapped);
 - dance / martial arts: :func:`limb_speed`, the mean speed of wrists and ankles relative to the pelvis, m/s.
 
+Root-relative signatures (issue 24): a re-enactment that follows the source's root path carries the
+pelvis excursion of a jump exactly even when the legs and arms do nothing, so these measure the motion
+relative to the body. Each is the range (max - min over the frames) of a per-frame distance, metres: the
+amplitude of that movement, 0 for a body holding one posture.
+
+- :func:`leg_extension`: the pelvis's height above the ankles (their mean height) - crouching and
+  extending the legs;
+- :func:`arm_swing`: a wrist's height relative to the thorax (the larger range of the two wrists) - arms
+  swung up and down;
+- :func:`knee_bend`: the hip-to-ankle distance of a leg (the larger range of the two legs) - the knee
+  bending and straightening;
+- :func:`ankle_lift`: an ankle's height relative to the pelvis (the larger range of the two legs) - the
+  height of a kick measured from the body, not the floor.
+
 :func:`bone_lengths` and :func:`bone_length_spread` check that a generated body stays rigid, and
 :func:`posture_error` how far a re-enactment's start is from the posture it should start from.
 """
@@ -34,9 +48,12 @@ from motion2video.core.skeletons import (
     R_HIP,
     R_KNEE,
     R_WRIST,
+    THORAX,
 )
 
-SIGNATURES = ("pelvis_excursion", "kick_height", "root_speed", "heading_change", "limb_speed")
+ROOT_PATH_SIGNATURES = ("pelvis_excursion", "kick_height", "root_speed", "heading_change", "limb_speed")
+ROOT_RELATIVE_SIGNATURES = ("leg_extension", "arm_swing", "knee_bend", "ankle_lift")
+SIGNATURES = ROOT_PATH_SIGNATURES + ROOT_RELATIVE_SIGNATURES
 
 
 def _joints(joints: np.ndarray, *, min_frames: int = 2) -> np.ndarray:
@@ -91,6 +108,43 @@ def limb_speed(joints: np.ndarray, fps: float) -> float:
     return float(np.linalg.norm(np.diff(rel, axis=0), axis=-1).mean() * fps)
 
 
+def _range(x: np.ndarray) -> np.ndarray:
+    """max - min over the first (time) axis: (T, ...) -> (...)."""
+    return x.max(axis=0) - x.min(axis=0)
+
+
+def leg_extension(joints: np.ndarray) -> float:
+    """Range over time of the pelvis's height above the mean height of the two ankles, (T, 17, 3) joints ->
+    metres (0 for a fixed posture; a crouch-and-extend of 0.3 m gives 0.3)."""
+    j = _joints(joints, min_frames=1)
+    height = j[:, PELVIS, 2] - 0.5 * (j[:, L_ANKLE, 2] + j[:, R_ANKLE, 2])  # (T,)
+    return float(_range(height))
+
+
+def arm_swing(joints: np.ndarray) -> float:
+    """Range over time of a wrist's height relative to the thorax, the larger of the two wrists, (T, 17, 3)
+    joints -> metres (arms raised from the sides to overhead: about 1 m)."""
+    j = _joints(joints, min_frames=1)
+    rel = j[:, [L_WRIST, R_WRIST], 2] - j[:, THORAX:THORAX + 1, 2]  # (T, 2)
+    return float(_range(rel).max())
+
+
+def knee_bend(joints: np.ndarray) -> float:
+    """Range over time of the hip-to-ankle distance of a leg, the larger of the two legs, (T, 17, 3) joints ->
+    metres (a straight leg that bends until hip and ankle are 0.2 m closer gives 0.2)."""
+    j = _joints(joints, min_frames=1)
+    dist = np.linalg.norm(j[:, [L_HIP, R_HIP]] - j[:, [L_ANKLE, R_ANKLE]], axis=-1)  # (T, 2)
+    return float(_range(dist).max())
+
+
+def ankle_lift(joints: np.ndarray) -> float:
+    """Range over time of an ankle's height relative to the pelvis, the larger of the two legs, (T, 17, 3)
+    joints -> metres (a kick that brings an ankle from 0.9 m below the pelvis to its height: 0.9)."""
+    j = _joints(joints, min_frames=1)
+    rel = j[:, [L_ANKLE, R_ANKLE], 2] - j[:, PELVIS:PELVIS + 1, 2]  # (T, 2)
+    return float(_range(rel).max())
+
+
 def signature(name: str, joints: np.ndarray, fps: float) -> float:
     """The signature ``name`` (one of :data:`SIGNATURES`) of (T, 17, 3) joints at ``fps``."""
     if name == "pelvis_excursion":
@@ -103,6 +157,9 @@ def signature(name: str, joints: np.ndarray, fps: float) -> float:
         return heading_change(joints)
     if name == "limb_speed":
         return limb_speed(joints, fps)
+    if name in ROOT_RELATIVE_SIGNATURES:
+        return {"leg_extension": leg_extension, "arm_swing": arm_swing, "knee_bend": knee_bend,
+                "ankle_lift": ankle_lift}[name](joints)
     raise ValueError(f"unknown signature {name!r}; known: {', '.join(SIGNATURES)}")
 
 

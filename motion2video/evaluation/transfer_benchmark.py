@@ -14,6 +14,11 @@ Three ways to re-enact, all from the same source window and target posture:
 - ``copy``: the source window itself, moved rigidly to the target's position and heading (carries every
   signature exactly, but starts from the source's posture, not the target's).
 
+Beside each case's own (root-path) signature, the root-relative signatures of
+:data:`motion2video.evaluation.signatures.ROOT_RELATIVE_SIGNATURES` (leg extension, arm swing, knee bend,
+ankle lift) of every pair, as ratios too: a re-enactment that follows the source's root path keeps a jump's
+pelvis excursion while its legs and arms may do nothing.
+
 Beside the ratios: the start-posture error (mean per-joint distance between the first generated frame and
 the target posture, root-relative and heading-aligned; small = the re-enactment starts from the target) and
 the bone-length spread (largest per-bone s.d. / mean length over the generated frames; 0 = rigid bones).
@@ -55,6 +60,10 @@ class Case:
 SIGNATURE_OF = {"jump": "pelvis_excursion", "kick": "kick_height", "walk/run": "root_speed",
                 "turn": "heading_change", "dance/martial arts": "limb_speed"}
 BEHAVIOURS = tuple(SIGNATURE_OF)
+RELATIVE = S.ROOT_RELATIVE_SIGNATURES
+# A root-relative ratio is only read where the source moves that way at all: a source amplitude below this
+# (metres) gives no ratio (NaN), e.g. the arm swing of a source whose arms hang still.
+MIN_RELATIVE_AMPLITUDE = 0.05
 
 # Chosen by manifest label, then the window with the largest signature in the clip (sliding, 25 fps,
 # stride 4; scripts/make_results_transfer.py --benchmark prints each source's signature).
@@ -128,6 +137,7 @@ class PairResult:
         source_signature, signature: the signature of the source window and of the re-enactment.
         start_error: metres, first generated frame vs the target posture (root-relative, heading-aligned).
         bone_spread: bone-length spread over the generated frames (:func:`signatures.bone_length_spread`).
+        relative: root-relative signature name -> (source's, re-enactment's) (:data:`RELATIVE`).
     """
 
     method: str
@@ -137,10 +147,17 @@ class PairResult:
     signature: float
     start_error: float
     bone_spread: float
+    relative: dict
 
     @property
     def ratio(self) -> float:
         return self.signature / self.source_signature if self.source_signature > 1e-9 else float("nan")
+
+    def relative_ratio(self, name: str) -> float:
+        """Re-enactment / source of the root-relative signature ``name``; NaN when the source's amplitude is
+        below :data:`MIN_RELATIVE_AMPLITUDE`."""
+        src, got = self.relative[name]
+        return got / src if src >= MIN_RELATIVE_AMPLITUDE else float("nan")
 
 
 def score(method: str, case: Case, target: tuple[str, int], source: np.ndarray, target_posture: np.ndarray,
@@ -157,7 +174,8 @@ def score(method: str, case: Case, target: tuple[str, int], source: np.ndarray, 
                       source_signature=S.signature(name, source, FPS),
                       signature=S.signature(name, reenacted, FPS),
                       start_error=S.posture_error(reenacted[1:2], target_posture),
-                      bone_spread=S.bone_length_spread(reenacted[1:]))
+                      bone_spread=S.bone_length_spread(reenacted[1:]),
+                      relative={r: (S.signature(r, source, FPS), S.signature(r, reenacted, FPS)) for r in RELATIVE})
 
 
 def copy_reenactment(source: np.ndarray, target_posture: np.ndarray) -> np.ndarray:
@@ -179,9 +197,16 @@ def copy_reenactment(source: np.ndarray, target_posture: np.ndarray) -> np.ndarr
     return moved
 
 
+def _median(x: np.ndarray) -> float:
+    """Median ignoring NaN; NaN when all are NaN (no warning)."""
+    x = np.asarray(x, np.float64)
+    return float(np.median(x[np.isfinite(x)])) if np.isfinite(x).any() else float("nan")
+
+
 def summarise(results: list[PairResult]) -> list[dict]:
     """Per (split, behaviour, method): the median ratio, its inter-quartile range, the number of pairs, the
-    median start error and the median bone spread."""
+    median start error, the median bone spread, and ``relative``: the median ratio of every root-relative
+    signature (NaN where no source of the behaviour moves that way, :data:`MIN_RELATIVE_AMPLITUDE`)."""
     rows = []
     keys = sorted({(r.case.split, r.case.behaviour, r.method) for r in results},
                   key=lambda k: (k[0] != "held-out", BEHAVIOURS.index(k[1]), k[2]))
@@ -194,6 +219,7 @@ def summarise(results: list[PairResult]) -> list[dict]:
             "q25": float(np.nanpercentile(ratios, 25)), "q75": float(np.nanpercentile(ratios, 75)),
             "start_error": float(np.median([r.start_error for r in sel])),
             "bone_spread": float(np.median([r.bone_spread for r in sel])),
+            "relative": {name: _median([r.relative_ratio(name) for r in sel]) for name in RELATIVE},
         })
     return rows
 

@@ -2,7 +2,7 @@
 
 Reading (:func:`read_bvh`) keeps the file's own skeleton and units (:class:`BvhClip`);
 :func:`bvh_world_positions` runs forward kinematics over all frames at once; :func:`bvh_to_canonical`
-and :func:`load_bvh` give a :class:`~motion2video.motion.Motion` in the project's frame (``h36m-17``,
+and :func:`load_bvh` give a :class:`~motion2video.core.motion.Motion` in the project's frame (``h36m-17``,
 metres, right-handed, z up, floor at z = 0).
 
 BVH conventions used here:
@@ -14,31 +14,23 @@ BVH conventions used here:
 - Position channels give the joint's translation in its parent's frame and replace the ``OFFSET``
   component on the same axis (the usual reading: the root's channels are its world position).
 - ``End Site`` blocks become nodes named ``"<joint>:end"`` (the notation of
-  :data:`motion2video.skeletons.RIG_JOINT_MAPS`).
+  :data:`motion2video.core.skeletons.RIG_JOINT_MAPS`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.formats.canonical import (  # noqa: F401 (ANKLE_HEIGHT, Y_UP_TO_Z_UP: re-exported)
-    ANKLE_HEIGHT,
-    Y_UP_TO_Z_UP,
-    CanonicalClip,
-    canonical_from_map,
-    canonical_motion,
-    floor_height,
-    to_project_frame,
-)
-from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_manifest  # noqa: F401 (default_trim re-exported)
+from motion2video.core.errors import InputError
+from motion2video.formats.canonical import CanonicalClip, canonical_from_map, canonical_motion, to_project_frame
+from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_manifest
 from motion2video.formats.numbers import parse_number_rows
 from motion2video.formats.resample import round_fps
-from motion2video.motion import Motion
-from motion2video.skeletons import RIG_JOINT_MAPS
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import BODY_POINT_RIGS, RIG_JOINT_MAPS
 
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 _CHANNEL_LOOKUP = {c.lower(): c for c in CHANNEL_NAMES}
@@ -55,6 +47,7 @@ RIG_UNITS: dict[str, float] = {
     "cmu-daz": 0.01,
     "deepmimic-humanoid": 0.01,
     "mass-character1": 0.01,
+    "motion2video-h36m": 1.0,  # the files motion2video writes (formats/bvh_write.py)
 }
 
 @dataclass(frozen=True)
@@ -226,6 +219,11 @@ def _header_value(line: str, key: str, num: int, source: str) -> str:
     return value.strip()
 
 
+# Frames parsed, and run through forward kinematics, per step: memory stays bounded by the chunk, not the
+# clip (a 38k-frame capture peaked at 17 times its file size when parsed and posed all at once).
+CHUNK_FRAMES = 2048
+
+
 def parse_bvh(text: str, source: str = "<bvh>") -> BvhClip:
     """Parse BVH text. Raises :class:`InputError` (naming ``source`` and the line) when it is malformed.
 
@@ -233,18 +231,29 @@ def parse_bvh(text: str, source: str = "<bvh>") -> BvhClip:
         text: the whole file.
         source: the file name used in messages.
     """
-    lines = text.splitlines()
-    motion_at = next((i for i, line in enumerate(lines) if line.strip().upper() == "MOTION"), None)
-    if motion_at is None:
+    return _parse_lines(iter(text.splitlines()), source)
+
+
+def _parse_lines(lines, source: str, *, chunk: int = CHUNK_FRAMES) -> BvhClip:
+    """Parse BVH from an iterator of lines (a file streams: the motion lines are parsed ``chunk`` at a time,
+    so only the hierarchy and the (T, C) values are ever held, never the whole text)."""
+    hierarchy: list[str] = []
+    for line in lines:
+        if line.strip().upper() == "MOTION":
+            break
+        hierarchy.append(line)
+    else:
         raise InputError("no MOTION section (not a BVH file, or truncated)", source)
-    names, parents, offsets, channels = _parse_hierarchy(lines[:motion_at], source)
+    motion_at = len(hierarchy)  # 0-based index of the MOTION line
+    names, parents, offsets, channels = _parse_hierarchy(hierarchy, source)
+    numbered = ((i, line) for i, line in enumerate(lines, motion_at + 2) if line.strip())
 
     # "Frames: N" and "Frame Time: dt", then one line per frame.
-    rest = [(i + 1, line) for i, line in enumerate(lines[motion_at + 1:], motion_at + 1) if line.strip()]
-    if len(rest) < 2:
+    header = [item for _, item in zip(range(2), numbered)]
+    if len(header) < 2:
         raise InputError(f"line {motion_at + 1}: MOTION must be followed by 'Frames:' and 'Frame Time:'",
                          source)
-    (frames_num, frames_line), (time_num, time_line) = rest[0], rest[1]
+    (frames_num, frames_line), (time_num, time_line) = header
     frames_text = _header_value(frames_line, "Frames", frames_num, source)
     if not frames_text.isdigit():
         raise InputError(f"line {frames_num}: frame count must be a non-negative integer, got {frames_text!r}",
@@ -264,13 +273,21 @@ def parse_bvh(text: str, source: str = "<bvh>") -> BvhClip:
     num_channels = int(sum(counts))
     if num_channels == 0:
         raise InputError("the hierarchy declares no channels", source)
-    data = rest[2:]
-    if len(data) < num_frames:
-        last = data[-1][0] if data else time_num
-        raise InputError(f"line {last}: file ends after {len(data)} of {num_frames} frames (truncated)", source)
-    if len(data) > num_frames:
-        raise InputError(f"line {data[num_frames][0]}: more frame lines than the declared {num_frames}", source)
-    values = parse_number_rows(data, num_channels, source, what="motion value")  # (T, C)
+    parts: list[np.ndarray] = []
+    read, last = 0, time_num
+    while read < num_frames:
+        rows = [item for _, item in zip(range(min(chunk, num_frames - read)), numbered)]
+        if rows:
+            last = rows[-1][0]
+            parts.append(parse_number_rows(rows, num_channels, source, what="motion value"))  # (t, C)
+            read += len(rows)
+        if read < num_frames and len(rows) < min(chunk, num_frames - read + len(rows)):
+            raise InputError(f"line {last}: file ends after {read} of {num_frames} frames (truncated)", source)
+    extra = next(numbered, None)
+    if extra is not None:
+        raise InputError(f"line {extra[0]}: more frame lines than the declared {num_frames}", source)
+    values = parts[0] if len(parts) == 1 else np.concatenate(parts)  # (T, C)
+    del parts
 
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(int)
     return BvhClip(
@@ -286,15 +303,16 @@ def parse_bvh(text: str, source: str = "<bvh>") -> BvhClip:
 
 
 def read_bvh(path: str | Path) -> BvhClip:
-    """Read a BVH file; see :func:`parse_bvh`. Raises :class:`InputError` for a missing or malformed file."""
+    """Read a BVH file; see :func:`parse_bvh`. The file is streamed line by line (the motion lines parsed
+    :data:`CHUNK_FRAMES` at a time). Raises :class:`InputError` for a missing or malformed file."""
     path = Path(path)
     if not path.is_file():
         raise InputError("no such file", path)
     try:
-        text = path.read_text(encoding="utf-8", errors="strict")
+        with path.open(encoding="utf-8", errors="strict", newline=None) as f:
+            return _parse_lines((line.rstrip("\n") for line in f), str(path))
     except UnicodeDecodeError:
         raise InputError("not a text file (BVH is plain text)", path) from None
-    return parse_bvh(text, str(path))
 
 
 # --- forward kinematics ---------------------------------------------------------------------------------
@@ -366,14 +384,26 @@ def local_transforms(clip: BvhClip) -> tuple[np.ndarray, np.ndarray]:
     return rotations, translations
 
 
-def bvh_world_positions(clip: BvhClip) -> np.ndarray:
+def bvh_world_positions(clip: BvhClip, *, chunk: int = CHUNK_FRAMES) -> np.ndarray:
     """Forward kinematics: world position of every node (joints and end sites), vectorised over frames.
 
-    Nodes are processed one tree depth at a time, all nodes of a depth at once.
+    Nodes are processed one tree depth at a time, all nodes of a depth at once; frames ``chunk`` at a time
+    (every frame is posed on its own, so the result does not depend on ``chunk``; the (t, N, 3, 3) rotations
+    exist for one chunk only).
 
     Returns:
         (T, N, 3) float64 positions in file units and file axes (y up).
     """
+    if clip.num_frames <= chunk:
+        return _world_positions(clip)
+    out = np.empty((clip.num_frames, clip.num_nodes, 3))
+    for s in range(0, clip.num_frames, chunk):
+        out[s:s + chunk] = _world_positions(replace(clip, values=clip.values[s:s + chunk]))
+    return out
+
+
+def _world_positions(clip: BvhClip) -> np.ndarray:
+    """:func:`bvh_world_positions` of all frames at once: (T, N, 3)."""
     rotations, translations = local_transforms(clip)
     parents = np.asarray(clip.parents)
     depth = np.zeros(clip.num_nodes, dtype=int)
@@ -408,7 +438,7 @@ def bvh_rest_positions(clip: BvhClip) -> np.ndarray:
 # --- canonical conversion -------------------------------------------------------------------------------
 
 def rig_joint_maps() -> dict[str, dict[str, str | tuple[str, str]]]:
-    """All known rigs (:data:`motion2video.skeletons.RIG_JOINT_MAPS`)."""
+    """All known rigs (:data:`motion2video.core.skeletons.RIG_JOINT_MAPS`)."""
     return RIG_JOINT_MAPS
 
 
@@ -443,23 +473,28 @@ def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) ->
         names: (N,) node names.
         rig: a key of :func:`rig_joint_maps`.
     Returns:
-        (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
+        (T, 17, 3) positions in :data:`~motion2video.core.skeletons.H36M_17` order.
     """
-    return canonical_from_map(nodes, names, rig_joint_maps()[rig])
+    return canonical_from_map(nodes, names, rig_joint_maps()[rig], body_points=rig not in BODY_POINT_RIGS)
 
 
 # A BVH clip in the project frame (the shared container of every mocap reader).
 CanonicalBvh = CanonicalClip
 
 
-def canonical_positions(clip: BvhClip, *, rig: str | None = None) -> CanonicalClip:
+def canonical_positions(clip: BvhClip, *, rig: str | None = None, chunk: int = CHUNK_FRAMES) -> CanonicalClip:
     """Forward kinematics, rig detection, unit and axis conversion for a whole clip (no floor shift);
-    ``fps`` of the result is the header's rate."""
+    ``fps`` of the result is the header's rate. Frames are posed ``chunk`` at a time (the result does not
+    depend on it); the canonical body points (:func:`~motion2video.core.skeletons.h36m_body_points`) are
+    then built once from the whole clip's nearest joints, as they take whole-clip medians and maxima."""
     rig = detect_rig(clip.names, clip.path) if rig is None else rig
     if rig not in rig_joint_maps():
         raise InputError(f"unknown rig {rig!r}; known: {', '.join(rig_joint_maps())}", clip.path)
     unit = RIG_UNITS[rig]
-    nodes = to_project_frame(bvh_world_positions(clip), unit)  # (T, N, 3) metres, z up
+    nodes = np.empty((clip.num_frames, clip.num_nodes, 3))  # (T, N, 3) metres, z up, posed chunk by chunk
+    for s in range(0, clip.num_frames, chunk):
+        nodes[s:s + chunk] = to_project_frame(_world_positions(replace(clip, values=clip.values[s:s + chunk])),
+                                              unit)
     joints = canonical_from_nodes(nodes, clip.names, rig)  # (T, 17, 3)
     return CanonicalClip(joints=joints, nodes=nodes, names=clip.names, rig=rig, unit=unit, fps=clip.header_fps)
 
@@ -501,7 +536,7 @@ def bvh_to_canonical(
     elif canonical.joints.shape[0] != clip.num_frames or (rig is not None and canonical.rig != rig):
         raise ValueError("canonical= does not belong to this clip / rig")
     return canonical_motion(canonical.joints, fps=rate, source=clip.path, start=start, frames=frames,
-                            target_fps=target_fps, label=label)
+                            target_fps=target_fps, label=label, place_floor=canonical.rig not in BODY_POINT_RIGS)
 
 
 

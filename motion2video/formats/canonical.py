@@ -1,5 +1,5 @@
 """What every motion-capture reader shares once it has joint positions: the project frame, the floor,
-trimming and resampling into a canonical ``h36m-17`` :class:`~motion2video.motion.Motion`.
+trimming and resampling into a canonical ``h36m-17`` :class:`~motion2video.core.motion.Motion`.
 
 A reader (BVH, DeepMimic, exp-map text) does its own forward kinematics and hands a
 :class:`CanonicalClip` (every node and the 17 canonical joints, metres, z up, floor not yet placed) to
@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.resample import resample_linear
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 from motion2video.core.skeletons import H36M_17, h36m_body_points
 
 # Height of the ankle joint centre above the floor with the foot flat, metres. Anny's default body (the mesh
@@ -99,6 +99,7 @@ def canonical_motion(
     frames: int | None = None,
     target_fps: float | None = None,
     label: str | None = None,
+    place_floor: bool = True,
 ) -> Motion:
     """Trim, place the floor and resample canonical joints into a ``h36m-17`` Motion.
 
@@ -109,6 +110,8 @@ def canonical_motion(
         joints: (T, 17, 3) canonical joints, metres, z up, any floor.
         fps: the true frame rate of ``joints``.
         source: the file (messages, Motion.source).
+        place_floor: False keeps z as given (files whose floor is z = 0 already: the BVH files motion2video
+            writes, :data:`~motion2video.core.skeletons.BODY_POINT_RIGS`).
     Raises:
         InputError: non-positive rates, a start outside the clip or a non-positive frame count.
     """
@@ -123,7 +126,8 @@ def canonical_motion(
         raise InputError(f"frames must be positive, got {frames}", source)
     stop = num if frames is None else min(start + frames, num)
     out = np.array(joints[start:stop], dtype=np.float64)  # (T', 17, 3)
-    out[..., 2] -= floor_height(out)
+    if place_floor:
+        out[..., 2] -= floor_height(out)
     rate = float(fps)
     if target_fps is not None and float(target_fps) != rate:
         out = resample_linear(out, rate, float(target_fps))
@@ -132,15 +136,17 @@ def canonical_motion(
 
 
 def canonical_from_map(nodes: np.ndarray, names: tuple[str, ...],
-                       mapping: dict[str, str | tuple[str, ...]]) -> np.ndarray:
+                       mapping: dict[str, str | tuple[str, ...]], *, body_points: bool = True) -> np.ndarray:
     """Pick the canonical H36M-17 joints out of per-node positions.
 
     Args:
         nodes: (T, N, 3) node positions (any units and axes).
         names: (N,) node names.
         mapping: canonical joint -> node name, or a tuple of node names whose mean is the joint.
+        body_points: rebuild the torso and head on Human3.6M's body points (:func:`h36m_body_points`);
+            False for rigs whose joints are those points already.
     Returns:
-        (T, 17, 3) positions in :data:`~motion2video.skeletons.H36M_17` order.
+        (T, 17, 3) positions in :data:`~motion2video.core.skeletons.H36M_17` order.
     """
     index = {n: i for i, n in enumerate(names)}
     out = []
@@ -150,4 +156,5 @@ def canonical_from_map(nodes: np.ndarray, names: tuple[str, ...],
             out.append(nodes[:, [index[t] for t in target]].mean(axis=1))
         else:
             out.append(nodes[:, index[target]])
-    return h36m_body_points(np.stack(out, axis=1))  # (T, 17, 3) on Human3.6M's body points
+    raw = np.stack(out, axis=1)  # (T, 17, 3)
+    return h36m_body_points(raw) if body_points else raw  # (T, 17, 3) on Human3.6M's body points

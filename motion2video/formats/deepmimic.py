@@ -16,28 +16,38 @@ midpoint of root and chest, the wrists are the ``fixed`` wrist joints and the he
 rig uses, so the BVH twins of ``deepmimic/txt/*.txt`` give the same joints). Each foot gets a toe point,
 the front-bottom corner of the foot box in the character's ``BodyDefs``.
 
-The character file: ``character=`` when given; otherwise ``humanoid3d_character.txt`` found in the motion
-file's folder, a ``deepmimic/`` sibling of it, or the same two places in up to two folders above
-(:func:`find_character`), which covers ``deepmimic/txt/`` and ``deepmimic-cmu/`` in the shared data.
+The character file: ``character=`` when given; otherwise (:func:`find_character`)
+
+- ``humanoid3d_character.txt`` in the motion file's folder, a ``deepmimic/`` sibling of it, or the same two
+  places in up to two folders above (covers ``deepmimic/txt/`` and ``deepmimic-cmu/`` in the shared data);
+- the DeepMimic repository's layout: motions in ``data/motions/*.txt``, the character in
+  ``data/characters/humanoid3d.txt``, i.e. ``../characters/humanoid3d.txt`` from the motion's folder;
+- else the standard DeepMimic ``humanoid3d`` character shipped with the package
+  (:data:`DEFAULT_CHARACTER`, zlib licence beside it), with a note on stderr.
 """
 
 from __future__ import annotations
 
 import json
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.canonical import CanonicalClip, canonical_from_map, canonical_motion, to_project_frame
 from motion2video.formats.manifest import ManifestEntry, resolve_manifest
 from motion2video.formats.resample import round_fps
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 
 RIG = "deepmimic-humanoid-txt"
 CHARACTER_FILE = "humanoid3d_character.txt"
+# The DeepMimic repository keeps motions in data/motions/ and the character in data/characters/.
+REPOSITORY_CHARACTER = Path("..") / "characters" / "humanoid3d.txt"
+# DeepMimic's standard humanoid3d character (pybullet 3.2.7 wheel, zlib: data/LICENSE-humanoid3d.txt).
+DEFAULT_CHARACTER = Path(__file__).resolve().parent / "data" / "humanoid3d.txt"
 JOINT_DOFS = {"none": 0, "spherical": 4, "revolute": 1, "fixed": 0}
 # The head: this far above the neck joint along the neck's local y, metres (the deepmimic-humanoid BVH
 # rig's neck end site).
@@ -160,8 +170,9 @@ def read_deepmimic(path: str | Path, character: Character) -> DeepMimicClip:
     for i, row in enumerate(frames):
         if not isinstance(row, list) or len(row) != width:
             got = len(row) if isinstance(row, list) else type(row).__name__
-            raise InputError(f"frame {i}: expected {width} numbers for {Path(character.path).name}, got {got}",
-                             path)
+            hint = "; pass --character FILE, the motion's character" if character.path == str(DEFAULT_CHARACTER) else ""
+            raise InputError(f"frame {i}: expected {width} numbers for the character "
+                             f"{Path(character.path).name}, got {got}{hint}", path)
     try:
         values = np.array(frames, dtype=np.float64)  # (T, width)
     except (TypeError, ValueError):
@@ -227,15 +238,33 @@ def deepmimic_canonical(clip: DeepMimicClip, character: Character) -> CanonicalC
     return CanonicalClip(joints=joints, nodes=nodes, names=names, rig=RIG, unit=1.0, fps=clip.file_fps)
 
 
-def find_character(motion_path: str | Path, *, levels: int = 3) -> Path:
-    """The character file for a motion file (see the module docstring). Raises InputError when none."""
+def find_character(motion_path: str | Path, *, levels: int = 3) -> Path | None:
+    """The character file for a motion file (see the module docstring), or None when there is none."""
     folder = Path(motion_path).resolve().parent
     for parent in [folder, *list(folder.parents)[:levels - 1]]:
         for candidate in (parent / CHARACTER_FILE, parent / "deepmimic" / CHARACTER_FILE):
             if candidate.is_file():
                 return candidate
-    raise InputError(f"no DeepMimic character file ({CHARACTER_FILE}) beside the motion file or in a "
-                     "deepmimic/ folder above it; pass character=", motion_path)
+    candidate = (folder / REPOSITORY_CHARACTER).resolve()
+    return candidate if candidate.is_file() else None
+
+
+def resolve_character(motion_path: str | Path, character: str | Path | Character | None = None) -> Character:
+    """The character for ``motion_path``: ``character`` when given (a path or a :class:`Character`), else
+    :func:`find_character`, else :data:`DEFAULT_CHARACTER` with a note on stderr."""
+    if isinstance(character, Character):
+        return character
+    if character is not None:
+        if not Path(character).is_file():
+            raise InputError("no such character file", character)
+        return read_character(character)
+    found = find_character(motion_path)
+    if found is not None:
+        return read_character(found)
+    print(f"note: {motion_path}: no DeepMimic character file beside it ({CHARACTER_FILE}, or "
+          f"{REPOSITORY_CHARACTER.as_posix()} as the DeepMimic repository lays it out); using the standard "
+          "humanoid3d character (pass --character FILE for another)", file=sys.stderr)
+    return read_character(DEFAULT_CHARACTER)
 
 
 def load_deepmimic(
@@ -252,15 +281,14 @@ def load_deepmimic(
 
     Args:
         path: the motion file (``.txt``, JSON).
-        character: the character file or a :class:`Character` (None: :func:`find_character`).
+        character: the character file or a :class:`Character` (None: :func:`resolve_character`).
         fps: the true frame rate; wins over the manifest and the file (1 / the frame duration).
         target_fps: resample to this rate (linear interpolation of positions).
         frames: keep this many frames (None: all).
         manifest: as in :func:`motion2video.formats.bvh.load_bvh` (fps and label).
         label: action label (wins over the manifest's).
     """
-    if not isinstance(character, Character):
-        character = read_character(find_character(path) if character is None else character)
+    character = resolve_character(path, character)
     clip = read_deepmimic(path, character)
     entry = resolve_manifest(path, manifest)
     if entry is not None:

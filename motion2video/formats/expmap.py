@@ -26,11 +26,11 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.canonical import CanonicalClip, canonical_motion, to_project_frame
 from motion2video.formats.manifest import ManifestEntry, resolve_manifest
 from motion2video.formats.numbers import parse_number_rows
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 from motion2video.core.skeletons import H36M_17, h36m_body_points
 
 LAYOUT_FILE = "skeleton.json"

@@ -1,4 +1,4 @@
-"""Live Link Face CSV (ARKit blendshapes) -> :class:`~motion2video.motion.FaceMotion`.
+"""Live Link Face CSV (ARKit blendshapes) -> :class:`~motion2video.core.motion.FaceMotion`.
 
 Two header variants are read:
 
@@ -9,7 +9,7 @@ Two header variants are read:
 
 What the loader does:
 
-- Blendshape columns (PascalCase) are matched case-insensitively to :data:`~motion2video.motion.ARKIT_NAMES`
+- Blendshape columns (PascalCase) are matched case-insensitively to :data:`~motion2video.core.motion.ARKIT_NAMES`
   and put in Anny's order; all 52 must be present. Eye-rotation columns are not used (the eyeLook*
   blendshapes carry gaze).
 - A row is *tracking lost* when it lacks values (``Timecode,0`` rows, or empty fields) or when all its
@@ -36,10 +36,10 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.manifest import find_manifest_entry
 from motion2video.formats.resample import round_fps
-from motion2video.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
+from motion2video.core.motion import ARKIT_NAMES, FACE_DIM, NUM_EXPRESSIONS, FaceMotion
 
 HEAD_COLUMNS = ("headyaw", "headpitch", "headroll")
 TIMECODE_RATE = 60.0

@@ -10,8 +10,11 @@ path                                    read as
 ``"Frames"``                            character file found beside it), same manifest rules
 other ``*.txt``                         exp-map text file (:mod:`~motion2video.formats.expmap`, with the
                                         ``skeleton.json`` layout found beside or above it), same manifest rules
-``*.npz`` with ``joints``               body :class:`~motion2video.motion.Motion`
-``*.npz`` with ``face``                 :class:`~motion2video.motion.FaceMotion`
+``*.npy``, or ``*.npz`` with one array  joint array (:mod:`~motion2video.formats.joint_arrays`): ``(T, 22, 3)``
+                                        SMPL/HumanML3D joints (y up, 20 fps unless ``fps``) or ``(T, 17, 3)``
+                                        H36M-17; never unpickled
+``*.npz`` with ``joints``               body :class:`~motion2video.core.motion.Motion`
+``*.npz`` with ``face``                 :class:`~motion2video.core.motion.FaceMotion`
 ``*.npz`` with ``positions_3d``         VideoPose3D Human3.6M file holding exactly one clip (else use
                                         :func:`~motion2video.formats.videopose3d.load_videopose3d`)
 a directory, or another ``*.json``      OpenPose keypoints (2D, image pixels)
@@ -25,8 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.formats.face_csv import load_face_csv
+from motion2video.formats.joint_arrays import is_joint_array, load_joint_array
 from motion2video.formats.mocap import is_deepmimic_file, load_mocap
 from motion2video.formats.npz import (
     load_face_npz,
@@ -39,9 +43,9 @@ from motion2video.formats.npz import (
 from motion2video.formats.openpose import load_openpose_folder
 from motion2video.formats.resample import resample_linear
 from motion2video.formats.videopose3d import load_videopose3d
-from motion2video.motion import NUM_EXPRESSIONS, FaceMotion, Motion
+from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion, Motion
 
-MOTION_SUFFIXES = (".bvh", ".txt", ".npz", ".json", ".csv")
+MOTION_SUFFIXES = (".bvh", ".txt", ".npz", ".npy", ".json", ".csv")
 
 
 def _check_rate(value: float | None, name: str, path: Path) -> None:
@@ -63,7 +67,8 @@ def resample_motion(motion: Motion | FaceMotion, target_fps: float) -> Motion | 
 
 
 def load_motion(
-    path: str | Path, *, fps: float | None = None, target_fps: float | None = None
+    path: str | Path, *, fps: float | None = None, target_fps: float | None = None,
+    character: str | Path | None = None,
 ) -> Motion | FaceMotion:
     """Read any supported motion file (see the module table).
 
@@ -71,6 +76,8 @@ def load_motion(
         path: file or OpenPose directory.
         fps: the true frame rate of the data, overriding what the file or manifest says.
         target_fps: resample the result to this rate (linear interpolation).
+        character: the character file of DeepMimic motion files (default: found beside the motion, else
+            the standard humanoid3d); other files ignore it.
     Raises:
         InputError: missing path, unknown extension, or a malformed file (one line naming the file).
     """
@@ -81,14 +88,19 @@ def load_motion(
         raise InputError("no such file or directory", path)
     suffix = path.suffix.lower()
     if suffix in (".bvh", ".txt") or (suffix == ".json" and path.is_file() and is_deepmimic_file(path)):
-        return load_mocap(path, fps=fps, target_fps=target_fps, manifest=True)
+        return load_mocap(path, fps=fps, target_fps=target_fps, manifest=True, character=character)
     if path.is_dir() or suffix == ".json":
         motion: Motion | FaceMotion = load_openpose_folder(path, fps=25.0 if fps is None else fps)
     elif suffix == ".csv":
         motion = load_face_csv(path, fps=fps)
+    elif suffix == ".npy":
+        motion = load_joint_array(path, fps=fps)
     elif suffix == ".npz":
-        kind = npz_kind(npz_keys(path))
-        if kind == "body":
+        keys = npz_keys(path)
+        kind = npz_kind(keys)
+        if kind not in ("face", "videopose3d") and is_joint_array(path, keys):
+            motion = load_joint_array(path, fps=fps)
+        elif kind == "body":
             motion = load_motion_npz(path)
         elif kind == "face":
             motion = load_face_npz(path)
@@ -99,8 +111,8 @@ def load_motion(
                                  "motion2video.formats.videopose3d.load_videopose3d(path, subject, action)", path)
             motion = clips[0]
         else:
-            raise InputError("unknown .npz layout: expected key 'joints' (body), 'face' (face) or "
-                             "'positions_3d' (VideoPose3D)", path)
+            raise InputError("unknown .npz layout: expected key 'joints' (body), 'face' (face), "
+                             "'positions_3d' (VideoPose3D), or exactly one joint array", path)
         if fps is not None:
             motion = _with_fps(motion, fps)
     else:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 REQUIRED_COLUMNS = ("file",)
 

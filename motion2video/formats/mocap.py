@@ -19,15 +19,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
+from motion2video.core.skeletons import BODY_POINT_RIGS
 from motion2video.formats.canonical import CanonicalClip, canonical_motion
-from motion2video.formats.manifest import (  # noqa: F401 (default_trim: also imported from here)
+from motion2video.formats.manifest import (
     ManifestEntry,
     default_trim,
     read_manifest,
     resolve_manifest,
 )
-from motion2video.motion import Motion
+from motion2video.core.motion import Motion
 
 KINDS = ("bvh", "deepmimic", "expmap")
 MOCAP_SUFFIXES = (".bvh", ".txt", ".json")
@@ -68,13 +69,16 @@ def mocap_kind(path: str | Path, entry: ManifestEntry | None = None) -> str:
     raise InputError(f"not a motion-capture file (expected one of {', '.join(MOCAP_SUFFIXES)})", path)
 
 
-def mocap_canonical(path: str | Path, *, entry: ManifestEntry | None = None) -> CanonicalClip:
+def mocap_canonical(path: str | Path, *, entry: ManifestEntry | None = None,
+                    character: str | Path | None = None) -> CanonicalClip:
     """A whole mocap file in the project frame (metres, z up, every node), before trimming and floor
     placement; ``fps`` is the rate the file states (BVH header, DeepMimic frame duration, exp-map layout).
 
     Args:
         path: the file.
         entry: its manifest row (used only to tell the kind, :func:`mocap_kind`).
+        character: DeepMimic files only: the character file (None: found beside the motion, else the
+            standard humanoid3d; :func:`~motion2video.formats.deepmimic.resolve_character`).
     """
     kind = mocap_kind(path, entry)
     if kind == "bvh":
@@ -82,10 +86,10 @@ def mocap_canonical(path: str | Path, *, entry: ManifestEntry | None = None) -> 
 
         return canonical_positions(read_bvh(path))
     if kind == "deepmimic":
-        from motion2video.formats.deepmimic import deepmimic_canonical, find_character, read_character, read_deepmimic
+        from motion2video.formats.deepmimic import deepmimic_canonical, read_deepmimic, resolve_character
 
-        character = read_character(find_character(path))
-        return deepmimic_canonical(read_deepmimic(path, character), character)
+        rig = resolve_character(path, character)
+        return deepmimic_canonical(read_deepmimic(path, rig), rig)
     from motion2video.formats.expmap import expmap_canonical, find_layout, read_expmap_layout, read_expmap_values
 
     layout = read_expmap_layout(find_layout(path))
@@ -100,6 +104,7 @@ def load_mocap(
     manifest: str | Path | ManifestEntry | bool | None = True,
     label: str | None = None,
     canonical: CanonicalClip | None = None,
+    character: str | Path | None = None,
 ) -> Motion:
     """Load any mocap file as a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
 
@@ -114,16 +119,17 @@ def load_mocap(
             :class:`ManifestEntry`; None / False for none.
         label: action label (wins over the manifest's).
         canonical: :func:`mocap_canonical` of this file when the caller has it already.
+        character: DeepMimic files only: their character file (see :func:`mocap_canonical`).
     """
     path = Path(path)
     entry = resolve_manifest(path, manifest)
-    canon = mocap_canonical(path, entry=entry) if canonical is None else canonical
+    canon = mocap_canonical(path, entry=entry, character=character) if canonical is None else canonical
     if entry is not None:
         fps = entry.fps if fps is None else fps
         label = entry.label if label is None else label
     return canonical_motion(canon.joints, fps=canon.fps if fps is None else float(fps), source=str(path),
                             start=default_trim(canon.rig) if entry is not None else 0,
-                            target_fps=target_fps, label=label)
+                            target_fps=target_fps, label=label, place_floor=canon.rig not in BODY_POINT_RIGS)
 
 
 def mocap_files(folder: str | Path) -> dict[str, ManifestEntry | None]:

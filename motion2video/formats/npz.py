@@ -5,7 +5,7 @@ Body motion keys: ``joints`` (T, J, 2|3) float32, ``fps`` (scalar), ``skeleton``
 string, Anny phenotype values), optional ``label``. Strings are stored as numpy unicode scalars so that
 reading never needs ``allow_pickle``.
 
-Writing is atomic (:mod:`motion2video.atomic`).
+Writing is atomic (:mod:`motion2video.core.atomic`).
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.atomic import save_npz
-from motion2video.errors import InputError
-from motion2video.motion import FACE_DIM, FaceMotion, Motion
+from motion2video.core.atomic import save_npz
+from motion2video.core.errors import InputError
+from motion2video.core.motion import FACE_DIM, FaceMotion, Motion
 
 BODY_KEYS = ("joints", "fps", "skeleton")
 FACE_KEYS = ("face", "fps", "identity")

@@ -6,7 +6,7 @@ import io
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 
 def parse_number_rows(lines: list[tuple[int, str]], width: int, source: str, *, delimiter: str | None = None,

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import Motion
-from motion2video.skeletons import BODY_25, OPENPOSE_18, OPENPOSE_TO_H36M, Skeleton, convert_openpose_to_h36m
+from motion2video.core.errors import InputError
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import BODY_25, OPENPOSE_18, OPENPOSE_TO_H36M, Skeleton, convert_openpose_to_h36m
 
 _LAYOUTS = {18 * 3: OPENPOSE_18, 25 * 3: BODY_25}
 

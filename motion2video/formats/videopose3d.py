@@ -5,7 +5,7 @@ so the one key holds a pickled dict. This loader is the only place in the projec
 ``allow_pickle=True``, and only for this explicitly named format: a pickle can run code, so load such a file
 only from a source you trust. Positions are Human3.6M world coordinates in metres, z up (the project's
 frame); the capture rate is 50 fps. The 32 joints are reduced to 17 with
-:data:`~motion2video.skeletons.H36M_32_TO_17`, as DLow and VideoPose3D do.
+:data:`~motion2video.core.skeletons.H36M_32_TO_17`, as DLow and VideoPose3D do.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.errors import InputError
-from motion2video.motion import Motion
-from motion2video.skeletons import H36M_32, H36M_32_TO_17
+from motion2video.core.errors import InputError
+from motion2video.core.motion import Motion
+from motion2video.core.skeletons import H36M_32, H36M_32_TO_17
 
 H36M_FPS = 50.0
 

@@ -21,10 +21,10 @@ from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
 
 from motion2video import __version__
-from motion2video.atomic import atomic_output
+from motion2video.core.atomic import atomic_output
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
+from motion2video.core.errors import InputError
 from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
-from motion2video.errors import InputError
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 

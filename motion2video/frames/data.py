@@ -31,26 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.atomic import save_npz
-from motion2video.errors import InputError
-from motion2video.skeletons import H36M_17
-from motion2video.frames.specs import (  # noqa: F401 (this module's public names, kept)
-    BACKGROUND_IMAGES,
+from motion2video.core.atomic import save_npz
+from motion2video.core.errors import InputError
+from motion2video.core.skeletons import H36M_17
+from motion2video.frames.specs import (
     DATA_VERSION,
-    HAIR_COLOURS,
-    IRIS_COLOURS,
-    PHENOTYPE_KEYS,
-    SKIN_TONES,
-    SPLITS,
     DatasetSpec,
     FrameSequences,
-    Identity,
     background_crop,
     background_images,
-    default_data_root,
-    default_spec,
-    identities,
-    is_test_clip,
     sample_identity,
 )
 

@@ -28,7 +28,8 @@ import numpy as np
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from motion2video.frames.baselines import BASELINES, run_baseline
-from motion2video.frames.data import FramePairs, FrameSequences, evaluation_pair_index, make_pairs
+from motion2video.frames.data import FramePairs, evaluation_pair_index, make_pairs
+from motion2video.frames.specs import FrameSequences
 from motion2video.frames.model import FrameGenerator, generate
 from motion2video.frames.warp import WarpGenerator, warp_generate
 

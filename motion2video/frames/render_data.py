@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 from motion2video.frames.specs import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
                                        default_data_root, identities, is_test_clip)
 
@@ -152,7 +152,7 @@ def render_body_sequence(source: SequenceSource, rng: np.random.Generator, ident
 def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity, *,
                    head: bool = False) -> tuple["BodyWindow", int, int]:
     """One body sequence as a :class:`BodyWindow` (with head masks when ``head``), its clip index and start."""
-    from motion2video.motion import Motion
+    from motion2video.core.motion import Motion
 
     spec = source.spec
     ci = int(rng.integers(len(source.clip_paths)))
@@ -312,7 +312,7 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
         (T, S, S) uint8 grey structure renders, masks (T, S, S) bool, clip index, first source frame.
     """
     from motion2video.data.face_dynamics import head_pose_track
-    from motion2video.motion import NUM_EXPRESSIONS, FaceMotion
+    from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion
     from renderers.body import BodyStyle
     from renderers.registry import renderer_for
 

@@ -16,11 +16,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motion2video.errors import InputError
-from motion2video.schedule import learning_rate  # the one schedule of both training loops
+from motion2video.core.errors import InputError
+from motion2video.core.schedule import learning_rate  # the one schedule of both training loops
 from motion2video.frames.checkpoint import (build_model, load_frame_model, load_train_state, model_kind,
                                             save_frame_model, save_train_state, state_path)
-from motion2video.frames.data import FrameSequences, make_pairs, sample_pair_index, structure_channels
+from motion2video.frames.specs import FrameSequences
+from motion2video.frames.data import make_pairs, sample_pair_index, structure_channels
 from motion2video.frames.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
                                        images_to_tensor, reconstruction_loss)
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig

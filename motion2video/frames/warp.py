@@ -36,7 +36,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from motion2video.errors import InputError
+from motion2video.core.errors import InputError
 
 NUM_JOINTS = 17
 # Limb parts: (name, joint a, joint b); the transform follows the segment a -> b.

@@ -47,9 +47,11 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
-from motion2video.models.blocks import (GaussianHead, LSTMCell, LSTMDecoder, LSTMEncoder, check_sequences,
-                                        kl_std_normal, motion_stats_error, randn, reconstruction_mse,
-                                        repeat_batch, reparameterize)
+from motion2video.models.blocks import (
+    GaussianHead, LSTMCell, LSTMDecoder, LSTMEncoder, kl_std_normal, motion_stats_error, randn, reconstruction_mse,
+    repeat_batch, reparameterize,
+)
+from motion2video.models.base import check_sequences
 from motion2video.models.flow import Flow, FlowFitResult, fit_flow
 
 

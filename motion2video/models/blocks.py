@@ -20,7 +20,7 @@ import math
 import torch
 from torch import nn
 
-from motion2video.models.base import LatentPosterior, check_sample_args, check_sequences  # noqa: F401
+from motion2video.models.base import LatentPosterior
 
 # --------------------------------------------------------------------------------------------------
 # Shape checks and random numbers

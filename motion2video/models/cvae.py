@@ -18,17 +18,10 @@ from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
 from motion2video.models.blocks import (
-    GaussianHead,
-    LSTMDecoder,
-    LSTMEncoder,
-    check_sequences,
-    kl_std_normal,
-    linear_ramp,
-    randn,
-    reconstruction_l1,
-    repeat_batch,
+    GaussianHead, LSTMDecoder, LSTMEncoder, kl_std_normal, linear_ramp, randn, reconstruction_l1, repeat_batch,
     reparameterize,
 )
+from motion2video.models.base import check_sequences
 
 
 @dataclass(frozen=True)

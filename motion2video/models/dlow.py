@@ -39,7 +39,8 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentSampler, LossOutput, build_model, register_model
-from motion2video.models.blocks import GRUEncoder, check_sequences, randn
+from motion2video.models.blocks import GRUEncoder, randn
+from motion2video.models.base import check_sequences
 
 
 @dataclass(frozen=True)

@@ -27,9 +27,11 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
-from motion2video.models.blocks import (GaussianHead, GRUDecoder, GRUEncoder, check_sequences, kl_diag_gaussians,
-                                        kl_std_normal, logistic_ramp, motion_stats_error, randn, reconstruction_mse,
-                                        repeat_batch, reparameterize, teacher_forcing_probability)
+from motion2video.models.blocks import (
+    GaussianHead, GRUDecoder, GRUEncoder, kl_diag_gaussians, kl_std_normal, logistic_ramp, motion_stats_error, randn,
+    reconstruction_mse, repeat_batch, reparameterize, teacher_forcing_probability,
+)
+from motion2video.models.base import check_sequences
 
 
 def lcp_posterior(data: LatentPosterior, cond: LatentPosterior) -> LatentPosterior:

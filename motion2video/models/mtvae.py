@@ -26,9 +26,11 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, register_model
-from motion2video.models.blocks import (LSTMDecoder, LSTMEncoder, SkipMLP, check_sequences, kl_std_normal,
-                                        linear_ramp, motion_stats_error, randn, reconstruction_l1, repeat_batch,
-                                        reparameterize)
+from motion2video.models.blocks import (
+    LSTMDecoder, LSTMEncoder, SkipMLP, kl_std_normal, linear_ramp, motion_stats_error, randn, reconstruction_l1,
+    repeat_batch, reparameterize,
+)
+from motion2video.models.base import check_sequences
 
 
 def cycle_consistency(z_star: torch.Tensor, z: torch.Tensor) -> torch.Tensor:

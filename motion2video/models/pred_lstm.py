@@ -13,12 +13,8 @@ import torch
 from torch import nn
 
 from motion2video.models.base import DeterministicSampler, LossOutput, register_model
-from motion2video.models.blocks import (
-    LSTMDecoder,
-    LSTMEncoder,
-    check_sequences,
-    reconstruction_l1,
-)
+from motion2video.models.blocks import LSTMDecoder, LSTMEncoder, reconstruction_l1
+from motion2video.models.base import check_sequences
 
 
 @dataclass(frozen=True)

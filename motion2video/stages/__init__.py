@@ -4,7 +4,8 @@
 - :mod:`~motion2video.stages.sampling`: sample K futures of an observed clip;
 - :mod:`~motion2video.stages.structure`: draw structure (one ``renderer_for(layout, style)`` table);
 - :mod:`~motion2video.stages.frames`: generate frames with the keypoint-conditioned frame generator;
-- writing video is :mod:`motion2video.video`.
+- :mod:`~motion2video.stages.reference`: the reference appearance image and its pose;
+- writing video is :mod:`motion2video.formats.video`.
 
 Stages import the core, the renderers, the models and the frame generator; never an application.
 """

@@ -2,7 +2,7 @@
 feeds its model with.
 
 One loader per input kind, chosen by the model's layout: body models take 3D h36m-17 motion (BVH of any rig,
-DeepMimic / exp-map text, motion npz, ...), face models take face captures (Live Link Face CSV, FaceMotion
+DeepMimic / exp-map text, motion npz, ..., or a video of a person, whose pose is estimated and cached), face models take face captures (Live Link Face CSV, FaceMotion
 npz). The clip is resampled to the model's rate exactly as its training data was
 (:mod:`motion2video.data.dataset`); a face capture with no head pose gets the same procedural head track the
 training captures got (``DatasetConfig.face_head_pose``).
@@ -10,6 +10,7 @@ training captures got (``DatasetConfig.face_head_pose``).
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,10 +49,18 @@ def _body_data(bundle, motion, path: Path) -> np.ndarray:
     from motion2video.data.dataset import _body_clip_from_motion
 
     if isinstance(motion, FaceMotion):
-        raise InputError(f"{bundle.name} is a body model, but this file holds face motion", path)
+        raise InputError(f"{bundle.label} is a body model, but this file holds face motion", path)
+    if (isinstance(motion, Motion) and motion.skeleton == "h36m-17" and motion.dim == 2
+            and bundle.data_config.layout == "body2d"):
+        # A 2D model sees the keypoints through its virtual camera: put them on a plane facing that camera.
+        from motion2video.pose.h36m import image_to_plane
+
+        motion = Motion(image_to_plane(motion.joints).astype(np.float32), motion.fps, "h36m-17", motion.source)
     if not isinstance(motion, Motion) or motion.skeleton != "h36m-17" or motion.dim != 3:
-        raise InputError(f"body models need 3D h36m-17 joints (BVH, motion npz, ...), got skeleton "
-                         f"{motion.skeleton} with D={motion.dim}", path)
+        hint = " (2D keypoints: use a 2D model such as mtvae-add-2d, or a video, whose 3D pose is estimated)" \
+            if isinstance(motion, Motion) and motion.dim == 2 else ""
+        raise InputError(f"body models need 3D h36m-17 joints (BVH, motion npz, a video, ...), got skeleton "
+                         f"{motion.skeleton} with D={motion.dim}{hint}", path)
     return _body_clip_from_motion(motion, name=path.name, fps=bundle.data_config.fps).data
 
 
@@ -60,7 +69,7 @@ def _face_data(bundle, motion, path: Path) -> np.ndarray:
     from motion2video.data.dataset import _face_clip_from_motion
 
     if not isinstance(motion, FaceMotion):
-        raise InputError(f"{bundle.name} is a face model, but this file holds body motion", path)
+        raise InputError(f"{bundle.label} is a face model, but this file holds body motion", path)
     cfg = bundle.data_config
     data = _face_clip_from_motion(motion, name=path.name, fps=cfg.fps, head_pose=cfg.face_head_pose).data
     data[:, :52] = np.clip(data[:, :52], 0.0, 1.0)
@@ -70,8 +79,45 @@ def _face_data(bundle, motion, path: Path) -> np.ndarray:
 LOADERS = {"body3d": _body_data, "body2d": _body_data, "face": _face_data}
 
 
-def load_clip(bundle, path: str | Path) -> LoadedClip:
-    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.checkpoint.ModelBundle`).
+def is_video_path(path: str | Path) -> bool:
+    """A video file (``.mp4``, ``.avi``, ``.mov``, ...) by its extension."""
+    from motion2video.stages.people import is_video
+
+    return is_video(path)
+
+
+def _note(line: str) -> None:
+    print(f"note: {line}", file=sys.stderr)
+
+
+def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion:
+    """The motion of the person in a video for ``bundle``'s model: its estimated pose
+    (:func:`motion2video.stages.people.video_pose`, cached in the user cache by the file's hash) at the
+    video's frame rate: 3D joints (metres, z up) for 3D body models, the 2D image keypoints for 2D body models
+    (which see them through their virtual camera, :func:`motion2video.pose.h36m.image_to_plane`). Face models
+    refuse it."""
+    from motion2video.pose.files import pose_motion_2d, pose_motion_3d
+    from motion2video.stages.people import video_pose
+
+    layout = bundle.data_config.layout
+    if layout == "face":
+        raise InputError(f"{bundle.name} is a face model; a video gives body motion", path)
+    pose = video_pose(path, person=person, note=_note)
+    return pose_motion_2d(pose, path) if layout == "body2d" else pose_motion_3d(pose, path)
+
+
+def load_clip(bundle, path: str | Path, *, character: str | Path | None = None,
+              fps: float | None = None) -> LoadedClip:
+    """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.models.checkpoint.ModelBundle`).
+
+    Args:
+        character: the character file of a DeepMimic motion file (default: found beside it, else the
+            standard humanoid3d).
+        fps: the file's true frame rate, for files that state none or a wrong one (joint arrays: 20 fps
+            for SMPL-22 by default).
+
+    ``fps``: the clip's true frame rate, overriding what the file says (an OpenPose folder has none: 25
+    without it); not for videos, whose rate is their own.
 
     Returns:
         A :class:`LoadedClip` at the model's rate.
@@ -82,9 +128,15 @@ def load_clip(bundle, path: str | Path) -> LoadedClip:
     from motion2video.formats.io import load_motion
 
     path = Path(path)
-    if path.is_dir():
-        raise InputError("a model takes one clip file, not a folder", path)
-    motion = load_motion(path)
+    if path.is_dir() and bundle.data_config.layout != "body2d":
+        raise InputError("a model takes one clip file, not a folder (OpenPose folders: 2D body models only)", path)
+    if is_video_path(path):
+        if fps is not None:
+            raise InputError("a video has its own frame rate; --input-fps is for files without one (OpenPose, "
+                             "joint arrays)", path)
+        motion = video_motion(bundle, path)
+    else:
+        motion = load_motion(path, fps=fps, character=character)
     data = LOADERS[bundle.data_config.layout](bundle, motion, path)
     identity = dict(motion.identity) if isinstance(motion, FaceMotion) else {}
     source_frames = motion.num_frames

@@ -15,7 +15,7 @@ from typing import Iterator
 
 import numpy as np
 
-from motion2video.reference import Reference
+from motion2video.stages.reference import Reference
 from motion2video.stages.sampling import torch_threads
 from motion2video.stages.structure import Structures, structure_maps, structure_previews, timeline_rows
 

@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import torch
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.data.dataset import DatasetConfig, decode_samples, encode_windows
@@ -48,7 +48,7 @@ def behavior_model(bundle: ModelBundle) -> BehaviorModel:
     """The bundle's model when it is a behaviour model; InputError otherwise."""
     if not isinstance(bundle.model, BehaviorModel):
         raise InputError(f"behaviour transfer needs a 'behavior' model (behaviour encoder + posture-conditioned "
-                         f"decoder), but this checkpoint is a {bundle.name!r} model", bundle.path or bundle.name)
+                         f"decoder), but {bundle.label} is a {bundle.name!r} model", bundle.path or bundle.name)
     return bundle.model
 
 
@@ -115,7 +115,8 @@ def analogy_model(bundle: ModelBundle) -> torch.nn.Module:
     model = bundle.model
     if bundle.kind in ("deterministic", "baseline") or not (hasattr(model, "encode") and hasattr(model, "decode")):
         raise InputError(f"analogy needs a latent-variable model with a transformation encoder (mtvae-add, "
-                         f"mtvae-concat, cvae, lcpvae, behavior), but {bundle.name!r} is a {bundle.kind} model "
+                         f"mtvae-concat, cvae, lcpvae, behavior), but {bundle.label} is a {bundle.kind} "
+                         f"{bundle.name!r} model "
                          "without one", bundle.path or bundle.name)
     return model
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from motion2video.checkpoint import ModelBundle
+from motion2video.models.checkpoint import ModelBundle
 from motion2video.core.errors import InputError
 from motion2video.data.dataset import DatasetConfig, decode_samples, encode_observation, observed_in_layout
 
@@ -144,7 +144,7 @@ def sample_forecast(bundle, clip: np.ndarray, *, samples: int, observed: int | N
     """K futures of ``clip[start:start + observed]`` from a motion model.
 
     Args:
-        bundle: a :class:`~motion2video.checkpoint.ModelBundle`.
+        bundle: a :class:`~motion2video.models.checkpoint.ModelBundle`.
         clip: (T, 17, 3) world joints or (T, 58) face parameters at the model's rate
             (:func:`motion2video.stages.clips.load_clip`).
         samples: K >= 1.

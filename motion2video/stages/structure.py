@@ -24,17 +24,8 @@ import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.core.rotations import heading_of
-from motion2video.reference import Reference
-from renderers.registry import (  # noqa: F401 (this stage's names)
-    LAYOUTS,
-    PIXELS,
-    RENDERERS,
-    STYLES,
-    StructureRenderer,
-    check_style,
-    layout_of,
-    renderer_for,
-)
+from motion2video.stages.reference import Reference
+from renderers.registry import PIXELS, renderer_for
 
 # Two clearly different Anny identities: the source keeps the renderer's default look, the target gets
 # another phenotype and other clothes, so the video shows the behaviour moving to another person.
@@ -222,7 +213,7 @@ def render_structures(forecast, *, domain: str, size: int, reference: Reference)
     structure (face) with the conventions of the generator's training data.
 
     Args:
-        forecast: the :class:`motion2video.forecast.Forecast` from :func:`sample_futures`.
+        forecast: the :class:`motion2video.stages.sampling.Forecast` from :func:`sample_futures`.
         domain: the frame generator's domain; must match the forecast's layout.
         size: the generator's image size.
         reference: from :func:`load_reference`.
@@ -244,7 +235,7 @@ def render_structures(forecast, *, domain: str, size: int, reference: Reference)
 
 def _render_face_structures(forecast, size: int, reference: Reference) -> np.ndarray:
     """(1 + To + K*Tf, S, S) uint8 grey structure renders: reference, observed, futures."""
-    from motion2video.motion import FaceMotion
+    from motion2video.core.motion import FaceMotion
 
     k, tf = forecast.futures.shape[:2]
     pose = reference.pose

@@ -1,4 +1,4 @@
-"""Write video: the layouts every application shares, on top of :mod:`motion2video.video` (H.264 mp4 / GIF
+"""Write video: the layouts every application shares, on top of :mod:`motion2video.formats.video` (H.264 mp4 / GIF
 writing, borders, labels, grids).
 """
 
@@ -9,7 +9,7 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from motion2video.core.errors import InputError
-from motion2video.video import add_border, label
+from motion2video.formats.video import add_border, label
 
 CELL_SIZES = (32, 2048)  # the smallest and largest grid cell the applications draw, pixels
 

@@ -1,0 +1,98 @@
+"""`motion2video pose`: the pose of a person in a photo (reference pose file) or a video (motion npz)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from motion2video.commands.common import add_command
+from motion2video.core.errors import InputError
+
+HELP = "estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose"
+
+DESCRIPTION = """\
+Estimate the pose of one person with the bundled BlazePose full model (no download). A photo gives its
+reference pose file (IMAGE.pose.npz: the canonical H36M-17 joints in its pixels), which synthesize and
+transfer read beside the image. A video (.mp4, .avi, .mov, ...) gives a motion .npz at the video's own frame
+rate: 3D joints (metres, z up, floor at 0; every motion command reads them), the 2D joints in the video's
+pixels (joints_2d), per-joint confidence, and which frames were interpolated. Frames without the person at
+the ends are trimmed; gaps inside are interpolated (the count is printed). --person picks one of several
+people: the largest (default) or an index counted left to right in the first frame with people; a video
+follows that person in every frame. --overlay draws the joints on the input so you can check them.
+"""
+
+EXAMPLES = """\
+examples:
+  motion2video pose ../shared/data/photos/skier.jpg -o out/skier.pose.npz --overlay out/skier_pose.png
+  motion2video pose ../shared/data/photos/three_walking.jpg -o out/walker.pose.npz --person 0
+  motion2video pose ../shared/data/video/dancer.avi -o out/dancer.npz --overlay out/dancer_pose.mp4
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = add_command(sub, "pose", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p.add_argument("input", help="a photo (.png, .jpg, ...) or a video (.mp4, .avi, .mov, .mkv, .webm)")
+    p.add_argument("-o", "--output", required=True,
+                   help="output .npz: a photo's reference pose file (name it IMAGE.pose.npz beside the image for "
+                        "synthesize to find it) or a video's motion file")
+    p.add_argument("--person", default="largest",
+                   help="which person: 'largest' (default) or an index counted left to right (0 = leftmost)")
+    p.add_argument("--overlay", default=None,
+                   help="also write the joints drawn on the input: a .png for a photo, an .mp4 for a video")
+
+
+def run(args: argparse.Namespace) -> int:
+    from motion2video.core.atomic import check_output_path
+    from motion2video.pose.estimate import parse_person
+    from motion2video.stages import people
+
+    src = Path(args.input)
+    try:
+        person = parse_person(args.person)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    if not src.exists():
+        raise InputError("no such file", src)
+    video = people.is_video(src)
+    if not video and not people.is_image(src):
+        raise InputError(f"unsupported input extension {src.suffix or '(none)'!r}: a photo (.png, .jpg, ...) or a "
+                         "video (.mp4, .avi, .mov, ...)", src)
+    out = check_output_path(args.output, (".npz",))
+    if args.overlay is not None:
+        check_output_path(args.overlay, (".mp4",) if video else (".png",))
+    if video:
+        return _video(src, out, person, args.overlay)
+    return _photo(src, out, person, args.overlay)
+
+
+def _photo(src: Path, out: Path, person, overlay: str | None) -> int:
+    from motion2video.stages.reference import reference_pose_path, save_reference_pose
+    from motion2video.stages import people
+
+    photo = people.photo_pose(src, person=person)
+    save_reference_pose(out, people.reference_pose_of(photo.pose))
+    which = "the largest" if person == "largest" else f"person {person} from the left"
+    print(f"found {photo.people} {'person' if photo.people == 1 else 'people'}; took {which}")
+    print(f"wrote {out} (17 joints in {photo.pose.width}x{photo.pose.height} pixels, mean confidence "
+          f"{photo.pose.confidence.mean():.2f})")
+    if out.resolve() != reference_pose_path(src).resolve():
+        print(f"note: synthesize and transfer look for {reference_pose_path(src).name} beside the image; "
+              f"pass --reference-pose {out} to use this file")
+    if overlay is not None:
+        print(f"wrote {people.write_photo_overlay(overlay, photo)}")
+    return 0
+
+
+def _video(src: Path, out: Path, person, overlay: str | None) -> int:
+    from motion2video.pose.files import save_video_pose
+    from motion2video.stages import people
+
+    pose = people.video_pose(src, person=person, cache=False)
+    save_video_pose(out, pose)
+    trimmed_end = pose.video_frames - pose.first_frame - pose.num_frames
+    print(f"wrote {out} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
+          f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
+          f"{trimmed_end} at the end of {pose.video_frames})")
+    if overlay is not None:
+        print(f"wrote {people.write_video_overlay(overlay, src, pose)}")
+    return 0

@@ -1,3 +1,0 @@
-"""Old import path, kept so existing code and checkpoints' callers work: everything lives in :mod:`motion2video.core.errors`."""
-
-from motion2video.core.errors import *  # noqa: F401,F403

@@ -1,0 +1,74 @@
+"""Per-action and macro-averaged metrics (issue 24): one pooled average over windows is dominated by the action
+with the most windows (salsa, Indian dance) and can hide a regression on the others.
+
+Pure functions on per-window metric arrays: :func:`group_by_action` gives each action's window indices (the
+action is the window's clip label, :func:`motion2video.data.corpus.action_class` of the manifest's action
+column), :func:`per_action_means` averages per-window metrics within each action, :func:`macro_average` is the
+unweighted mean over actions and :func:`window_weighted_average` the mean weighted by window counts (which
+equals the pooled mean over all windows for any per-window metric).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+UNLABELLED = "unlabelled"  # the action of windows whose clip has no label
+COUNT_KEY = "windows"  # the per-action entry holding the number of windows
+
+
+def action_names(labels) -> np.ndarray:
+    """(N,) str: each window's action label, :data:`UNLABELLED` for None or empty labels."""
+    return np.array([str(lab) if lab else UNLABELLED for lab in labels], dtype=object)
+
+
+def group_by_action(labels) -> dict[str, np.ndarray]:
+    """Window indices per action: ``{action: (n_a,) int64}``, the actions ordered by window count (largest
+    first), then by name. ``labels``: (N,) per-window action labels (None = unlabelled)."""
+    names = action_names(labels)
+    actions = sorted(set(names.tolist()), key=lambda a: (-int((names == a).sum()), a))
+    return {a: np.flatnonzero(names == a) for a in actions}
+
+
+def per_action_means(per_window: dict[str, np.ndarray], groups: dict[str, np.ndarray]) -> dict[str, dict[str, float]]:
+    """Mean of every per-window metric within each action, plus the action's window count.
+
+    Args:
+        per_window: metric name -> (N,) value per window.
+        groups: from :func:`group_by_action`.
+    Returns:
+        ``{action: {metric: mean over its windows, ..., "windows": n_a}}``.
+    """
+    out = {}
+    for action, idx in groups.items():
+        row = {k: float(np.mean(np.asarray(v, np.float64)[idx])) for k, v in per_window.items()}
+        row[COUNT_KEY] = int(len(idx))
+        out[action] = row
+    return out
+
+
+def _metric_keys(per_action: dict[str, dict[str, float]]) -> list[str]:
+    keys: list[str] = []
+    for row in per_action.values():
+        keys += [k for k in row if k != COUNT_KEY and k not in keys]
+    return keys
+
+
+def macro_average(per_action: dict[str, dict[str, float]]) -> dict[str, float]:
+    """The unweighted mean over actions of each metric (every action counts once, whatever its window count);
+    a metric missing in some action is averaged over the actions that have it."""
+    if not per_action:
+        raise ValueError("no actions to average")
+    return {k: float(np.mean([row[k] for row in per_action.values() if k in row])) for k in _metric_keys(per_action)}
+
+
+def window_weighted_average(per_action: dict[str, dict[str, float]]) -> dict[str, float]:
+    """The mean over actions of each metric weighted by the actions' window counts: for a metric that is a
+    mean over windows (ADE, FDE, APD, MMADE, MMFDE) this is the pooled value over all windows."""
+    if not per_action:
+        raise ValueError("no actions to average")
+    out = {}
+    for k in _metric_keys(per_action):
+        rows = [row for row in per_action.values() if k in row]
+        w = np.array([row[COUNT_KEY] for row in rows], np.float64)
+        out[k] = float(np.sum(w * np.array([row[k] for row in rows])) / w.sum())
+    return out

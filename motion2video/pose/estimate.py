@@ -1,0 +1,373 @@
+"""Pose of a person in a photo or a video: BlazePose landmarks -> canonical H36M-17 joints.
+
+- :func:`estimate_image`: one photo -> :class:`PersonPose` (2D joints in its pixels, 3D joints in metres).
+- :func:`track_frames`: a stream of video frames -> one BlazePose :class:`~.blazepose.Landmarks` (or None)
+  per frame, following one person: the ROI of each frame comes from the previous frame's landmarks, and the
+  detector runs again (keeping the detection nearest the person's last position) when the landmark model's
+  presence score falls below ``min_presence``.
+- :func:`estimate_video`: a video file -> :class:`VideoPose` (frames without a person at the ends trimmed,
+  landmarks smoothed as MediaPipe smooths them, gaps inside linearly interpolated), the data of
+  ``motion2video pose VIDEO``.
+
+3D joints: BlazePose's world landmarks (hip-centred, metres) turned z up, on the canonical body points
+(:func:`motion2video.core.skeletons.h36m_body_points`, skeleton version 2); the body's position comes from the
+2D hip centre under a constant metres-per-pixel scale (the clip's median leg length in metres over its
+90th-percentile leg length in pixels): sideways and vertical movement in the image plane, none in depth.
+The floor is put at z = 0, :data:`~motion2video.formats.canonical.ANKLE_HEIGHT` below the lowest ankle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from motion2video.core.errors import InputError
+from motion2video.core.skeletons import h36m_body_points
+from motion2video.formats.canonical import floor_height
+from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, detection_roi
+from motion2video.pose.h36m import blazepose_to_h36m, leg_length, world_to_project
+from motion2video.pose.smoothing import smooth_landmarks
+
+MIN_PRESENCE = 0.5
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".webp", ".tif", ".tiff")
+
+_MODEL: BlazePose | None = None
+
+
+def default_model() -> BlazePose:
+    """One shared :class:`BlazePose` per process (the interpreters take ~50 ms to build)."""
+    global _MODEL
+    if _MODEL is None:
+        _MODEL = BlazePose()
+    return _MODEL
+
+
+def order_people(detections: list[Detection]) -> list[Detection]:
+    """Detections ordered left to right by hip centre (the index ``--person N`` counts in)."""
+    return sorted(detections, key=lambda d: float(d.keypoints[0, 0]))
+
+
+def landmark_extent(lm: Landmarks) -> float:
+    """Size of a landmark result: the diagonal (pixels) of the 33 body landmarks' bounding box."""
+    xy = lm.xy[:NUM_BODY_LANDMARKS]
+    return float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0))))
+
+
+def choose_person(model: BlazePose, image: np.ndarray, detections: list[Detection], person: str | int,
+                  source: str | Path | None = None) -> Landmarks:
+    """The landmarks of the person ``person`` names among ``detections`` of ``image``: ``"largest"`` (the
+    largest landmark bounding box of those with a pose) or an index counted left to right (by hip centre).
+
+    Raises:
+        InputError: no detection, or an index beyond the people found.
+    """
+    if not detections:
+        raise InputError("no person found", source)
+    if person == "largest":
+        found = [model.landmarks(image, detection_roi(d)) for d in detections]
+        present = [lm for lm in found if lm.score >= MIN_PRESENCE] or found
+        return max(present, key=landmark_extent)
+    people = order_people(detections)
+    index = int(person)
+    if not 0 <= index < len(people):
+        raise InputError(f"--person {index}: {len(people)} people found (0..{len(people) - 1} left to right)",
+                         source)
+    return model.landmarks(image, detection_roi(people[index]))
+
+
+def parse_person(value: str) -> str | int:
+    """``--person`` argument: ``largest`` or a non-negative integer."""
+    if value == "largest":
+        return value
+    try:
+        index = int(value)
+    except ValueError:
+        raise ValueError(f"--person must be 'largest' or an index (0 = leftmost), got {value!r}") from None
+    if index < 0:
+        raise ValueError(f"--person must be 'largest' or an index >= 0, got {index}")
+    return index
+
+
+# --- joints from landmarks ----------------------------------------------------------------------------------
+
+def landmarks_to_joints(xy: np.ndarray, world: np.ndarray, visibility: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """BlazePose landmarks of T frames -> canonical joints with a root trajectory and the floor at 0.
+
+    Args:
+        xy: (T, 33, 2) image pixels.
+        world: (T, 33, 3) world landmarks (BlazePose axes: y down, metres, hip-centred).
+        visibility: (T, 33) in [0, 1].
+    Returns:
+        points2d (T, 17, 2) pixels, joints3d (T, 17, 3) metres z up floor at 0, confidence (T, 17).
+    """
+    points2d, confidence = blazepose_to_h36m(xy, visibility)
+    raw, _ = blazepose_to_h36m(world_to_project(world))  # (T, 17, 3), pelvis at the origin
+    # canonical skeleton v2: spine, neck/nose and head at Human3.6M's lengths scaled by the clip's leg, the
+    # head along the thorax -> ears direction (the raw neck -> head direction)
+    local = h36m_body_points(raw)
+    local -= local[:, :1]
+    leg_m = float(np.median(leg_length(world)))
+    leg_px = float(np.percentile(leg_length(xy), 90))
+    metres_per_px = leg_m / max(leg_px, 1e-6)
+    root_px = points2d[:, 0] - points2d[:1, 0]  # (T, 2) image motion of the pelvis
+    root = np.stack([root_px[:, 0], np.zeros(len(root_px)), -root_px[:, 1]], axis=1) * metres_per_px
+    joints3d = local + root[:, None, :]
+    joints3d[..., 2] -= floor_height(joints3d)
+    return points2d, joints3d, confidence
+
+
+@dataclass(frozen=True)
+class PersonPose:
+    """One person's pose in one image.
+
+    Attributes:
+        points2d: (17, 2) canonical H36M-17 joints in image pixels.
+        joints3d: (17, 3) canonical joints, metres, z up, floor at 0.
+        confidence: (17,) per-joint visibility in [0, 1].
+        landmarks: the raw BlazePose result.
+        width, height: image size in pixels.
+        people: how many people the detector found.
+    """
+
+    points2d: np.ndarray
+    joints3d: np.ndarray
+    confidence: np.ndarray
+    landmarks: Landmarks
+    width: int
+    height: int
+    people: int
+
+    def bounding_box(self) -> np.ndarray:
+        """(4,) x_min, y_min, x_max, y_max of the 33 body landmarks, pixels."""
+        xy = self.landmarks.xy[:NUM_BODY_LANDMARKS]
+        return np.concatenate([xy.min(axis=0), xy.max(axis=0)])
+
+
+def estimate_image(image: np.ndarray, *, person: str | int = "largest", model: BlazePose | None = None,
+                   source: str | Path | None = None) -> PersonPose:
+    """The pose of one person in an (H, W, 3) uint8 RGB image.
+
+    Raises:
+        InputError: no person found (naming ``source``), or ``person`` beyond the people found.
+    """
+    model = model or default_model()
+    detections = model.detect(image)
+    lm = choose_person(model, image, detections, person, source)
+    if lm.score < MIN_PRESENCE:
+        raise InputError(f"no person found (pose presence {lm.score:.2f})", source)
+    body = slice(0, NUM_BODY_LANDMARKS)
+    p2, j3, conf = landmarks_to_joints(lm.xy[None, body], lm.world[None, body], lm.visibility[None, body])
+    return PersonPose(p2[0], j3[0], conf[0], lm, image.shape[1], image.shape[0], len(detections))
+
+
+def read_image_rgb(path: str | Path) -> np.ndarray:
+    """(H, W, 3) uint8 RGB of an image file (grey replicated, alpha dropped, 16-bit scaled to 8-bit).
+
+    Raises:
+        InputError: naming the file when it is missing, a folder or not a decodable image.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such image file" if not path.is_dir() else "a folder, not an image file", path)
+    data = np.fromfile(path, np.uint8)
+    image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    if image is None:
+        raise InputError("cannot decode the image (not a PNG/JPEG/... image file)", path)
+    return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+
+
+# --- video -------------------------------------------------------------------------------------------------
+
+def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
+                 model: BlazePose | None = None, min_presence: float = MIN_PRESENCE,
+                 source: str | Path | None = None) -> Iterator[Landmarks | None]:
+    """Follow one person through a stream of (H, W, 3) uint8 RGB frames.
+
+    The person is chosen (``person``) in the first frame where the detector finds anyone; afterwards each
+    frame's ROI comes from the previous frame's landmarks. When the presence score drops below
+    ``min_presence`` the detector runs on that frame again and the detection whose hip centre is nearest
+    the person's last hip centre is taken.
+
+    Yields:
+        the person's :class:`Landmarks` per frame, or None for a frame where they are not found.
+    """
+    model = model or default_model()
+    roi = None
+    last_hip: np.ndarray | None = None
+    for frame in frames:
+        lm = model.landmarks(frame, roi) if roi is not None else None
+        if lm is None or lm.score < min_presence:
+            detections = model.detect(frame)
+            if not detections:
+                roi = None
+                yield None
+                continue
+            if last_hip is None:
+                lm = choose_person(model, frame, detections, person, source)
+            else:
+                det = min(detections, key=lambda d: float(np.hypot(*(d.keypoints[0] - last_hip))))
+                lm = model.landmarks(frame, detection_roi(det))
+            if lm.score < min_presence:
+                roi = None
+                yield None
+                continue
+        roi = lm.next_roi()
+        last_hip = lm.xy[33].copy()
+        yield lm
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What a video file says about itself: fps, frame size, frame count (None when unknown)."""
+
+    fps: float
+    width: int
+    height: int
+    frames: int | None
+
+
+def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
+    """Open a video for reading; InputError naming it when it is missing or cannot be decoded."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    cap = cv2.VideoCapture(str(path))
+    if not cap.isOpened():
+        raise InputError("cannot read the video (not a video file, or an unsupported codec)", path)
+    fps = float(cap.get(cv2.CAP_PROP_FPS))
+    count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    width, height = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
+    if not np.isfinite(fps) or fps <= 0 or fps > 1000:
+        cap.release()
+        raise InputError(f"the video does not say its frame rate (got {fps})", path)
+    if width <= 0 or height <= 0:
+        cap.release()
+        raise InputError("cannot read the video's frame size", path)
+    return cap, VideoInfo(fps, width, height, count if count > 0 else None)
+
+
+def iter_video_frames(path: str | Path) -> Iterator[np.ndarray]:
+    """(H, W, 3) uint8 RGB frames of a video file, streamed; InputError when it has none."""
+    cap, _ = open_video(path)
+    try:
+        n = 0
+        while True:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            n += 1
+            yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+        if n == 0:
+            raise InputError("the video has no readable frames", path)
+    finally:
+        cap.release()
+
+
+@dataclass(frozen=True)
+class VideoPose:
+    """One person's motion in a video, frames without them at the ends trimmed.
+
+    Attributes:
+        points2d: (T, 17, 2) canonical joints in the video's pixels.
+        joints3d: (T, 17, 3) canonical joints, metres, z up, floor at 0.
+        confidence: (T, 17) per-joint visibility; 0 on interpolated frames.
+        interpolated: (T,) True where the person was not found and the joints are interpolated.
+        landmarks2d: (T, 33, 2) BlazePose's image landmarks (interpolated likewise).
+        fps: the video's frame rate.
+        first_frame: index in the video of the first kept frame.
+        width, height: the video's frame size.
+        video_frames: how many frames the video has.
+    """
+
+    points2d: np.ndarray
+    joints3d: np.ndarray
+    confidence: np.ndarray
+    interpolated: np.ndarray
+    landmarks2d: np.ndarray
+    fps: float
+    first_frame: int
+    width: int
+    height: int
+    video_frames: int
+
+    @property
+    def num_frames(self) -> int:
+        return len(self.points2d)
+
+    @property
+    def gaps(self) -> int:
+        """Number of interpolated frames."""
+        return int(self.interpolated.sum())
+
+
+def interpolate_gaps(values: np.ndarray, found: np.ndarray) -> np.ndarray:
+    """Fill the frames where ``found`` is False by linear interpolation in time.
+
+    Args:
+        values: (T, ...) per-frame arrays (anything on missing frames).
+        found: (T,) bool, True at least at the first and last frame.
+    Returns:
+        (T, ...) float64 with the missing frames filled.
+    """
+    t = np.arange(len(found))
+    flat = np.asarray(values, np.float64).reshape(len(found), -1)
+    out = np.empty_like(flat)
+    for k in range(flat.shape[1]):
+        out[:, k] = np.interp(t, t[found], flat[found, k])
+    return out.reshape(np.shape(values))
+
+
+def poses_from_landmarks(results: list[Landmarks | None], *, fps: float, width: int, height: int,
+                         source: str | Path | None = None, smooth: bool = True) -> VideoPose:
+    """Per-frame tracking results -> :class:`VideoPose` (trim the ends, smooth, interpolate the gaps).
+
+    ``smooth``: MediaPipe's One-Euro smoothing of the landmarks (:mod:`motion2video.pose.smoothing`), each
+    run of frames with the person on its own.
+
+    Raises:
+        InputError: no person in any frame, or in fewer than 2 frames (a motion needs two).
+    """
+    found = np.array([r is not None for r in results])
+    if not found.any():
+        raise InputError("no person found in any frame", source)
+    first, last = int(np.argmax(found)), len(found) - 1 - int(np.argmax(found[::-1]))
+    if last == first:
+        raise InputError("a person is found in only one frame; a motion needs at least two", source)
+    kept = results[first:last + 1]
+    ok = found[first:last + 1]
+    body = slice(0, NUM_BODY_LANDMARKS)
+    blank = np.zeros((NUM_BODY_LANDMARKS, 1))
+    xy = np.stack([r.xy[body] if r is not None else blank.repeat(2, 1) for r in kept])  # (T, 33, 2)
+    world = np.stack([r.world[body] if r is not None else blank.repeat(3, 1) for r in kept])  # (T, 33, 3)
+    vis = np.stack([r.visibility[body] if r is not None else blank[:, 0] for r in kept])  # (T, 33)
+    if smooth:
+        size = np.array([r.roi.size if r is not None else 1.0 for r in kept])
+        xy, world, vis = smooth_landmarks(xy, world, vis, size, ok, fps)
+    xy, world = interpolate_gaps(xy, ok), interpolate_gaps(world, ok)
+    points2d, joints3d, confidence = landmarks_to_joints(xy, world, vis)
+    confidence[~ok] = 0.0
+    return VideoPose(points2d, joints3d, confidence, ~ok, xy, float(fps), first, width, height, len(results))
+
+
+def estimate_video(path: str | Path, *, person: str | int = "largest", model: BlazePose | None = None,
+                   smooth: bool = True) -> VideoPose:
+    """The motion of one person in a video file (see the module docstring).
+
+    Raises:
+        InputError: unreadable video, no person, a person in fewer than two frames.
+    """
+    cap, info = open_video(path)
+    cap.release()
+    # the segmentation (256 KB a frame) is not kept: a long video's landmarks stay a few MB
+    results = [None if lm is None else replace(lm, segmentation=None)
+               for lm in track_frames(iter_video_frames(path), person=person, model=model, source=path)]
+    if len(results) < 2:
+        raise InputError(f"the video has {len(results)} frame; a motion needs at least two", path)
+    return poses_from_landmarks(results, fps=info.fps, width=info.width, height=info.height, source=path,
+                                smooth=smooth)

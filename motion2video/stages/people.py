@@ -1,0 +1,149 @@
+"""Real people in: the pose of a photo or a video, ready for the applications.
+
+- :func:`photo_pose`: a photo -> :class:`~motion2video.pose.estimate.PersonPose` and the reference pose
+  (``IMAGE.pose.npz`` content) the frame generator reads;
+- :func:`video_pose`: a video -> :class:`~motion2video.pose.estimate.VideoPose`, cached by the file's
+  sha256 (next to an output, or in ``~/.cache/motion2video/pose``), so that running two commands on the
+  same video estimates it once;
+- :func:`write_photo_overlay` / :func:`write_video_overlay`: the keypoints drawn on the input.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from motion2video.core.errors import InputError
+from motion2video.pose.estimate import (IMAGE_SUFFIXES, VIDEO_SUFFIXES, PersonPose, VideoPose, estimate_image,
+                                        estimate_video, iter_video_frames, read_image_rgb)
+from motion2video.pose.files import ESTIMATOR, load_video_pose, save_video_pose
+
+def is_video(path: str | Path) -> bool:
+    """A video file by its extension (``.mp4``, ``.avi``, ``.mov``, ...)."""
+    return Path(path).suffix.lower() in VIDEO_SUFFIXES
+
+
+def is_image(path: str | Path) -> bool:
+    """A photo by its extension (``.png``, ``.jpg``, ...)."""
+    return Path(path).suffix.lower() in IMAGE_SUFFIXES
+
+
+def file_sha256(path: str | Path) -> str:
+    """Hex sha256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def cache_dir() -> Path:
+    """``$XDG_CACHE_HOME/motion2video/pose`` (default ``~/.cache/motion2video/pose``)."""
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "motion2video" / "pose"
+
+
+def cache_path(video: str | Path, person: str | int, folder: str | Path | None = None) -> Path:
+    """Where the pose of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.npz``."""
+    folder = Path(folder) if folder is not None else cache_dir()
+    return folder / f"{file_sha256(video)[:16]}-{person}.{ESTIMATOR}.npz"
+
+
+def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | Path | None | bool = None,
+               note: Callable[[str], None] | None = None) -> VideoPose:
+    """The pose of one person in a video, read from the cache when it was estimated before.
+
+    Args:
+        path: the video.
+        person: ``"largest"`` or an index left to right.
+        cache: a folder to cache in; None: the user cache (:func:`cache_dir`); False: no cache.
+        note: called with one line when the pose is estimated or read from the cache.
+    Raises:
+        InputError: unreadable video, no person, a person in fewer than two frames.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    cached = None if cache is False else cache_path(path, person, None if cache is None else cache)
+    if cached is not None and cached.is_file():
+        try:
+            pose = load_video_pose(cached)
+            if note:
+                note(f"pose of {path.name} read from the cache {cached}")
+            return pose
+        except InputError:
+            pass  # a damaged cache entry is estimated again and overwritten
+    pose = estimate_video(path, person=person)
+    if note:
+        note(f"estimated the pose of {path.name} (BlazePose full): {pose.num_frames} frames at {pose.fps:g} fps"
+             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else ""))
+    if cached is not None:
+        try:
+            save_video_pose(cached, pose)
+        except OSError:
+            pass  # a read-only cache only costs the next run the estimate
+    return pose
+
+
+@dataclass(frozen=True)
+class PhotoPose:
+    """A photo, its person's pose and what the generator needs of it.
+
+    Attributes:
+        image: (H, W, 3) uint8 RGB (cropped when a crop was asked for).
+        pose: the estimated pose, in ``image``'s pixels.
+        people: how many people were found.
+    """
+
+    image: np.ndarray
+    pose: PersonPose
+    people: int
+
+
+def photo_pose(path: str | Path, *, person: str | int = "largest") -> PhotoPose:
+    """The pose of one person in a photo file; InputError when it cannot be read or shows nobody."""
+    image = read_image_rgb(path)
+    pose = estimate_image(image, person=person, source=path)
+    return PhotoPose(image, pose, pose.people)
+
+
+def reference_pose_of(pose: PersonPose):
+    """The body :class:`~motion2video.stages.reference.ReferencePose` of an estimated photo pose."""
+    from motion2video.stages.reference import ReferencePose
+
+    return ReferencePose("body", pose.width, pose.height, points=pose.points2d.astype(np.float64))
+
+
+# --- overlays ------------------------------------------------------------------------------------------------
+
+def write_photo_overlay(path: str | Path, photo: PhotoPose) -> Path:
+    """The photo with its person's joints drawn, as a PNG (atomically)."""
+    from motion2video.pose.overlay import draw_pose
+    from motion2video.formats.video import write_image
+
+    return write_image(path, draw_pose(photo.image, photo.pose.points2d))
+
+
+def write_video_overlay(path: str | Path, video: str | Path, pose: VideoPose) -> Path:
+    """The video with the tracked person's joints drawn on every kept frame (mp4 at the video's rate);
+    interpolated frames are drawn with thinner lines."""
+    from motion2video.pose.overlay import draw_pose, overlay_style
+    from motion2video.formats.video import write_video
+
+    style = overlay_style(pose.width, pose.height)
+    thin = overlay_style(pose.width // 2, pose.height // 2)
+
+    def frames():
+        for i, frame in enumerate(iter_video_frames(video)):
+            t = i - pose.first_frame
+            if 0 <= t < pose.num_frames:
+                yield draw_pose(frame, pose.points2d[t], style=thin if pose.interpolated[t] else style)
+            elif t >= pose.num_frames:
+                break
+
+    return write_video(path, frames(), pose.fps, n_frames=pose.num_frames, preset="veryfast")

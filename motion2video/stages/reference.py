@@ -1,0 +1,321 @@
+"""The reference appearance for the frame generator: the image, and the pose it shows.
+
+The generator makes a frame by the analogy ``enc(x_ref) + enc(p_target) - enc(p_ref)``; it was trained on
+pairs whose reference structure is exactly the structure of the reference frame. So the pipeline uses the
+reference image's true pose when it is known, from a *reference pose file* beside the image
+(``IMAGE.pose.npz``, see :func:`save_reference_pose`; the demo images have one, written by
+``scripts/make_demo_inputs.py --reference``):
+
+- body: ``points`` (17, 2), the image's canonical H36M-17 joints in its pixels;
+- face: ``face`` (58,) parameters, ``identity`` and the camera that rendered the image.
+
+Without one, a body reference gets its pose estimated (BlazePose, :mod:`motion2video.pose`; a note says
+so). A face reference, or a body reference where nobody is found, is assumed to show the person in the
+first observed pose, framed as the default renderers frame a single frame (body: a camera fitted to that
+pose; face: the Anny close-up camera), and a note says so. With the true pose, the generated first observed frame matches the
+reference picture; with the assumption, it does when the assumption holds.
+
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from motion2video.core.atomic import save_npz
+from motion2video.core.errors import InputError
+
+REFERENCE_POSE_SUFFIX = ".pose.npz"
+PERSON_CROP_MARGIN = 0.1  # --crop-person: of the square's side, on every side
+
+
+def reference_pose_path(image: str | Path) -> Path:
+    """The reference pose file that goes with an image: ``ref.png`` -> ``ref.pose.npz``."""
+    image = Path(image)
+    return image.with_name(image.stem + REFERENCE_POSE_SUFFIX)
+
+
+# --- the reference image and its pose --------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ReferencePose:
+    """The pose shown in a reference image (see the module docstring).
+
+    Attributes:
+        kind: ``"body"`` or ``"face"``.
+        width, height: size in pixels of the image the pose belongs to.
+        points: body: (17, 2) canonical H36M-17 joints in image pixels (x right, y down); face: None.
+        face: face: (58,) face parameters of the picture; body: None.
+        identity: face: Anny phenotype values of the pictured face ({} = Anny's defaults).
+        camera: face: the camera that rendered the picture (its size = width x height); body: None.
+    """
+
+    kind: str
+    width: int
+    height: int
+    points: np.ndarray | None = None
+    face: np.ndarray | None = None
+    identity: dict = field(default_factory=dict)
+    camera: object | None = None  # motion2video.core.camera.PinholeCamera
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("body", "face"):
+            raise ValueError(f"kind must be 'body' or 'face', got {self.kind!r}")
+        if self.kind == "body" and (self.points is None or np.asarray(self.points).shape != (17, 2)):
+            raise ValueError("a body reference pose needs points of shape (17, 2)")
+        if self.kind == "face" and (self.face is None or np.asarray(self.face).shape != (58,)
+                                    or self.camera is None):
+            raise ValueError("a face reference pose needs face params of shape (58,) and a camera")
+
+
+def save_reference_pose(path: str | Path, pose: ReferencePose) -> Path:
+    """Write a reference pose file (npz; atomically)."""
+    path = Path(path)
+    arrays: dict[str, np.ndarray] = {"kind": np.str_(pose.kind), "width": np.int64(pose.width),
+                                     "height": np.int64(pose.height)}
+    if pose.kind == "body":
+        arrays["points"] = np.asarray(pose.points, np.float32)
+    else:
+        cam = pose.camera
+        arrays.update(face=np.asarray(pose.face, np.float32), identity=np.str_(json.dumps(pose.identity)),
+                      camera_position=np.asarray(cam.position, np.float64),
+                      camera_target=np.asarray(cam.target, np.float64), camera_yfov=np.float64(cam.yfov))
+    return save_npz(path, arrays)
+
+
+def load_reference_pose(path: str | Path) -> ReferencePose:
+    """Read a reference pose file; InputError (naming it) when it is missing or malformed."""
+    from motion2video.core.camera import PinholeCamera
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such reference pose file", path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+        kind = str(data["kind"])
+        width, height = int(data["width"]), int(data["height"])
+        if kind == "body":
+            return ReferencePose(kind, width, height, points=data["points"].astype(np.float64))
+        if kind == "face":
+            camera = PinholeCamera(tuple(float(v) for v in data["camera_position"]),
+                                   tuple(float(v) for v in data["camera_target"]), float(data["camera_yfov"]),
+                                   width, height)
+            return ReferencePose(kind, width, height, face=data["face"].astype(np.float32),
+                                 identity=json.loads(str(data["identity"])), camera=camera)
+        raise ValueError(f"unknown kind {kind!r}")
+    except (OSError, KeyError, ValueError, TypeError, json.JSONDecodeError) as err:
+        raise InputError(f"not a valid reference pose file ({err})", path) from None
+
+
+def read_reference_image(path: str | Path) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Read a reference image as RGB uint8, converting what can be converted, with a note for each.
+
+    Conversions: grey -> RGB (replicated); grey + alpha and RGBA -> RGB composited over white; 16-bit ->
+    8-bit.
+
+    Returns:
+        (H, W, 3) uint8 RGB and the notes.
+    Raises:
+        InputError: missing, empty or undecodable file, or an unsupported channel layout.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise InputError("the reference is a folder, not an image file", path)
+    if not path.is_file():
+        raise InputError("no such reference image", path)
+    data = np.fromfile(path, np.uint8)
+    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    if image is None:
+        raise InputError("cannot decode the reference image (not a PNG/JPEG/... image file)", path)
+    notes = []
+    if image.dtype == np.uint16:
+        image = np.rint(image.astype(np.float64) / 257.0).astype(np.uint8)
+        notes.append("16-bit image converted to 8-bit")
+    elif image.dtype != np.uint8:
+        raise InputError(f"unsupported reference image sample type {image.dtype}", path)
+    if image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 1):
+        image = np.repeat(image.reshape(image.shape[0], image.shape[1], 1), 3, axis=2)
+        notes.append("grey-scale image converted to RGB")
+    elif image.ndim == 3 and image.shape[2] == 2:  # grey + alpha
+        grey, alpha = image[..., :1].astype(np.float64), image[..., 1:].astype(np.float64) / 255.0
+        image = np.repeat(np.rint(grey * alpha + 255.0 * (1 - alpha)), 3, axis=2).astype(np.uint8)
+        notes.append("grey-scale image with alpha converted to RGB over a white background")
+    elif image.ndim == 3 and image.shape[2] == 4:
+        rgb = image[..., 2::-1].astype(np.float64)  # BGRA -> RGB
+        alpha = image[..., 3:].astype(np.float64) / 255.0
+        image = np.rint(rgb * alpha + 255.0 * (1 - alpha)).astype(np.uint8)
+        notes.append("RGBA image composited over a white background")
+    elif image.ndim == 3 and image.shape[2] == 3:
+        image = image[..., ::-1]  # BGR -> RGB
+    else:
+        raise InputError(f"unsupported reference image layout {image.shape}", path)
+    return np.ascontiguousarray(image), tuple(notes)
+
+
+@dataclass(frozen=True)
+class ImageFit:
+    """How an image was made square and resized: ``out = in * scale + offset`` in pixels."""
+
+    scale: float
+    offset: tuple[float, float]
+    padded: tuple[int, int]  # pixels added (left, top) before resizing
+
+
+def fit_square(image: np.ndarray, size: int) -> tuple[np.ndarray, ImageFit]:
+    """Pad an image to a square (centred, repeating its edge pixels), then resize it to size x size.
+
+    Args:
+        image: (H, W, 3) uint8.
+    Returns:
+        (size, size, 3) uint8 and the :class:`ImageFit` mapping input pixels to output pixels.
+    """
+    h, w = image.shape[:2]
+    side = max(h, w)
+    left, top = (side - w) // 2, (side - h) // 2
+    if (h, w) != (side, side):
+        image = cv2.copyMakeBorder(image, top, side - h - top, left, side - w - left, cv2.BORDER_REPLICATE)
+    if side != size:
+        interp = cv2.INTER_AREA if side > size else cv2.INTER_CUBIC
+        image = cv2.resize(image, (size, size), interpolation=interp)
+    scale = size / side
+    return np.ascontiguousarray(image), ImageFit(scale, (left * scale, top * scale), (left, top))
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The reference appearance at the generator's size.
+
+    Attributes:
+        image: (S, S, 3) uint8 RGB.
+        pose: the reference pose moved into these pixels (camera resized to S x S), or None when unknown.
+        notes: what was converted or assumed, one line each (the CLI prints them).
+        path: the image file.
+    """
+
+    image: np.ndarray
+    pose: ReferencePose | None
+    notes: tuple[str, ...]
+    path: Path
+
+
+def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[int, int]) -> ReferencePose:
+    """A reference pose moved from the original image's pixels into the fitted square image's."""
+    h, w = image_shape
+    if pose.kind == "body":
+        pts = np.asarray(pose.points, np.float64) * (w / pose.width, h / pose.height)  # stored size -> image
+        return ReferencePose("body", size, size, points=pts * fit.scale + np.asarray(fit.offset))
+    # The padding is centred, so the principal point stays centred: only the vertical field of view of
+    # the square changes when the width was the longer side.
+    from motion2video.core.camera import PinholeCamera
+
+    cam = pose.camera
+    yfov = cam.yfov if h >= w else 2.0 * np.arctan(np.tan(0.5 * cam.yfov) * w / h)
+    camera = PinholeCamera(cam.position, cam.target, float(yfov), size, size)
+    return ReferencePose("face", size, size, face=pose.face, identity=dict(pose.identity), camera=camera)
+
+
+def estimate_reference_pose(image: np.ndarray, path: str | Path) -> ReferencePose | None:
+    """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`);
+    None when nobody is found."""
+    from motion2video.pose.estimate import estimate_image
+
+    try:
+        person = estimate_image(image, source=path)
+    except InputError:
+        return None
+    return ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d)
+
+
+def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PERSON_CROP_MARGIN
+                   ) -> tuple[np.ndarray, ReferencePose, tuple[int, int, int]]:
+    """A square of ``image`` around the person of a body pose, and the pose moved into it.
+
+    The square holds the joints' bounding box grown by 12% of the body's height above the head joint (the top
+    of the head) and 6% below the lowest ankle (the feet), then ``margin`` of its larger side on every side;
+    outside the image the border is replicated.
+
+    Returns:
+        (side, side, 3) crop, its :class:`ReferencePose` and the box (x0, y0, side) in the image's pixels.
+    """
+    h, w = image.shape[:2]
+    pts = np.asarray(pose.points, np.float64) * (w / pose.width, h / pose.height)
+    x0, y0 = pts.min(axis=0)
+    x1, y1 = pts.max(axis=0)
+    tall = max(y1 - y0, 1.0)
+    y0, y1 = y0 - 0.12 * tall, y1 + 0.06 * tall
+    side = int(round(max(x1 - x0, y1 - y0) * (1 + 2 * margin)))
+    left, top = int(round((x0 + x1 - side) / 2)), int(round((y0 + y1 - side) / 2))
+    pad = max(0, -left, -top, left + side - w, top + side - h)
+    padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_REPLICATE) if pad else image
+    crop = np.ascontiguousarray(padded[top + pad:top + pad + side, left + pad:left + pad + side])
+    moved = ReferencePose("body", side, side, points=pts - (left, top))
+    return crop, moved, (left, top, side)
+
+
+def load_reference(path: str | Path, *, size: int, domain: str,
+                   pose_path: str | Path | None = None, crop_person: bool = False) -> Reference:
+    """The reference image at ``size`` x ``size`` and its pose (see the module docstring).
+
+    A body reference with no pose file gets its pose estimated (BlazePose, a note says so); when nobody is
+    found, the image is assumed to show the first observed pose (a note says so too).
+
+    Args:
+        path: the image.
+        size: the generator's image size.
+        domain: ``"body"`` or ``"face"`` (the pose file must be of this kind).
+        pose_path: the reference pose file; None looks for ``IMAGE.pose.npz`` beside the image.
+        crop_person: body: cut a square around the person first (:func:`crop_to_person`), so that a person
+            small in a large photo fills the generator's frame.
+    Raises:
+        InputError: unreadable image, a pose file that is malformed or of the other domain, or (body) a pose
+        with joints outside the image or no person, or an image that shows nothing along the pose's limbs;
+        ``crop_person`` for a face model or with no person found.
+    """
+    path = Path(path)
+    image, notes = read_reference_image(path)
+    notes = list(notes)
+    if crop_person and domain != "body":
+        raise InputError("--crop-person is for body references (this frame model makes face frames)", path)
+    explicit = pose_path is not None
+    pose_path = Path(pose_path) if explicit else reference_pose_path(path)
+    pose = None
+    from_file = explicit or pose_path.is_file()
+    if from_file:
+        pose = load_reference_pose(pose_path)
+        if pose.kind != domain:
+            raise InputError(f"this reference pose is a {pose.kind} pose, but the frame model makes {domain} "
+                             "frames", pose_path)
+    elif domain == "body":
+        pose = estimate_reference_pose(image, path)
+        if pose is not None:
+            notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
+                         f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "
+                         "saves it and shows it)")
+    if crop_person:
+        if pose is None:
+            raise InputError("--crop-person: no person found in the reference image", path)
+        h0, w0 = image.shape[:2]
+        image, pose, (left, top, side) = crop_to_person(image, pose)
+        notes.append(f"reference cut to the person: a {side}x{side} square at ({left}, {top}) of the {w0}x{h0} image")
+    h, w = image.shape[:2]
+    fitted, fit = fit_square(image, size)
+    if (h, w) != (size, size):
+        how = f"padded to {max(h, w)}x{max(h, w)} and " if h != w else ""
+        notes.append(f"reference image is {w}x{h}: {how}resized to {size}x{size} for the frame generator")
+    if pose is not None:
+        pose = _fit_pose(pose, fit, size, (h, w))
+        if domain == "body":  # a person to move: joints inside the image, and the image shows them
+            from motion2video.frames.warp import check_reference_person, check_reference_points
+
+            check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
+            check_reference_person(fitted, pose.points, path=path)
+    else:
+        nobody = " and no person found in it" if domain == "body" else ""
+        notes.append(f"no reference pose file ({pose_path.name}){nobody}: assuming the reference image shows the "
+                     "first observed pose, framed like the default renderer")
+    return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path)
