@@ -188,7 +188,7 @@ Issue 22's targets driven by real motion:
 
 {targets(payloads)}
 
-Reference | truth | new | limb-warp, two pairs per clip ({', '.join(f'`{c}`' for c in payloads)}, top to
+Reference | truth | new | old | limb-warp (old: the previous generator, when it loads), two pairs per clip ({', '.join(f'`{c}`' for c in payloads)}, top to
 bottom), at twice the frame size, each with the head region enlarged beside it (top right):
 
 ![real motion sheet](images/frames_real_motion.png)
