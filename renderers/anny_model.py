@@ -224,6 +224,33 @@ def dominant_bones() -> np.ndarray:
     return _DOMINANT
 
 
+HEAD_BONE = "head"  # the head region: vertices whose dominant bone is this bone or one below it (the eyes)
+
+
+def head_vertices() -> np.ndarray:
+    """(V,) bool: vertices whose dominant bone is :data:`HEAD_BONE` or a descendant of it (the skull, face,
+    eyes, hair; not the neck)."""
+    parents = bone_parents()
+    inside = np.zeros(len(parents), dtype=bool)
+    inside[bone_index(HEAD_BONE)] = True
+    for b in range(len(parents)):  # parents come before children
+        if parents[b] >= 0 and inside[parents[b]]:
+            inside[b] = True
+    return inside[dominant_bones()]
+
+
+def head_submesh() -> tuple[np.ndarray, np.ndarray]:
+    """The head's own triangles: (H,) int64 indices of :func:`head_vertices` into the full mesh and (F, 3)
+    int64 triangles (those with all three corners on the head) indexing that subset."""
+    keep = head_vertices()
+    ids = np.flatnonzero(keep)
+    remap = np.full(len(keep), -1, dtype=np.int64)
+    remap[ids] = np.arange(len(ids))
+    faces = triangles()
+    faces = faces[keep[faces].all(axis=1)]
+    return ids, remap[faces]
+
+
 def bone_region(name: str) -> int:
     """Region code of a bone by :data:`BONE_REGION_RULES`."""
     for prefix, region in BONE_REGION_RULES:

@@ -52,6 +52,7 @@ from renderers.mesh import MeshRenderer
 SPINE_BONES = ("spine05", "spine04", "spine03", "spine02", "spine01")
 SPINE_BLEND = (0.1, 0.3, 0.55, 0.8, 1.0)  # pelvis -> chest orientation weight per spine bone
 NECK_TILT_RANGE = (6.0, 24.0)  # plausible clip-median forward tilt of neck -> head, degrees (Anny: 14)
+HEAD_DEPTH_TOLERANCE = 1e-3  # relative depth difference within which the head is the body's front surface
 KEEP_VERTICES_FRAMES = 300  # clips up to this long keep their posed vertices between camera fit and render
 FLAT_FOOT_RANGE = 0.12  # metres above the clip's floor level over which a foot turns from flat to free
 
@@ -336,12 +337,15 @@ class BodyFrames:
         masks: (T, H, W) bool silhouettes.
         camera: the camera used.
         pose: the fitted Anny pose.
+        head_masks: (T, H, W) bool pixels where the visible surface is the head
+            (:func:`renderers.anny_model.head_vertices`), or None when not asked for.
     """
 
     frames: np.ndarray
     masks: np.ndarray
     camera: PinholeCamera
     pose: AnnyPose
+    head_masks: np.ndarray | None = None
 
 
 def skin_vertices(rest: AnnyRest, bone_poses: np.ndarray) -> np.ndarray:
@@ -440,13 +444,15 @@ class BodyRenderer(RendererBase):
                           elevation_deg=s.elevation_deg, yfov_deg=s.yfov_deg, margin=s.margin)
 
     def render_with_masks(self, motion: Motion, *, camera: PinholeCamera | None = None,
-                          progress: Callable[[int], object] | None = None) -> BodyFrames:
+                          progress: Callable[[int], object] | None = None, head: bool = False) -> BodyFrames:
         """Render every frame of ``motion``; see :class:`BodyFrames`.
 
         Args:
             motion: a 3D canonical (h36m-17) motion.
             camera: the camera; None fits one over the whole sequence (mesh included).
             progress: called with the number of frames rendered after each batch.
+            head: also render the head masks (a second, depth-only pass of the head's triangles; a pixel is
+                head where that depth equals the whole body's, so a hand in front of the face is not head).
         """
         pose = self.fit_pose(motion)
         chunks = None
@@ -460,14 +466,25 @@ class BodyRenderer(RendererBase):
         colors = self._vertex_colors()
         frames = np.zeros((motion.num_frames, self.height, self.width, 3), dtype=np.uint8)
         masks = np.zeros((motion.num_frames, self.height, self.width), dtype=bool)
+        head_masks = np.zeros_like(masks) if head else None
+        head_ids, head_faces = anny_model.head_submesh() if head else (None, None)
         for start, verts in (chunks if chunks is not None else posed_vertices(pose, batch=self.style.batch)):
             for k, v in enumerate(verts):
                 out = self._mesh.render_mesh(v, faces, vertex_colors=colors, camera=camera,
                                              background=self.style.background)
                 frames[start + k], masks[start + k] = out.color, out.mask
+                if head_masks is not None:
+                    head_masks[start + k] = self._head_mask(v[head_ids], head_faces, out.depth, camera)
             if progress is not None:
                 progress(len(verts))
-        return BodyFrames(frames=frames, masks=masks, camera=camera, pose=pose)
+        return BodyFrames(frames=frames, masks=masks, camera=camera, pose=pose, head_masks=head_masks)
+
+    def _head_mask(self, head_vertices: np.ndarray, head_faces: np.ndarray, depth: np.ndarray,
+                   camera: PinholeCamera) -> np.ndarray:
+        """(H, W) bool: pixels where the head sub-mesh ((K, 3) vertices, (F, 3) triangles) is the front surface
+        of the body whose depth map is ``depth`` (H, W)."""
+        alone = self._mesh.render_mesh(head_vertices, head_faces, vertex_colors=(255, 255, 255), camera=camera).depth
+        return (alone > 0) & (depth > 0) & (np.abs(alone - depth) <= HEAD_DEPTH_TOLERANCE * np.maximum(depth, 1e-6))
 
     def iter_frames(self, motion: Motion, *, camera: PinholeCamera | None = None) -> Iterator[np.ndarray]:
         """Yield ``motion``'s frames as (b, H, W, 3) uint8 chunks of ``style.batch`` frames.

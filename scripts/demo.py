@@ -4,14 +4,13 @@
 
 Writes, from the committed ``demo_inputs/`` only (nothing outside the repository is read):
 
-- ``out/futures_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``walk_to_run.npz`` sampled by
-  ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-128``;
+- ``out/futures_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``cmu_walk.npz`` (a real CMU walk)
+  sampled by ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-128``;
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
   ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``;
-- ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``jump.npz`` (a procedural jump: the
-  committed demo inputs hold no real mocap excerpt) re-enacted by ``behavior`` from the standing posture of
-  ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-128``, side by side
+- ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``cmu_jump.npz`` (a real CMU jump)
+  re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-128``, side by side
   with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
   ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
 - ``out/inputs/<clip>_<style>.mp4``: every demo input rendered in every style that fits it (skip: --no-inputs).
@@ -30,14 +29,14 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 DEMO_INPUTS = REPO / "demo_inputs"
 WEIGHTS = REPO / "motion2video" / "weights"
-BODY = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="walk_to_run.npz",
+BODY = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="cmu_walk.npz",
             reference="reference_body_128.png", start=24)
 FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-128", clip="smile.npz",
             reference="reference_face.png", start=0)
 MESH_SIZE = 256
-# Behaviour transfer: the jump (stands 0.8 s, then crouches and jumps) from its frame 10, re-enacted from wave.npz's
-# first (standing) posture.
-TRANSFER = dict(motion_model="behavior", frame_model="frames-body-128", behavior="jump.npz", behavior_start=10,
+# Behaviour transfer: the real jump (stands 0.5 s, crouches, jumps, lands by frame 45) from its start, re-enacted
+# from wave.npz's first (standing) posture.
+TRANSFER = dict(motion_model="behavior", frame_model="frames-body-128", behavior="cmu_jump.npz", behavior_start=0,
                 target="wave.npz", target_frame=0, reference="reference_body_128.png")
 
 

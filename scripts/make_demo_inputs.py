@@ -1,11 +1,14 @@
-"""Write the committed demo inputs: procedural body and face motions as .npz, and their README.
+"""Write the committed demo inputs: procedural body and face motions as .npz, real CMU excerpts, and their README.
 
     .venv/bin/python scripts/make_demo_inputs.py --out demo_inputs
+    .venv/bin/python scripts/make_demo_inputs.py --out demo_inputs --real-mocap ../shared/data/mocap  # + CMU clips
     .venv/bin/python scripts/make_demo_inputs.py --out demo_inputs --reference   # + reference images
 
-Every file is a pure function of the tables below (fixed seeds), so running the script again gives the
-same arrays. ``--reference`` also renders the reference appearance images with the Anny renderers
-(``renderers/body.py`` BodyRenderer, ``renderers/face.py`` FaceRenderer).
+Every file is a pure function of the tables below (fixed seeds, fixed excerpts), so running the script again
+gives the same arrays. ``--real-mocap`` also cuts the real CMU excerpts (:data:`REAL_DEMOS`) out of the mocap
+folder (read with ``load_motion`` at 25 fps, so on the canonical skeleton). ``--reference`` also renders the
+reference appearance images with the Anny renderers (``renderers/body.py`` BodyRenderer,
+``renderers/face.py`` FaceRenderer).
 """
 
 from __future__ import annotations
@@ -37,9 +40,17 @@ FACE_DEMOS: dict[str, tuple[tuple[tuple[str, float], ...], str]] = {
     "nod_turn.npz": ((("nod", 2.0), ("turn", 3.2)), "nods, then turns the head left and right"),
 }
 REFERENCE_SIZES = (256, 128)
+# Real CMU excerpts: file name -> (clip in the mocap folder, first frame and frames at FPS, description). Both
+# clips are held out of the frame generator's training data (motion2video.frames.specs.is_test_clip).
+REAL_DEMOS: dict[str, tuple[str, int, int, str]] = {
+    "cmu_walk.npz": ("cmu/07_04.bvh", 0, 90, "CMU subject 7, trial 4 (\"slow walk\"): walks forward about 3 m"),
+    "cmu_jump.npz": ("cmu/16_02.bvh", 20, 75, "CMU subject 16, trial 2 (\"jump\"): stands, crouches, jumps up "
+                     "in place (pelvis 0.5 m higher at the top), lands and stands"),
+}
 
 
 COMMAND = ".venv/bin/python scripts/make_demo_inputs.py --out demo_inputs"
+REAL_COMMAND = COMMAND + " --real-mocap ../shared/data/mocap"
 
 
 def readme_text() -> str:
@@ -66,6 +77,30 @@ def readme_text() -> str:
         lines.append(f"| `{name}` | {_modes_text(modes)} | {_frames(modes)} | {what} |")
     lines += [
         "",
+        "## Real motion capture (CMU Graphics Lab Motion Capture Database)",
+        "",
+        "Excerpts of two real captures, read with `motion2video.formats.io.load_motion` (so on the canonical",
+        f"skeleton) at {FPS:g} fps and trimmed; same keys as the body motions above, with the source in `label`.",
+        "Regenerate them (same arrays) from the mocap folder beside the repository with:",
+        "",
+        "```",
+        REAL_COMMAND,
+        "```",
+        "",
+        "| file | source clip | frames (at 25 fps) | content |",
+        "| --- | --- | --- | --- |",
+    ]
+    for name, (clip, start, frames, what) in REAL_DEMOS.items():
+        lines.append(f"| `{name}` | `{clip}` | {start}-{start + frames - 1} ({frames}) | {what} |")
+    lines += [
+        "",
+        "Terms: CMU places no restrictions on the use of the original dataset (\"free for use in research and",
+        "commercial projects worldwide\"; later wording: \"You may include this data in commercially-sold products,",
+        "but you may not resell this data directly, even in converted form\"), so these excerpts may ship inside a",
+        "product; do not sell the clips themselves. Credit, as CMU asks: *The data used in this project was obtained",
+        "from mocap.cs.cmu.edu. The database was created with funding from NSF EIA-0196217.* (The licence evidence",
+        "is kept beside the clips, in `LICENSE-CMU.txt` of the mocap folder.)",
+        "",
         "## Face motions (52 ARKit coefficients + head axis-angle + head translation)",
         "",
         "Keys: `face` (T, 58) float32, `fps`, `identity` (JSON of Anny phenotype values; `{}` = Anny's",
@@ -87,6 +122,9 @@ def readme_text() -> str:
         "plain command above does not make them. Beside each image, `<image>.pose.npz` holds the pose it shows",
         "(body: `points` (17, 2) joints in its pixels; face: `face` (58,) params, `identity` and the camera that",
         "rendered it), which `motion2video synthesize` uses as the reference structure.",
+        "",
+        "- `jobs.jsonl`: three batch jobs over these files (the README's `motion2video batch demo_inputs/jobs.jsonl` "
+        "example; input paths are relative to the repository root, where the command runs).",
         "",
     ]
     return "\n".join(lines)
@@ -116,6 +154,30 @@ def write_motions(out: Path) -> list[Path]:
     readme.write_text(readme_text(), encoding="utf-8")
     written.append(readme)
     return written
+
+
+def real_motion(mocap: Path, name: str):
+    """The excerpt ``name`` of :data:`REAL_DEMOS` cut out of the mocap folder ``mocap`` (a Motion at FPS)."""
+    from motion2video.core.motion import Motion
+    from motion2video.formats.io import load_motion
+
+    clip, start, frames, _ = REAL_DEMOS[name]
+    motion = load_motion(mocap / clip, target_fps=FPS)
+    if not isinstance(motion, Motion) or start + frames > motion.num_frames:
+        raise InputError(f"expected a body capture of at least {start + frames} frames at {FPS:g} fps",
+                         mocap / clip)
+    cut = motion.slice(start, frames)
+    return Motion(cut.joints.astype("float32"), FPS, cut.skeleton, cut.source,
+                  f"CMU {clip} frames {start}-{start + frames - 1} at {FPS:g} fps")
+
+
+def write_real_motions(out: Path, mocap: Path) -> list[Path]:
+    """Write the real CMU excerpts (:data:`REAL_DEMOS`) from the mocap folder ``mocap`` into ``out``."""
+    if not (mocap / "manifest.csv").is_file():
+        raise InputError("not a mocap folder (no manifest.csv): give the folder holding cmu/ and manifest.csv",
+                         mocap)
+    out.mkdir(parents=True, exist_ok=True)
+    return [save_motion_npz(real_motion(mocap, name), out / name) for name in REAL_DEMOS]
 
 
 def _has_module(name: str) -> bool:
@@ -181,11 +243,15 @@ def write_reference_poses(out: Path) -> list[Path]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=Path("demo_inputs"), help="output folder (default demo_inputs)")
+    parser.add_argument("--real-mocap", type=Path, default=None, metavar="FOLDER",
+                        help="also cut the real CMU excerpts out of this mocap folder (../shared/data/mocap)")
     parser.add_argument("--reference", action="store_true",
                         help="also render reference_body.png / reference_body_128.png / reference_face.png")
     args = parser.parse_args(argv)
     try:
         paths = write_motions(args.out)
+        if args.real_mocap is not None:
+            paths += write_real_motions(args.out, args.real_mocap)
         if args.reference:
             paths += write_references(args.out)
     except InputError as err:

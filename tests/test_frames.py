@@ -251,7 +251,9 @@ def test_evaluation_json_shape_and_contact_sheet(tmp_path, domain):
     payload = json.loads(out.read_text())
     person = {"person_psnr", "person_ssim", "person_sharpness", "moving_psnr", "moving_sharpness"}
     for method in METHODS:
-        assert set(payload["results"][method]) == {"psnr", "ssim"} | person
+        assert set(payload["results"][method]) == {"psnr", "ssim", "head_psnr", "head_ssim"} | person
+        # Held-out pairs carry no head masks: the head keys are there, and null.
+        assert payload["results"][method]["head_psnr"] is None and payload["results"][method]["head_ssim"] is None
     # The toy data has silhouettes, so the person targets of issue 10 are reported.
     assert set(payload["targets_met"]) == {"person_psnr_vs_limb_warp_3db", "person_psnr_vs_copy_reference_5db",
                                            "person_sharpness_0.9", "psnr_29db", "ssim_above_every_baseline"}
@@ -259,6 +261,35 @@ def test_evaluation_json_shape_and_contact_sheet(tmp_path, domain):
     assert sheet.dtype == np.uint8 and sheet.shape == (18 + 3 * 34, 5 * 34, 3)
     with pytest.raises(ValueError):
         contact_sheet({"a": seqs.images[0], "b": seqs.images[0, :, :16]})
+
+
+def test_head_metrics_known_answers():
+    """With the whole silhouette as the "head", the head metrics equal the person metrics; a prediction wrong
+    only outside the head scores ~148 dB (the 1e-10 MSE floor) there, and one wrong by a known amount inside
+    it scores the known PSNR."""
+    seqs = toy_sequences("body", num_sequences=2, frames_per_sequence=3, image_size=32)
+    ev = evaluate_sequences(None, seqs, head_masks=seqs.masks)
+    for scores in ev.results.values():
+        assert scores.person["head_psnr"] == pytest.approx(scores.person["person_psnr"])
+        assert scores.person["head_ssim"] == pytest.approx(scores.person["person_ssim"])
+    from motion2video.frames.evaluate import person_metrics
+
+    target = seqs.images[:, 1]
+    head = np.zeros(target.shape[:3], bool)
+    head[:, 4:10, 12:20] = True
+    outside = target.copy()
+    outside[~head] = 255 - outside[~head]
+    per = person_metrics(outside, target, seqs.images[:, 0], seqs.masks[:, 0], seqs.masks[:, 1], head)
+    assert np.all(per["head_psnr"] > 140) and np.all(per["head_psnr"] > per["person_psnr"])
+    inside = target.astype(np.int16)
+    inside[head] = np.clip(inside[head] + np.where(inside[head] < 128, 16, -16), 0, 255)
+    per = person_metrics(inside.astype(np.uint8), target, seqs.images[:, 0], seqs.masks[:, 0], seqs.masks[:, 1],
+                         head)
+    np.testing.assert_allclose(per["head_psnr"], 10 * np.log10(255**2 / 16**2))
+    assert np.all(per["head_ssim"] < 1.0)
+    empty = person_metrics(target, target, seqs.images[:, 0], seqs.masks[:, 0], seqs.masks[:, 1],
+                           np.zeros_like(head))
+    assert np.all(np.isnan(empty["head_psnr"])) and np.all(np.isnan(empty["head_ssim"]))
 
 
 def test_training_crops_hold_both_poses():

@@ -132,3 +132,133 @@ def test_warp_settings_without_the_warp_model_are_refused_before_any_rendering(t
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "settings of --model-kind warp" in err
     assert not cache.exists() and not (tmp_path / "x.safetensors").exists()
+
+
+# --- evaluate-frames --poses: held-out identities posed by real mocap (issue 22) ----------------------------
+
+WALK = DATA / "mocap" / "cmu" / "08_01.bvh"  # a held-out clip of the frame data (is_test_clip)
+
+
+def test_pose_windows_spread_over_the_clip():
+    from motion2video.frames.poses import PoseEvalSpec, window_frames
+
+    spec = PoseEvalSpec(windows_per_clip=3, frames_per_window=5, window_seconds=1.0)
+    w = window_frames(273, 120.0, spec)
+    assert w.shape == (3, 5) and w[0, 0] == 0 and w[-1, -1] == 272 and np.all(np.diff(w, axis=1) == 30)
+    short = window_frames(10, 25.0, spec)  # shorter than a window: every window is the whole clip
+    assert np.all(short[:, 0] == 0) and np.all(short[:, -1] == 9)
+
+
+@pytest.mark.slow
+def test_posed_windows_render_visible_heads():
+    from motion2video.frames.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
+
+    assert is_test_clip("cmu/08_01.bvh")
+    spec = PoseEvalSpec(image_size=64, windows_per_clip=2, frames_per_window=3, num_identities=2)
+    posed = render_posed_sequences(load_body_clips(WALK), spec)
+    seqs, heads = posed.sequences, posed.head_masks
+    assert seqs.images.shape == (2, 3, 64, 64, 3) and heads.shape == seqs.masks.shape == (2, 3, 64, 64)
+    assert list(seqs.identity) == [0, 1] and list(seqs.clip) == ["08_01.bvh"] * 2
+    # The head is part of the silhouette, seen in every frame, small, and at its top.
+    assert not np.any(heads & ~seqs.masks)
+    head_px, body_px = heads.sum(axis=(2, 3)), seqs.masks.sum(axis=(2, 3))
+    assert np.all(head_px > 0) and np.all(head_px < 0.3 * body_px)
+    rows = np.arange(64)[None, None, :, None]
+    assert np.all((rows * heads).sum(axis=(2, 3)) / head_px < (rows * seqs.masks).sum(axis=(2, 3)) / body_px)
+
+
+@pytest.mark.slow
+def test_evaluate_frames_posed_by_real_motion(tmp_path, capsys):
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+
+    ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
+    out = tmp_path / "real.json"
+    rc = main(["evaluate-frames", "--model", str(ckpt), "--poses", str(WALK), "--windows", "1", "--json", str(out),
+               "--no-progress"])
+    assert rc == 0
+    payload = json.loads(out.read_text())
+    assert payload["pairs"] == "poses" and payload["num_pairs"] == 8  # one window of 9 frames
+    assert payload["poses"]["clips"] == [{"name": "08_01.bvh", "frames": 273, "fps": 120.0, "window_starts": [0]}]
+    keys = {"psnr", "ssim", "person_psnr", "person_ssim", "person_sharpness", "moving_psnr", "moving_sharpness",
+            "head_psnr", "head_ssim"}
+    assert set(payload["results"]) == {"generator", "copy-reference", "limb-warp"}  # the 128 px v1 is left out
+    for scores in payload["results"].values():
+        assert set(scores) == keys and all(np.isfinite(v) for v in scores.values())
+        assert 0 < scores["head_ssim"] < 1 and scores["head_psnr"] < 60
+    assert set(payload["targets_met"]) == {"person_psnr_vs_limb_warp_3db", "head_psnr_vs_limb_warp_3db",
+                                           "person_sharpness_0.9"}
+    assert json.loads(capsys.readouterr().out[: -1].split("\nwrote")[0]) == payload
+
+
+def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+
+    ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=32)), tmp_path / "warp.safetensors", step=0)
+    repo = Path(__file__).resolve().parents[1]
+    for poses, words in ((tmp_path / "missing.bvh", "no such file"), (repo / "demo_inputs" / "smile.npz", "face"),
+                         (tmp_path, "no motion files")):
+        assert main(["evaluate-frames", "--model", str(ckpt), "--poses", str(poses), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and words in err and str(poses) in err
+    from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
+
+    face = save_frame_model(FrameGenerator(FrameGeneratorConfig(domain="face", structure_channels=1, image_size=32,
+                                                                channels=(8, 12, 16))),
+                            tmp_path / "face.safetensors", step=0)
+    for flags in (["--poses", str(WALK)], ["--head"]):
+        assert main(["evaluate-frames", "--model", str(face), *flags, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "needs a body frame model" in err and "face.safetensors" in err
+
+
+@pytest.mark.slow
+def test_held_out_split_with_heads_renders_the_cached_frames(tmp_path):
+    """The head masks of the held-out pairs come from rendering the split again: the same frames as its
+    cached shards, with the heads inside the silhouettes."""
+    from motion2video.frames.render_data import render_body_split_with_heads
+
+    spec = tiny_spec("body", "test")
+    cached = load_or_generate(spec, cache_dir=tmp_path, progress=False)
+    rendered = render_body_split_with_heads(spec)
+    seqs, heads = rendered.sequences, rendered.head_masks
+    np.testing.assert_array_equal(seqs.images, cached.images)
+    np.testing.assert_array_equal(seqs.masks, cached.masks)
+    np.testing.assert_array_equal(seqs.points, cached.points)
+    assert heads.shape == seqs.masks.shape and heads.any(axis=(2, 3)).all() and not np.any(heads & ~seqs.masks)
+
+
+@pytest.mark.slow
+def test_evaluate_frames_head_on_held_out_pairs(tmp_path):
+    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+
+    ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
+    out = tmp_path / "eval.json"
+    assert main(["evaluate-frames", "--model", str(ckpt), "--test-sequences", "1", "--head", "--json", str(out),
+                 "--no-progress"]) == 0
+    payload = json.loads(out.read_text())
+    assert payload["pairs"] == "held-out" and payload["num_pairs"] == 8
+    for scores in payload["results"].values():
+        assert np.isfinite(scores["head_psnr"]) and 0 < scores["head_ssim"] < 1
+    # The held-out targets, not the real-motion ones.
+    assert "psnr_29db" in payload["targets_met"] and "head_psnr_vs_limb_warp_3db" not in payload["targets_met"]
+
+
+def test_pose_clips_from_a_folder_pass_over_what_is_not_a_body_motion(tmp_path):
+    """A folder's face motions and non-motion text files are skipped with a note; its body motions load in
+    name order."""
+    import shutil
+
+    from motion2video.frames.poses import load_body_clips
+
+    repo = Path(__file__).resolve().parents[1]
+    for name in ("jump.npz", "smile.npz", "wave.npz", "reference_body.pose.npz"):
+        shutil.copy(repo / "demo_inputs" / name, tmp_path / name)
+    (tmp_path / "notes.txt").write_text("not a motion\n")
+    skipped = []
+    clips = load_body_clips(tmp_path, on_skip=lambda file, why: skipped.append(file.name))
+    assert [name for name, _ in clips] == ["jump.npz", "wave.npz"]
+    assert sorted(skipped) == ["notes.txt", "smile.npz"]
+    assert clips[0][1].num_frames == 102 and clips[0][1].skeleton == "h36m-17"

@@ -298,3 +298,29 @@ def test_demo_inputs_regenerate_identically(tmp_path):
     assert (tmp_path / "README.md").read_text() == (committed / "README.md").read_text()
     for name in names:
         assert name in (committed / "README.md").read_text()
+
+
+MOCAP = REPO.parent / "shared" / "data" / "mocap"
+
+
+def test_real_demo_inputs_regenerate_identically(tmp_path):
+    """The committed CMU excerpts are what ``--real-mocap`` cuts out of the mocap folder beside the repository,
+    and the README names their source, the terms and CMU's credit line."""
+    script = _load_script()
+    assert script.main(["--out", str(tmp_path), "--real-mocap", str(MOCAP)]) == 0
+    committed = REPO / "demo_inputs"
+    readme = (committed / "README.md").read_text()
+    for name, (clip, start, frames, _) in script.REAL_DEMOS.items():
+        new, old = load_motion_npz(tmp_path / name), load_motion_npz(committed / name)
+        assert old.joints.shape == (frames, 17, 3) and old.fps == 25.0 and old.skeleton == "h36m-17"
+        # The BVH forward kinematics may differ in the last bits between CPUs: compare at a micrometre.
+        np.testing.assert_allclose(new.joints, old.joints, rtol=0, atol=1e-6)
+        assert new.label == old.label and clip in old.label and name in readme and clip in readme
+        assert (committed / name).stat().st_size < 64 * 1024
+    assert "mocap.cs.cmu.edu" in readme and "NSF EIA-0196217" in readme
+    # A real walk moves forward; a real jump lifts the pelvis well off its standing height.
+    walk = load_motion_npz(committed / "cmu_walk.npz").joints
+    jump = load_motion_npz(committed / "cmu_jump.npz").joints
+    assert np.linalg.norm(walk[-1, 0, :2] - walk[0, 0, :2]) > 2.0
+    assert jump[:, 0, 2].max() - jump[0, 0, 2] > 0.2
+    assert script.main(["--out", str(tmp_path), "--real-mocap", str(tmp_path)]) == 2  # not a mocap folder

@@ -8,7 +8,11 @@ Metrics, computed per pair on uint8 RGB frames (data range 255) and averaged ove
   of the grey image inside the silhouette, generated / truth (1.0 = as sharp as the truth; a blurry
   person scores below 1);
 - moving region (pixels of either person's silhouette where reference and target differ by more than
-  :data:`MOVING_THRESHOLD` in some channel): PSNR and the sharpness ratio.
+  :data:`MOVING_THRESHOLD` in some channel): PSNR and the sharpness ratio;
+- head (over the target's visible head: the pixels where the Anny head vertices are the front surface,
+  :meth:`renderers.body.BodyRenderer.render_with_masks` with ``head=True``): PSNR and the mean of the SSIM map
+  inside it (``head_psnr``, ``head_ssim``). Only evaluations that rendered head masks have them
+  (``evaluate-frames --poses``); elsewhere they are null.
 
 The person metrics need sequences with masks (rendered caches of data version 2); without them they are
 NaN.
@@ -84,26 +88,37 @@ def moving_region(ref: np.ndarray, target: np.ndarray, ref_mask: np.ndarray, tgt
 
 
 PERSON_METRICS = ("person_psnr", "person_ssim", "person_sharpness", "moving_psnr", "moving_sharpness")
+HEAD_METRICS = ("head_psnr", "head_ssim")
+
+
+def region_ssim(ssim_map: np.ndarray, mask: np.ndarray) -> float:
+    """Mean of an (H, W, 3) SSIM map over the pixels of ``mask`` (H, W) bool; NaN for an empty mask."""
+    return float(ssim_map.mean(axis=-1)[mask].mean()) if mask.any() else float("nan")
 
 
 def person_metrics(pred: np.ndarray, target: np.ndarray, ref: np.ndarray, ref_masks: np.ndarray,
-                   tgt_masks: np.ndarray) -> dict[str, np.ndarray]:
-    """Per-pair person metrics (:data:`PERSON_METRICS`).
+                   tgt_masks: np.ndarray, tgt_head_masks: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Per-pair person metrics (:data:`PERSON_METRICS`, and :data:`HEAD_METRICS` with head masks).
 
     Args:
-        pred, target, ref: (N, H, W, 3) uint8 frames; ref_masks, tgt_masks: (N, H, W) bool silhouettes.
+        pred, target, ref: (N, H, W, 3) uint8 frames; ref_masks, tgt_masks: (N, H, W) bool silhouettes;
+        tgt_head_masks: (N, H, W) bool visible head of the target, or None.
     Returns:
         metric name -> (N,) float64 (NaN where a region is empty).
     """
-    out = {k: np.empty(len(pred)) for k in PERSON_METRICS}
+    keys = PERSON_METRICS + (HEAD_METRICS if tgt_head_masks is not None else ())
+    out = {k: np.empty(len(pred)) for k in keys}
     for i, (p, t, r, mr, mt) in enumerate(zip(pred, target, ref, ref_masks, tgt_masks)):
         _, smap = structural_similarity(t, p, channel_axis=-1, data_range=255, full=True)
         moving = moving_region(r, t, mr, mt)
         out["person_psnr"][i] = region_psnr(p, t, mt)
-        out["person_ssim"][i] = float(smap.mean(axis=-1)[mt].mean()) if mt.any() else float("nan")
+        out["person_ssim"][i] = region_ssim(smap, mt)
         out["person_sharpness"][i] = sharpness_ratio(p, t, mt)
         out["moving_psnr"][i] = region_psnr(p, t, moving)
         out["moving_sharpness"][i] = sharpness_ratio(p, t, moving)
+        if tgt_head_masks is not None:
+            out["head_psnr"][i] = region_psnr(p, t, tgt_head_masks[i])
+            out["head_ssim"][i] = region_ssim(smap, tgt_head_masks[i])
     return out
 
 
@@ -124,11 +139,12 @@ class MethodScores:
 
     @staticmethod
     def from_frames(pred: np.ndarray, target: np.ndarray, *, ref: np.ndarray | None = None,
-                    ref_masks: np.ndarray | None = None, tgt_masks: np.ndarray | None = None) -> "MethodScores":
+                    ref_masks: np.ndarray | None = None, tgt_masks: np.ndarray | None = None,
+                    tgt_head_masks: np.ndarray | None = None) -> "MethodScores":
         psnr, ssim = frame_metrics(pred, target)
         per: dict[str, np.ndarray] = {}
         if ref is not None and ref_masks is not None and tgt_masks is not None:
-            per = person_metrics(pred, target, ref, ref_masks, tgt_masks)
+            per = person_metrics(pred, target, ref, ref_masks, tgt_masks, tgt_head_masks)
         return MethodScores.from_per_pair(psnr, ssim, per)
 
     @staticmethod
@@ -137,7 +153,9 @@ class MethodScores:
         return MethodScores(float(psnr.mean()), float(ssim.mean()), psnr, ssim, means, per)
 
     def to_dict(self) -> dict:
+        """``psnr``, ``ssim`` and every person and head metric (null when not measured or not finite)."""
         out = {"psnr": round(self.psnr, 4), "ssim": round(self.ssim, 5)}
+        out.update({k: None for k in PERSON_METRICS + HEAD_METRICS})
         out.update({k: (round(v, 4) if np.isfinite(v) else None) for k, v in self.person.items()})
         return out
 
@@ -152,6 +170,8 @@ class FrameEvaluation:
         domain, image_size: what was evaluated.
         predictions: method name -> (N, H, W, 3) uint8 frames (for contact sheets), plus ``reference`` and
             ``target``.
+        pairs: ``"held-out"`` (the frame test split) or ``"poses"`` (posed by real motion, with head metrics:
+            :mod:`motion2video.frames.poses`); it picks the targets.
     """
 
     results: dict[str, MethodScores]
@@ -159,6 +179,7 @@ class FrameEvaluation:
     domain: str
     image_size: int
     predictions: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+    pairs: str = "held-out"
 
     def to_dict(self) -> dict:
         """The JSON shape: ``{"results": {method: {"psnr", "ssim", "person_psnr", ...}}, "num_pairs",
@@ -168,6 +189,7 @@ class FrameEvaluation:
             "num_pairs": self.num_pairs,
             "domain": self.domain,
             "image_size": self.image_size,
+            "pairs": self.pairs,
         }
 
     def targets_met(self) -> dict[str, bool]:
@@ -176,8 +198,20 @@ class FrameEvaluation:
         - person PSNR >= limb-warp + 3 dB, >= copy-reference + 5 dB, >= every baseline generator + 2 dB;
         - person sharpness ratio >= 0.9; whole-frame PSNR >= 29 dB; SSIM above every baseline.
         Without person metrics: PSNR >= copy-reference + 3 dB and >= limb-warp + 1 dB; SSIM above both.
+        Posed by real motion (``pairs == "poses"``, issue 22): person and head PSNR >= limb-warp + 3 dB, person
+        sharpness ratio >= 0.9.
         """
         g, c, w = (self.results[k] for k in METHODS)
+        if self.pairs == "poses":
+            def at_least(a: float, b: float) -> bool:
+                return bool(np.isfinite(a) and np.isfinite(b) and a >= b)
+
+            gp, wp = g.person, w.person
+            return {
+                "person_psnr_vs_limb_warp_3db": at_least(gp["person_psnr"], wp["person_psnr"] + 3.0),
+                "head_psnr_vs_limb_warp_3db": at_least(gp["head_psnr"], wp["head_psnr"] + 3.0),
+                "person_sharpness_0.9": at_least(gp["person_sharpness"], 0.9),
+            }
         others = [v for k, v in self.results.items() if k != "generator"]
         if not g.person or not np.isfinite(g.person.get("person_psnr", np.nan)):
             return {
@@ -208,9 +242,11 @@ def run_generator(model: FrameGenerator | WarpGenerator, pairs: FramePairs, *, b
 
 
 def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePairs, *, domain: str,
-                   batch_size: int = 16, baseline_models: dict | None = None) -> FrameEvaluation:
+                   batch_size: int = 16, baseline_models: dict | None = None,
+                   tgt_head_masks: np.ndarray | None = None) -> FrameEvaluation:
     """Score the generator (when given), every baseline and every named baseline generator
-    (``baseline_models``: name -> model) on ``pairs``."""
+    (``baseline_models``: name -> model) on ``pairs``; ``tgt_head_masks`` (N, H, W) bool adds the head
+    metrics."""
     preds: dict[str, np.ndarray] = {}
     if model is not None:
         preds["generator"] = run_generator(model, pairs, batch_size=batch_size)
@@ -219,7 +255,8 @@ def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePai
     for name, other in (baseline_models or {}).items():
         preds[name] = run_generator(other, pairs, batch_size=batch_size)
     results = {name: MethodScores.from_frames(p, pairs.tgt_images, ref=pairs.ref_images, ref_masks=pairs.ref_masks,
-                                              tgt_masks=pairs.tgt_masks) for name, p in preds.items()}
+                                              tgt_masks=pairs.tgt_masks, tgt_head_masks=tgt_head_masks)
+               for name, p in preds.items()}
     preds["reference"] = pairs.ref_images
     preds["target"] = pairs.tgt_images
     return FrameEvaluation(results=results, num_pairs=len(pairs), domain=domain,
@@ -228,16 +265,22 @@ def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePai
 
 def evaluate_sequences(model: FrameGenerator | WarpGenerator | None, seqs: FrameSequences, *,
                        max_pairs: int | None = None, chunk: int = 64,
-                       baseline_models: dict | None = None) -> FrameEvaluation:
+                       baseline_models: dict | None = None, head_masks: np.ndarray | None = None,
+                       pairs: str = "held-out") -> FrameEvaluation:
     """Score on the fixed evaluation pairs of ``seqs`` (:func:`evaluation_pair_index`), in chunks so the
-    structure maps of every pair are never all in memory at once."""
+    structure maps of every pair are never all in memory at once. ``head_masks`` (N, T, H, W) bool, the
+    visible head of every frame, adds the head metrics."""
     index = evaluation_pair_index(seqs)
     if max_pairs is not None:
         index = index[:max_pairs]
     if len(index) == 0:
         raise ValueError("no evaluation pairs")
+    def heads(rows: np.ndarray) -> np.ndarray | None:
+        return None if head_masks is None else head_masks[rows[:, 0], rows[:, 2]]
+
     parts = [evaluate_pairs(model, make_pairs(seqs, index[i:i + chunk]), domain=seqs.domain,
-                            baseline_models=baseline_models) for i in range(0, len(index), chunk)]
+                            baseline_models=baseline_models, tgt_head_masks=heads(index[i:i + chunk]))
+             for i in range(0, len(index), chunk)]
     preds = {k: np.concatenate([p.predictions[k] for p in parts]) for k in parts[0].predictions}
     results = {}
     for name in parts[0].results:
@@ -247,17 +290,24 @@ def evaluate_sequences(model: FrameGenerator | WarpGenerator | None, seqs: Frame
                for k in parts[0].results[name].person_per_pair}
         results[name] = MethodScores.from_per_pair(psnr, ssim, per)
     return FrameEvaluation(results=results, num_pairs=len(index), domain=seqs.domain,
-                           image_size=seqs.image_size, predictions=preds)
+                           image_size=seqs.image_size, predictions=preds, pairs=pairs)
 
 
-def write_json(evaluation: FrameEvaluation, path: str | Path, *, extra: dict | None = None) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+def json_payload(evaluation: FrameEvaluation, *, extra: dict | None = None) -> dict:
+    """The JSON report: :meth:`FrameEvaluation.to_dict`, ``targets_met`` (empty without a generator) and
+    ``extra``."""
     payload = evaluation.to_dict()
     payload["targets_met"] = evaluation.targets_met() if "generator" in evaluation.results else {}
     payload.update(extra or {})
+    return payload
+
+
+def write_json(evaluation: FrameEvaluation, path: str | Path, *, extra: dict | None = None) -> Path:
+    """Write :func:`json_payload` to ``path`` atomically (tmp file + rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(payload, indent=2, sort_keys=True) + "\n")
+    tmp.write_text(json.dumps(json_payload(evaluation, extra=extra), indent=2, sort_keys=True) + "\n")
     tmp.replace(path)
     return path
 

@@ -145,33 +145,93 @@ def identity_vertex_colors(identity: Identity, palette: np.ndarray) -> np.ndarra
 def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
     """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, masks (T, S, S) bool,
     clip index, start)."""
-    from motion2video.core.camera import project
+    rendered, ci, start = _body_sequence(source, rng, identity)
+    return rendered.images, rendered.points, rendered.masks, ci, start
+
+
+def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity, *,
+                   head: bool = False) -> tuple["BodyWindow", int, int]:
+    """One body sequence as a :class:`BodyWindow` (with head masks when ``head``), its clip index and start."""
     from motion2video.core.motion import Motion
-    from renderers.body import BodyStyle
-    from renderers.registry import renderer_for
 
     spec = source.spec
-    size = spec.image_size
     ci = int(rng.integers(len(source.clip_paths)))
     clip = source.clip(ci)
     times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
                          seconds=spec.window_seconds)
     motion = Motion(clip.joints[times], clip.fps, source=clip.source)
+    return render_body_window(motion, identity, rng, source.backgrounds, spec.image_size, head=head), ci, int(times[0])
+
+
+@dataclass
+class SequencesWithHeads:
+    """Rendered body sequences and the visible head of every frame: ``head_masks`` (N, T, S, S) bool, the pixels
+    where Anny's head vertices are the front surface (:meth:`renderers.body.BodyRenderer.render_with_masks`)."""
+
+    sequences: FrameSequences
+    head_masks: np.ndarray
+
+
+def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | None = None,
+                                 on_sequence: Callable[[int], object] | None = None) -> SequencesWithHeads:
+    """Every sequence of a body split rendered as its shards are (the same frames as :func:`render_shard`),
+    with the visible head masks. Nothing is cached: it takes as long as rendering the split."""
+    if spec.domain != "body":
+        raise ValueError("head masks are rendered for body splits only")
+    source = SequenceSource.create(spec, data_root=data_root)
+    parts, heads = [], []
+    try:
+        for i in range(spec.num_sequences):
+            rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
+            ident_index = i % spec.num_identities
+            out, ci, start = _body_sequence(source, rng, source.identities[ident_index], head=True)
+            parts.append(FrameSequences(domain="body", images=out.images[None], points=out.points[None],
+                                        structure_images=None, identity=np.asarray([ident_index], np.int64),
+                                        clip=np.asarray([source.clip_names[ci]]),
+                                        start=np.asarray([start], np.int64), masks=out.masks[None]))
+            heads.append(out.head_masks)
+            if on_sequence is not None:
+                on_sequence(1)
+    finally:
+        source.close()
+    return SequencesWithHeads(FrameSequences.concatenate(parts), np.stack(heads))
+
+
+@dataclass
+class BodyWindow:
+    """A rendered body window: images (T, S, S, 3) uint8, points (T, 17, 2) float32 projected joints,
+    masks (T, S, S) bool silhouettes, head_masks (T, S, S) bool visible head or None."""
+
+    images: np.ndarray
+    points: np.ndarray
+    masks: np.ndarray
+    head_masks: np.ndarray | None = None
+
+
+def render_body_window(motion, identity: Identity, rng: np.random.Generator, backgrounds: list[np.ndarray],
+                       size: int, *, head: bool = False) -> BodyWindow:
+    """Render the frames of ``motion`` (canonical 3D) as ``identity`` the way the training data is made: a
+    background crop, camera yaw and elevation and a light level drawn from ``rng`` (in that order), the
+    camera fitted over the window; ``head`` also renders the visible head masks."""
+    from motion2video.core.camera import project
+    from renderers.body import BodyStyle
+    from renderers.registry import renderer_for
+
     look = dict(
         phenotype=dict(identity.phenotype),
         skin=_rgb255(identity.skin), top=_rgb255(identity.top), trousers=_rgb255(identity.trousers),
         shoes=_rgb255(identity.shoes), hair=_rgb255(identity.hair),
-        background=background_crop(rng, source.backgrounds, size),
+        background=background_crop(rng, backgrounds, size),
         azimuth_deg=float(rng.uniform(*BODY_AZIMUTH_DEG)),
         elevation_deg=float(rng.uniform(*BODY_ELEVATION_DEG)),
     )
     look["vertex_colors"] = identity_vertex_colors(identity, BodyStyle(size=(size, size), **look).region_colors())
     gain = light_jitter(rng)
     with renderer_for("body3d", "mesh", size=size, **look) as renderer:
-        out = renderer.renderer.render_with_masks(motion)
+        out = renderer.renderer.render_with_masks(motion, head=head)
     images = relight(out.frames, out.masks, gain)
     points = project(motion.joints, out.camera)[..., :2].astype(np.float32)  # (T, 17, 2)
-    return images, points, out.masks, ci, int(times[0])
+    return BodyWindow(images, points, out.masks, out.head_masks)
 
 
 def render_shard(source: SequenceSource, shard: int, *,
