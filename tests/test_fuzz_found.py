@@ -24,3 +24,15 @@ def test_face_csv_with_a_damaged_frame_number_is_one_line(tmp_path):
     path.write_text(header + ",".join(cells) + "".join(lines[2:]))
     with pytest.raises(InputError, match="damaged timecode or frame number"):
         load_motion(path)
+
+
+def test_deeply_nested_json_is_one_line_not_a_recursion_error(tmp_path):
+    """Found by test_openpose_reader in a full run: json's decoder recursed past Python's limit."""
+    from motion2video.core.errors import InputError
+    from motion2video.formats.io import load_motion
+
+    folder = tmp_path / "openpose"
+    folder.mkdir()
+    (folder / "000000000000_keypoints.json").write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(InputError, match="nested too deeply"):
+        load_motion(folder)

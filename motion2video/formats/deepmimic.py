@@ -122,6 +122,8 @@ def _load_json(path: Path, what: str):
         raise InputError(f"not a text file ({what} is JSON text)", path) from None
     except json.JSONDecodeError as err:
         raise InputError(f"not valid JSON ({what}): line {err.lineno}: {err.msg}", path) from None
+    except RecursionError:  # json's decoder recurses once per nesting level
+        raise InputError(f"not valid JSON ({what}): nested too deeply", path) from None
 
 
 def read_character(path: str | Path) -> Character:

@@ -121,8 +121,9 @@ def read_expmap_layout(path: str | Path) -> ExpmapLayout:
             canonical=tuple(int(index[j]) for j in H36M_17.joints),
             toe_ends=None if toes is None else (int(toes["left"]), int(toes["right"])),
         )
-    except (KeyError, TypeError, ValueError, json.JSONDecodeError, UnicodeDecodeError) as err:
-        raise InputError(f"not an exp-map layout file ({type(err).__name__}: {err})", path) from None
+    except (KeyError, TypeError, ValueError, json.JSONDecodeError, UnicodeDecodeError, RecursionError) as err:
+        raise InputError(f"not an exp-map layout file ({type(err).__name__})" if isinstance(err, RecursionError)
+                         else f"not an exp-map layout file ({type(err).__name__}: {err})", path) from None
     width = layout.values_per_frame
     used = [c for c in layout.root_position_columns] + [c for cs in cols if cs for c in cs]
     problems = []

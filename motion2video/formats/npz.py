@@ -144,6 +144,8 @@ def load_face_npz(path: str | Path) -> FaceMotion:
         identity = json.loads(_string(arrays, "identity", path))
     except json.JSONDecodeError as err:
         raise InputError(f"'identity' is not valid JSON ({err.msg})", path) from None
+    except RecursionError:  # json's decoder recurses once per nesting level
+        raise InputError("'identity' is not valid JSON (nested too deeply)", path) from None
     if not isinstance(identity, dict) or not all(isinstance(v, (int, float)) for v in identity.values()):
         raise InputError("'identity' must be a JSON object of numbers", path)
     label = _string(arrays, "label", path) if "label" in arrays else None

@@ -47,6 +47,8 @@ def read_openpose_frame(path: Path) -> np.ndarray | None:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise InputError(f"not valid JSON ({type(err).__name__})", path) from None
+    except RecursionError:  # json's decoder recurses once per nesting level (found by the fuzz tests)
+        raise InputError("not valid JSON (nested too deeply)", path) from None
     if not isinstance(data, dict) or not isinstance(data.get("people"), list):
         raise InputError("not an OpenPose keypoints file (no 'people' list)", path)
     if not data["people"]:
