@@ -31,6 +31,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from motion2video.core.errors import InputError  # noqa: E402
 from motion2video.models.checkpoint import baseline_bundle, load_model  # noqa: E402
 from motion2video.core.atomic import write_json, write_section  # noqa: E402
 from motion2video.data.dataset import DEFAULT_MOCAP, WindowSet, build_dataset  # noqa: E402
@@ -171,9 +172,14 @@ def main(argv: list[str] | None = None) -> int:
     models = ([] if args.no_defaults else default_models(args.old_rev)) + [parse_model(v) for v in args.model]
     if not models:
         raise SystemExit("no models: give --model LABEL=PATH")
-    bundles = []
+    bundles, kept = [], []
     for label, spec in models:
-        bundles.append(load_model(resolve(spec, Path(args.cache))))
+        try:
+            bundles.append(load_model(resolve(spec, Path(args.cache))))
+            kept.append((label, spec))
+        except InputError as err:  # e.g. the 5-minute models: trained on canonical skeleton version 1
+            print(f"note: {label} left out: {err}", file=sys.stderr)
+    models = kept
     ref = load_model(args.windows_from)
     for (label, _), b in zip(models, bundles):
         if (b.data_config.observed, b.data_config.future, b.data_config.fps, b.layout.kind) != \
