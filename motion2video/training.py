@@ -235,6 +235,10 @@ def train_model(
     out = Path(out)
     last, sidecar = last_paths(out)
     full_config = {**model_config, "feature_dim": dataset.num_features}
+    fields = {f.name for f in dataclasses.fields(entry.config_cls)}
+    if "feature_scale" in fields and not full_config.get("feature_scale"):
+        # models that measure their loss in data units (mixer-dct) get the training set's feature scales
+        full_config["feature_scale"] = [float(v) for v in dataset.stats.std]
     torch.manual_seed(config.seed)
     try:
         model = build_model(model_name, full_config)

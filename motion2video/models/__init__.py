@@ -4,7 +4,7 @@ See :mod:`motion2video.models.base` for the interface and :data:`MODEL_REGISTRY`
 """
 
 from motion2video.models import (  # noqa: F401  (importing registers the models)
-    baselines, behavior, blocks, cvae, dlow, flow, lcpvae, mtvae, pred_lstm,
+    baselines, behavior, blocks, cvae, dlow, flow, lcpvae, mixer, mtvae, pred_lstm,
 )
 from motion2video.models.base import MODEL_REGISTRY, LatentPosterior, LossOutput, build_model, register_model
 
