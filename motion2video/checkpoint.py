@@ -31,6 +31,7 @@ from motion2video.atomic import atomic_output
 from motion2video.data.dataset import DatasetConfig, Split
 from motion2video.data.windows import FeatureLayout, NormStats
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
+from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
 from motion2video.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
 
@@ -56,6 +57,9 @@ class CheckpointMeta:
     version: str
     data_summary: dict = field(default_factory=dict)
     training: dict = field(default_factory=dict)
+    # The canonical skeleton definition the joints followed (core.skeletons.SKELETON_VERSION); None: a
+    # checkpoint written before versions were recorded (version 1), or a model of no body skeleton.
+    skeleton_version: int | None = None
 
     @property
     def layout(self) -> FeatureLayout:
@@ -75,6 +79,7 @@ class CheckpointMeta:
                 "summary": self.data_summary,
             },
             "skeleton": self.skeleton,
+            "skeleton_version": self.skeleton_version,
             "version": self.version,
             "training": self.training,
         })
@@ -88,7 +93,7 @@ class CheckpointMeta:
             data_config=DatasetConfig.from_dict(data["config"]), stats=NormStats.from_dict(data["stats"]),
             split=None if data.get("split") is None else Split.from_dict(data["split"]),
             skeleton=d.get("skeleton"), version=d["version"], data_summary=data.get("summary", {}),
-            training=d.get("training", {}),
+            training=d.get("training", {}), skeleton_version=d.get("skeleton_version"),
         )
 
 
@@ -211,6 +216,7 @@ def load_model(path_or_name: str | Path, *, device: str | torch.device = "cpu") 
     """
     path = resolve_checkpoint(path_or_name)
     meta = read_meta(path)
+    check_skeleton_version(meta.skeleton, meta.skeleton_version, path)
     if meta.model not in MODEL_REGISTRY:
         raise InputError(f"the checkpoint's model {meta.model!r} is not a known model "
                          f"(known: {', '.join(sorted(MODEL_REGISTRY))})", path)
@@ -239,5 +245,6 @@ def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats |
     stats = stats or NormStats.identity(num)
     meta = CheckpointMeta(model=name, kind="baseline", config=config_dict(model.config), data_config=data_config,
                           stats=stats, split=None, skeleton="h36m-17" if data_config.feature_layout.is_body else None,
-                          version=__version__)
+                          version=__version__,
+                          skeleton_version=SKELETON_VERSION if data_config.feature_layout.is_body else None)
     return ModelBundle(model=model, stats=stats, meta=meta, path=None)

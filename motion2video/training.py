@@ -38,6 +38,7 @@ from tqdm import tqdm
 from motion2video import __version__
 from motion2video.atomic import atomic_output
 from motion2video.checkpoint import CheckpointMeta, config_dict, read_meta, save_checkpoint
+from motion2video.core.skeletons import SKELETON_VERSION
 from motion2video.data.dataset import MotionDataset
 from motion2video.errors import InputError
 from motion2video.models.base import MODEL_REGISTRY, build_model
@@ -268,6 +269,7 @@ def train_model(
                       "wall_time_s": round(wall_before + time.perf_counter() - t0, 2),
                       "val_loss": val, "train_loss": float(np.mean(recent)) if recent else None,
                       "torch": torch.__version__},
+            skeleton_version=SKELETON_VERSION if dataset.layout.is_body else None,
         )
 
     def periodic(step: int) -> None:

@@ -22,12 +22,15 @@ from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
+from motion2video.core.skeletons import h36m_body_points
+
 if TYPE_CHECKING:  # pragma: no cover
     import anny as _anny_t
 
 PHENOTYPE_NAMES: tuple[str, ...] = ("gender", "age", "muscle", "weight", "height", "proportions")
 
-# Anny bone whose rest head sits at each canonical H36M-17 joint (canonical order).
+# Anny bone whose rest head is each canonical H36M-17 joint's nearest point (canonical order); the torso and
+# head joints are then put on Human3.6M's body points (core.skeletons.h36m_body_points, skeleton version 2).
 H36M_17_BONES: tuple[str, ...] = (
     "root",                                              # 0 pelvis
     "upperleg01.R", "lowerleg01.R", "foot.R",            # 1-3 right hip, knee, ankle
@@ -152,7 +155,8 @@ class AnnyRest:
         bone_heads: (104, 3) float64 bone head positions.
         bone_poses: (104, 4, 4) float64 rest world pose of each bone (pass back with
             ``pose_parameterization="world"`` to get ``vertices``).
-        joints17: (17, 3) float64 the canonical H36M-17 joints read off the bone heads (:data:`H36M_17_BONES`).
+        joints17: (17, 3) float64 the canonical H36M-17 joints: the bone heads of :data:`H36M_17_BONES` put on
+            Human3.6M's body points (:func:`~motion2video.core.skeletons.h36m_body_points`).
         phenotype: the 6 phenotype values used.
     """
 
@@ -181,7 +185,7 @@ def anny_rest(phenotype: Mapping[str, float] | None = None) -> AnnyRest:
         vertices=out["rest_vertices"][0].double().cpu().numpy(),
         bone_heads=heads,
         bone_poses=out["rest_bone_poses"][0].double().cpu().numpy(),
-        joints17=heads[idx].copy(),
+        joints17=h36m_body_points(heads[idx][None], shoulder_band=None)[0],  # Anny keeps its own shoulders
         phenotype=values,
     )
     for arr in (rest.vertices, rest.bone_heads, rest.bone_poses, rest.joints17):

@@ -176,7 +176,8 @@ def _solve_bones(j: np.ndarray, rest: AnnyRest, *, flat_feet: bool) -> tuple[np.
     # Root / pelvis.
     r = idx["root"]
     G[:, r] = _pelvis_frame(j) @ _pelvis_frame(rest.joints17).T
-    h[:, r] = j[:, PELVIS]
+    # the canonical pelvis is the hips' midpoint (Human3.6M's body point), not quite Anny's root head
+    h[:, r] = j[:, PELVIS] + G[:, r] @ (H[r] - rest.joints17[PELVIS])
     done[r] = True
     g_chest = _chest_frame(j) @ _chest_frame(rest.joints17).T  # (T, 3, 3)
 

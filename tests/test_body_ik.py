@@ -124,8 +124,11 @@ def test_limb_joints_land_exactly_on_synthetic_targets(rest):
     pose = pose_anny_from_joints(joints, fit_scale=False)
     heads = pose.bone_poses[0, :, :3, 3]  # (104, 3)
     for joint, bone in ((12, "lowerarm01.L"), (13, "wrist.L"), (1, "upperleg01.R"), (2, "lowerleg01.R"),
-                        (3, "foot.R"), (0, "root")):
+                        (3, "foot.R")):
         np.testing.assert_allclose(heads[anny_model.bone_index(bone)], joints[joint], atol=1e-9)
+    # The canonical pelvis (skeleton version 2) is the midpoint of the hips, where Anny's hips land.
+    hips = heads[[anny_model.bone_index("upperleg01.L"), anny_model.bone_index("upperleg01.R")]].mean(axis=0)
+    np.testing.assert_allclose(hips, joints[0], atol=1e-9)
     # The upper arm bone now points forward: its rotated rest direction matches the target.
     i, child = anny_model.bone_index("upperarm01.L"), anny_model.bone_index("lowerarm01.L")
     rest_dir = rest.bone_heads[child] - rest.bone_heads[i]

@@ -16,8 +16,11 @@ joint's origin sits at each canonical joint; ``None`` entries are derived by :fu
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+
+from motion2video.core.errors import InputError
 
 
 # Named joint indices of the canonical H36M-17 skeleton (checked against :data:`H36M_17`'s names below).
@@ -301,4 +304,151 @@ def feet_above(joints: np.ndarray, floor: float, *, legs=((R_HIP, R_KNEE, R_ANKL
             np.linalg.norm(fallback, axis=-1, keepdims=True), 1e-9))
         j[low, knee] = h + axis * along[:, None] + pole * height[:, None]
         j[low, ankle] = target
+    return j
+
+
+# --- the canonical body points (skeleton definition version 2) ----------------------------------------
+# Version of the canonical joint definition. 1: each rig's nearest joints were taken as they are (the
+# "thorax" of CMU rigs mid-chest, the "head" at the neck). 2: every source lands on Human3.6M's body points
+# (:func:`h36m_body_points`). Checkpoints record it (``skeleton_version`` in their metadata).
+SKELETON_VERSION = 2
+
+def check_skeleton_version(skeleton: str | None, version: int | None, path: str | Path) -> None:
+    """Refuse a body checkpoint trained on another canonical skeleton definition (one line, InputError).
+
+    Version 1 (checkpoints that record none) took each rig's nearest joints as they were: the thorax of CMU
+    rigs mid-chest, their head at the neck. Its models draw bodies that do not fit this version's joints.
+    """
+    if skeleton is None or version == SKELETON_VERSION:
+        return
+    raise InputError(f"trained on canonical skeleton version {version or 1}, but this motion2video uses version "
+                     f"{SKELETON_VERSION} (every source on Human3.6M's body points, docs/data.md): retrain it "
+                     "on the new joints", path)
+
+
+# Human3.6M's own bone lengths, subject S1, millimetres (the skeleton offsets of its exp-map tools).
+H36M_BONES_MM: dict[str, float] = {
+    "hip": 133.0, "thigh": 443.0, "shin": 454.0, "pelvis_spine": 233.0, "spine_thorax": 257.0,
+    "thorax_nose": 121.0, "nose_head": 115.0, "thorax_shoulder": 151.0, "upper_arm": 279.0, "forearm": 252.0,
+}
+H36M_LEG_MM = H36M_BONES_MM["thigh"] + H36M_BONES_MM["shin"]  # 897
+
+# The four proportions that tell conventions apart, each as a length over the leg (thigh + shin):
+# name -> (joint a, joint b, Human3.6M's value).
+PROPORTIONS: dict[str, tuple[int, int, float]] = {
+    "pelvis_thorax": (PELVIS, THORAX, (H36M_BONES_MM["pelvis_spine"] + H36M_BONES_MM["spine_thorax"]) / H36M_LEG_MM),
+    "thorax_nose": (THORAX, NECK, H36M_BONES_MM["thorax_nose"] / H36M_LEG_MM),
+    "nose_head": (NECK, HEAD, H36M_BONES_MM["nose_head"] / H36M_LEG_MM),
+    "thorax_shoulder": (THORAX, (L_SHOULDER, R_SHOULDER), H36M_BONES_MM["thorax_shoulder"] / H36M_LEG_MM),
+}
+
+
+# Shoulder half-width kept within this band of Human3.6M's (thorax-shoulder over the leg), see
+# :func:`h36m_body_points`.
+SHOULDER_BAND = (0.85, 1.2)
+
+
+def leg_length(joints: np.ndarray) -> float:
+    """Median over frames of thigh + shin, averaged over both legs, of (T, 17, 3) canonical joints."""
+    j = np.asarray(joints, np.float64)
+    seg = lambda a, b: np.linalg.norm(j[:, a] - j[:, b], axis=-1)  # noqa: E731  (T,)
+    legs = 0.5 * (seg(R_HIP, R_KNEE) + seg(R_KNEE, R_ANKLE) + seg(L_HIP, L_KNEE) + seg(L_KNEE, L_ANKLE))
+    return float(np.median(legs))
+
+
+def proportion_ratios(joints: np.ndarray) -> dict[str, float]:
+    """How a clip's skeleton compares with Human3.6M's: 1.00 means "as in Human3.6M".
+
+    For each of :data:`PROPORTIONS` (pelvis-thorax, thorax-neck/nose, neck/nose-head, thorax-shoulder, the
+    last averaged over both shoulders): the median length over frames, divided by :func:`leg_length`, divided
+    by Human3.6M's own ratio (subject S1).
+
+    Args:
+        joints: (T, 17, 3) canonical joints, any unit.
+    Returns:
+        proportion name -> ratio.
+    """
+    j = np.asarray(joints, np.float64)
+    leg = leg_length(j)
+    out = {}
+    for name, (a, b, h36m) in PROPORTIONS.items():
+        bs = b if isinstance(b, tuple) else (b,)
+        lengths = np.mean([np.linalg.norm(j[:, a] - j[:, i], axis=-1) for i in bs], axis=0)  # (T,)
+        out[name] = float(np.median(lengths)) / leg / h36m
+    return out
+
+
+def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """(..., 3) unit vectors of v; where v is (near) zero, the unit vector of ``fallback``."""
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    f = fallback / np.maximum(np.linalg.norm(fallback, axis=-1, keepdims=True), 1e-12)
+    return np.where(n > 1e-9, v / np.maximum(n, 1e-12), f)
+
+
+def h36m_body_points(raw: np.ndarray, *, head_direction: np.ndarray | None = None,
+                     leg: float | None = None,
+                     shoulder_band: tuple[float, float] | None = SHOULDER_BAND) -> np.ndarray:
+    """Put the torso and head joints of a rig's nearest joints on Human3.6M's body points (version 2).
+
+    Rigs disagree on where "thorax", "neck/nose" and "head" are (a CMU rig's chest joint sits mid-chest,
+    its head joint at the top of the neck), so these four joints are rebuilt from points every rig agrees on:
+
+    - thorax (8): the midpoint of the two shoulders (Human3.6M's thorax is the base of the neck between them);
+    - pelvis (0): the midpoint of the hips (Human3.6M's hips are level with its pelvis);
+    - spine (7): a chain pelvis -> spine -> thorax with two fixed lengths in Human3.6M's 233 : 257 mm split of
+      the clip's longest pelvis-thorax distance, bent towards the side the rig's own spine joint bends;
+    - neck/nose (9) and head (10): up from the thorax along the head's direction, at Human3.6M's lengths
+      (121 and 115 mm) scaled by this clip's leg (thigh + shin, :func:`leg_length`; 897 mm in Human3.6M).
+
+    Hips, legs, shoulders and arms are the rig's own joints, except that a rig whose shoulders are wider
+    (or narrower) than ``shoulder_band`` times Human3.6M's has each whole arm moved towards (or away from)
+    the midline by one constant fraction of its shoulder's offset (rigid bones, the same joint angles).
+    Every bone this function builds has a constant length over the clip.
+
+    Args:
+        raw: (T, 17, 3) the rig's nearest joints in canonical order (metres, z up).
+        head_direction: (T, 3) the direction the head points (neck base -> top of head); default the raw
+            neck -> head direction. A degenerate direction falls back to pelvis -> thorax.
+        leg: the leg length to scale with (default :func:`leg_length` of ``raw``).
+        shoulder_band: (low, high) thorax-shoulder ratio to Human3.6M's kept; None keeps the rig's shoulders.
+    Returns:
+        (T, 17, 3) float64 joints on Human3.6M's body points.
+    """
+    j = np.array(raw, dtype=np.float64, copy=True)
+    leg = leg_length(j) if leg is None else float(leg)
+    j[:, PELVIS] = 0.5 * (j[:, L_HIP] + j[:, R_HIP])  # Human3.6M's hips are level with its pelvis
+    thorax = 0.5 * (j[:, L_SHOULDER] + j[:, R_SHOULDER])  # (T, 3)
+    # Shoulder width: a rig whose shoulder joints sit wider (or narrower) than SHOULDER_BAND times
+    # Human3.6M's has each whole arm moved towards (or away from) the midline by one constant fraction of
+    # its shoulder's offset: bones stay rigid and joint angles are kept, only the build changes.
+    half = np.linalg.norm(j[:, L_SHOULDER] - thorax, axis=-1)  # (T,)
+    ratio = float(np.median(half)) / leg / PROPORTIONS["thorax_shoulder"][2] if leg > 0 else 1.0
+    if shoulder_band is not None and ratio > 0 and not shoulder_band[0] <= ratio <= shoulder_band[1]:
+        scale = float(np.clip(ratio, *shoulder_band)) / ratio
+        for shoulder, arm in ((L_SHOULDER, (L_SHOULDER, L_ELBOW, L_WRIST)),
+                              (R_SHOULDER, (R_SHOULDER, R_ELBOW, R_WRIST))):
+            shift = (scale - 1.0) * (j[:, shoulder] - thorax)  # (T, 3)
+            j[:, list(arm)] += shift[:, None]
+    up = thorax - j[:, PELVIS]  # (T, 3)
+    direction = j[:, HEAD] - j[:, NECK] if head_direction is None else np.asarray(head_direction, np.float64)
+    u = _unit(direction, up)  # (T, 3)
+    # spine: a two-bone chain pelvis -> spine -> thorax of fixed lengths (Human3.6M's 233 : 257 split of the
+    # clip's longest pelvis-thorax distance), bent the way the rig's own spine bends
+    chord = thorax - j[:, PELVIS]  # (T, 3)
+    dist = np.linalg.norm(chord, axis=-1)  # (T,)
+    total = float(dist.max()) if len(dist) else 0.0
+    a = total * H36M_BONES_MM["pelvis_spine"] / (H36M_BONES_MM["pelvis_spine"] + H36M_BONES_MM["spine_thorax"])
+    b = total - a
+    axis = _unit(chord, np.array([0.0, 0.0, 1.0]))  # (T, 3)
+    safe = np.maximum(dist, 1e-9)
+    along = np.clip((a**2 - b**2 + dist**2) / (2 * safe), 0.0, a)  # (T,) pelvis -> foot of the perpendicular
+    height = np.sqrt(np.maximum(a**2 - along**2, 0.0))  # (T,)
+    bend = j[:, SPINE] - j[:, PELVIS]
+    bend = bend - axis * np.sum(bend * axis, axis=-1, keepdims=True)  # the rig's spine offset from the chord
+    backward = np.cross(axis, j[:, L_HIP] - j[:, R_HIP])  # (T, 3) bodies face -y, left is +x: this is +y
+    spine = j[:, PELVIS] + axis * along[:, None] + _unit(bend, backward) * height[:, None]
+    j[:, SPINE] = spine
+    j[:, THORAX] = thorax
+    j[:, NECK] = thorax + u * (leg * H36M_BONES_MM["thorax_nose"] / H36M_LEG_MM)
+    j[:, HEAD] = j[:, NECK] + u * (leg * H36M_BONES_MM["nose_head"] / H36M_LEG_MM)
     return j

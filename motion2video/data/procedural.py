@@ -130,7 +130,7 @@ def rest_offsets(params: BodyParams = BodyParams()) -> np.ndarray:
     off[SPINE] = (0.0, 0.0, 0.135 * h)
     off[THORAX] = (0.0, 0.0, 0.145 * h)
     off[NECK] = (0.0, -0.02 * h, 0.06 * h)
-    off[HEAD] = (0.0, 0.005 * h, 0.095 * h)
+    off[HEAD] = (0.0, 0.0033 * h, 0.0627 * h)  # Human3.6M's nose -> head: 115 / 897 of the leg (0.49 h)
     off[L_SHOULDER] = (shoulder, 0.0, -0.005 * h)
     off[R_SHOULDER] = (-shoulder, 0.0, -0.005 * h)
     off[L_ELBOW] = off[R_ELBOW] = (0.0, 0.0, -0.17 * arm)

@@ -15,7 +15,7 @@ import numpy as np
 from motion2video.errors import InputError
 from motion2video.formats.resample import resample_linear
 from motion2video.motion import Motion
-from motion2video.skeletons import H36M_17
+from motion2video.core.skeletons import H36M_17, h36m_body_points
 
 # Height of the ankle joint centre above the floor with the foot flat, metres. Anny's default body (the mesh
 # the renderers pose from these joints) has its ankle (bone ``foot.R``) 0.071 m above its soles; adults
@@ -150,4 +150,4 @@ def canonical_from_map(nodes: np.ndarray, names: tuple[str, ...],
             out.append(nodes[:, [index[t] for t in target]].mean(axis=1))
         else:
             out.append(nodes[:, index[target]])
-    return np.stack(out, axis=1)  # (T, 17, 3)
+    return h36m_body_points(np.stack(out, axis=1))  # (T, 17, 3) on Human3.6M's body points

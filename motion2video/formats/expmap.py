@@ -31,7 +31,7 @@ from motion2video.formats.canonical import CanonicalClip, canonical_motion, to_p
 from motion2video.formats.manifest import ManifestEntry, resolve_manifest
 from motion2video.formats.numbers import parse_number_rows
 from motion2video.motion import Motion
-from motion2video.skeletons import H36M_17
+from motion2video.core.skeletons import H36M_17, h36m_body_points
 
 LAYOUT_FILE = "skeleton.json"
 
@@ -198,7 +198,7 @@ def expmap_world_positions(values: np.ndarray, layout: ExpmapLayout) -> np.ndarr
 def expmap_canonical(values: np.ndarray, layout: ExpmapLayout) -> CanonicalClip:
     """A whole clip in the project frame (metres, z up), before trimming and floor placement."""
     nodes = to_project_frame(expmap_world_positions(values, layout), layout.unit, layout.axes)  # (T, N, 3)
-    joints = nodes[:, list(layout.canonical)]  # (T, 17, 3)
+    joints = h36m_body_points(nodes[:, list(layout.canonical)])  # (T, 17, 3) on Human3.6M's body points
     return CanonicalClip(joints=joints, nodes=nodes, names=layout.node_names, rig=layout.name,
                          unit=layout.unit, fps=layout.fps)
 

@@ -23,6 +23,7 @@ from safetensors.torch import save_file
 from motion2video import __version__
 from motion2video.atomic import atomic_output
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
+from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
 from motion2video.errors import InputError
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
@@ -87,6 +88,8 @@ def save_frame_model(model: FrameGenerator | WarpGenerator, path: str | Path, *,
         "step": str(int(step)),
         "train": json.dumps(train or {}, sort_keys=True),
     }
+    if model.config.domain == "body":  # its control points are canonical H36M-17 joints
+        metadata["skeleton_version"] = str(SKELETON_VERSION)
     _atomic_save(dict(model.state_dict()), path, metadata)
     return path
 
@@ -106,8 +109,13 @@ def resolve_model_path(path_or_name: str | Path) -> Path:
     raise InputError(f"no such checkpoint file or shipped frame model ({hint})", name)
 
 
-def load_frame_model(path_or_name: str | Path) -> LoadedFrameModel:
-    """Rebuild a generator from a checkpoint file or shipped name; raises InputError for a bad file."""
+def load_frame_model(path_or_name: str | Path, *, any_skeleton: bool = False) -> LoadedFrameModel:
+    """Rebuild a generator from a checkpoint file or shipped name; raises InputError for a bad file.
+
+    A body generator trained on another canonical skeleton definition (its control points, see
+    :func:`motion2video.core.skeletons.check_skeleton_version`) is refused unless ``any_skeleton`` (fine-tuning
+    it on the new joints with ``train-frames --init-from``).
+    """
     path = resolve_model_path(path_or_name)
     try:
         with safe_open(str(path), framework="pt") as f:
@@ -131,6 +139,12 @@ def load_frame_model(path_or_name: str | Path) -> LoadedFrameModel:
         model = model_cls(config)
     except (ValueError, TypeError, RuntimeError) as err:
         raise InputError(f"damaged checkpoint metadata: cannot build the {kind} model ({err})", path) from None
+    if config.domain == "body" and not any_skeleton:
+        try:
+            version = int(metadata["skeleton_version"]) if "skeleton_version" in metadata else None
+        except ValueError:
+            raise InputError("damaged checkpoint metadata: bad skeleton_version", path) from None
+        check_skeleton_version("h36m-17", version, path)
     missing, unexpected = model.load_state_dict(tensors, strict=False)
     if missing or unexpected:
         raise InputError(f"checkpoint weights do not match its config (missing {len(missing)}, "

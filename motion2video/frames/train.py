@@ -202,7 +202,7 @@ def train_frames(
     elif resume:
         print(f"train-frames: nothing to resume at {output} (no checkpoint + .state file); starting from step 0")
     if init_from is not None and not (resume and have_state):
-        source = load_frame_model(init_from)
+        source = load_frame_model(init_from, any_skeleton=True)  # fine-tuning on new joints is allowed
         if source.kind != config.model_kind:
             raise InputError(f"cannot start from a {source.kind} model when training a {config.model_kind} model",
                              init_from)
