@@ -67,7 +67,7 @@ def test_loss_and_sample_shapes_and_long_horizons() -> None:
     obs, fut = _batch()
     out = model.loss(obs, fut, step=0)
     assert out.total.ndim == 0 and torch.isfinite(out.total)
-    assert set(out.terms) == {"best_of_k", "past", "stats", "diversity"}
+    assert set(out.terms) == {"best_of_k", "past", "early", "stats", "diversity"}
     model.eval()
     assert _sample(model, obs, k=4, horizon=7, seed=0).shape == (3, 4, 7, F)
     assert _sample(model, obs, k=2, horizon=3, seed=0).shape == (3, 2, 3, F)

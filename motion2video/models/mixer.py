@@ -28,6 +28,10 @@ sets it), with K = ``train_samples`` futures per window drawn from K independent
   samples spread over the futures a context allows);
 - ``observed_weight`` x the mean per-frame error of every sample's reconstruction of the observed frames
   (the coefficients must describe the past they continue);
+- ``early_weight`` x the mean per-frame error of EVERY sample over the first ``early_frames`` future frames
+  (the next 0.16 s follow from the observed velocity whatever happens later; without it the best-of-K loss
+  leaves the first frames of the other samples free, and the first frame's best-of-50 error stayed above the
+  constant-velocity forecast's; MT-VAE's motion-coherence term does the same for its samples);
 - ``stats_weight`` x :func:`~motion2video.models.blocks.motion_stats_error` of every sample against the
   truth (mean absolute velocity and acceleration per feature): samples that do not win must still move
   like real motion, neither frozen nor jittering;
@@ -70,6 +74,8 @@ class MixerDCTConfig:
     stats_weight: float = 1.0
     diversity_weight: float = 0.0
     diversity_scale: float = 1.0
+    early_frames: int = 4
+    early_weight: float = 1.0
     # Per-feature scale of the errors (F numbers; the training set's standard deviations, filled in by
     # :func:`motion2video.training.train_model`): the best-of-K and observed errors are then measured in
     # metres, as ``evaluate`` measures them, instead of in normalised units. Empty: normalised units.
@@ -205,12 +211,15 @@ class MixerDCT(LatentSampler, nn.Module):
         best = score.min(dim=1).values.mean()
         ctx = fit_context(obs, To)
         past_err = ((past - ctx[:, None]) * self.scale).pow(2).sum(-1).add(1e-8).sqrt().mean()
+        early = err[..., : c.early_frames].mean() if c.early_frames > 0 else fut.new_zeros(())
         stats = motion_stats_error(fut.reshape(B * K, c.future, -1),
                                    future[:, None].expand(-1, K, -1, -1).reshape(B * K, c.future, -1),
                                    ctx[:, -1:].expand(-1, K, -1).reshape(B * K, -1))
         div = pairwise_similarity(fut, scale=c.diversity_scale) if c.diversity_weight > 0 else fut.new_zeros(())
-        total = best + c.observed_weight * past_err + c.stats_weight * stats + c.diversity_weight * div
+        total = (best + c.observed_weight * past_err + c.early_weight * early + c.stats_weight * stats
+                 + c.diversity_weight * div)
         return LossOutput(total=total, terms={"best_of_k": float(best.detach()), "past": float(past_err.detach()),
+                                              "early": float(early.detach()),
                                               "stats": float(stats.detach()), "diversity": float(div.detach())})
 
     # -- sampling --------------------------------------------------------------------------------
