@@ -10,7 +10,8 @@
 # exact commands). Two lanes side by side, one torch thread each. Measured on the shared 2-core machine
 # (2026-11-25, wall time per model, training + held-out evaluation + card): lane A mtvae-add 4000 steps 14 min,
 # mtvae-add-dlow 600 steps 7 min, behavior 4000 steps 14 min; lane B lcpvae 3000 steps 7 min, mtvae-add-2d
-# 2500 steps 8 min, mtvae-add-face 1200 steps about 5 min. About 35 minutes in all. Logs and evaluation JSON go
+# 2500 steps 8 min, mtvae-add-face 1200 steps about 5 min. About 35 minutes in all; mixer-dct (issue 24, lane B)
+# adds 6000 steps, 39 min (measured alone beside other people's trainings, 2026-11-25). Logs and evaluation JSON go
 # to out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
 # Afterwards: python scripts/make_results_corpus.py (docs/results.md, issue 8).
 set -euo pipefail
