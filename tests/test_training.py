@@ -13,7 +13,7 @@ from safetensors.torch import save_file
 from motion2video.models import checkpoint as C
 from motion2video.data.dataset import DatasetConfig, build_dataset
 from motion2video.core.errors import InputError
-from motion2video.models.training import TrainConfig, last_paths, train_model, validation_loss
+from motion2video.models.training import TrainConfig, last_paths, schedule_step, train_model, validation_loss
 from motion2video.core.schedule import learning_rate
 from tests.conftest import link_clips
 
@@ -45,6 +45,43 @@ def test_learning_rate_schedule():
     assert learning_rate(10, cfg) == pytest.approx(1.0)
     assert learning_rate(100, cfg) == pytest.approx(0.1)
     assert learning_rate(55, cfg) == pytest.approx(0.55)
+
+
+def test_time_budget_schedule_follows_whichever_of_steps_and_time_is_further():
+    cfg = TrainConfig(steps=100, max_minutes=10.0)
+    assert schedule_step(5, cfg, elapsed_s=0.0) == 5
+    assert schedule_step(5, cfg, elapsed_s=300.0) == 50  # half the time spent: half-way down the schedule
+    assert schedule_step(5, cfg, elapsed_s=6000.0) == 99  # never past the last step
+    assert schedule_step(70, cfg, elapsed_s=300.0) == 70
+    assert schedule_step(70, TrainConfig(steps=100), elapsed_s=1e9) == 70  # no budget: steps only
+    with pytest.raises(ValueError, match="max_minutes"):
+        TrainConfig(max_minutes=-1.0)
+
+
+def test_a_spent_time_budget_ends_the_run_with_a_checkpoint_of_the_steps_done(dataset, tmp_path):
+    out = tmp_path / "budget.safetensors"
+    result = train_model(model_name="pred-lstm", model_config=TINY, dataset=dataset,
+                         config=_quick(steps=1000, max_minutes=1e-6), out=out, progress=False)
+    assert result.steps == 1  # one step always runs, then the budget is spent
+    meta = C.read_meta(out)
+    assert meta.training["steps"] == 1 and meta.training["config"]["max_minutes"] == 1e-6
+    assert result.history[-1]["step"] == 1
+
+
+def test_mixer_dct_trains_with_the_training_feature_scales_and_reloads(dataset, tmp_path):
+    out = tmp_path / "mixer.safetensors"
+    cfg = {"hidden_dim": 16, "context_blocks": 1, "sample_blocks": 1, "num_coeffs": 16, "train_samples": 2}
+    data = dataclasses.replace(dataset.config, balance_actions=0.5)
+    ds = dataclasses.replace(dataset, config=data)
+    train_model(model_name="mixer-dct", model_config=cfg, dataset=ds, config=_quick(steps=4), out=out,
+                progress=False)
+    bundle = C.load_model(out)
+    assert bundle.meta.data_config.balance_actions == 0.5
+    assert np.allclose(bundle.model.config.feature_scale, dataset.stats.std)  # the loss is in metres
+    windows = dataset.windows("test")
+    gen = torch.Generator().manual_seed(0)
+    samples = bundle.model.sample(torch.from_numpy(windows.obs[:2]), num_samples=3, horizon=48, generator=gen)
+    assert samples.shape == (2, 3, 48, 51) and torch.isfinite(samples).all()
 
 
 def test_dataset_split_of_the_small_folder(dataset):

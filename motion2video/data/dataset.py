@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from motion2video.data import windows as W
-from motion2video.data.corpus import action_class, corpus_index, pinned_split
+from motion2video.data.corpus import action_class, corpus_index, pinned_split, source_of
 from motion2video.data.corpus import clip_group as corpus_group
 from motion2video.data.face_data import face_files, load_face_clip, mirror_face
 from motion2video.core.errors import InputError
@@ -80,6 +80,11 @@ class DatasetConfig:
             recorded without head streaming) gets a head-pose track from
             :func:`motion2video.data.face_dynamics.head_pose_track` (seeded by the clip name); captures with
             real head pose keep it. ``"zero"``: head pose as captured.
+        balance_actions: training windows are drawn with weight ``share ** -balance_actions``, ``share`` the
+            fraction of training windows whose clip has the window's action label (clips without one form
+            one class): 0 draws every window alike (the corpus mix, half salsa), 1 gives every action the
+            same share of the batches, 0.5 is between (:func:`clip_sampling_weights`).
+        balance_sources: the same for the clip's source folder (``cmu``, ``acrnn``, ``cmu-bench``, ...).
     """
 
     layout: str = "body3d"
@@ -98,8 +103,13 @@ class DatasetConfig:
     face_head_pose: str = "procedural"
     held_out: str = "corpus"
     drop_duplicates: bool = True
+    balance_actions: float = 0.0
+    balance_sources: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (0.0 <= self.balance_actions <= 1.0 and 0.0 <= self.balance_sources <= 1.0):
+            raise ValueError(f"balance_actions and balance_sources must be in [0, 1], got "
+                             f"{self.balance_actions}, {self.balance_sources}")
         W.FeatureLayout(self.layout)  # validates the name
         if self.observed < 2 or self.future < 1:
             raise ValueError(f"need observed >= 2 and future >= 1, got {self.observed}, {self.future}")
@@ -242,7 +252,8 @@ class MotionDataset:
     def sample_batch(self, rng: np.random.Generator, batch_size: int, *, augment: bool = True) -> np.ndarray:
         """A random batch of training windows, normalised: (B, L, F) float32.
 
-        Clips are drawn in proportion to their number of windows; each window gets a random start, a
+        Clips are drawn in proportion to their number of windows, reweighted by action and source
+        (:func:`clip_sampling_weights`, ``config.balance_actions`` / ``balance_sources``); each window gets a random start, a
         speed in [1 - speed, 1 + speed] (lowered to what the clip's length allows, never below 1 - speed,
         so with augmentation a clip a little shorter than a window still gives slowed-down windows), a
         mirror flip with probability 0.5 and (without canonical heading) a random rotation about z.
@@ -254,7 +265,8 @@ class MotionDataset:
         clips = [c for c in self.clips_of("train") if c.num_frames >= min_frames]
         if not clips:
             raise InputError(f"no training clip has the {min_frames} frames a window needs", self.source)
-        weights = np.array([c.num_frames - min_frames + 1 for c in clips], np.float64)
+        weights = clip_sampling_weights(clips, min_frames=min_frames, balance_actions=cfg.balance_actions,
+                                        balance_sources=cfg.balance_sources)
         picks = rng.choice(len(clips), size=batch_size, p=weights / weights.sum())
         out = []
         for i in picks:
@@ -278,6 +290,31 @@ class MotionDataset:
     def describe(self) -> dict:
         """A JSON-able summary of the data (written into checkpoints)."""
         return dict(self.summary)
+
+
+def clip_sampling_weights(clips: list[Clip], *, min_frames: int, balance_actions: float = 0.0,
+                          balance_sources: float = 0.0) -> np.ndarray:
+    """Unnormalised probability of drawing each clip for a training window: (N,) float64.
+
+    A clip's weight is its number of window starts (``num_frames - min_frames + 1``, at least 0) times
+    ``action_share ** -balance_actions`` times ``source_share ** -balance_sources``, the shares being the
+    fractions of all window starts that belong to the clip's action label (None is one class) and to its
+    source folder (:func:`motion2video.data.corpus.source_of`). With both at 0 every window is equally
+    likely; with ``balance_actions=1`` every action receives the same total weight.
+    """
+    starts = np.array([max(c.num_frames - min_frames + 1, 0) for c in clips], np.float64)
+    weights = starts.copy()
+    total = starts.sum()
+    if total <= 0:
+        return weights
+    for key, power in ((lambda c: c.label, balance_actions), (lambda c: source_of(c.name), balance_sources)):
+        if power == 0.0:
+            continue
+        share: dict = {}
+        for c, n in zip(clips, starts):
+            share[key(c)] = share.get(key(c), 0.0) + n / total
+        weights *= np.array([share[key(c)] ** -power if share[key(c)] > 0 else 0.0 for c in clips])
+    return weights
 
 
 # --- encoding --------------------------------------------------------------------------------------------

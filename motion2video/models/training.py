@@ -66,6 +66,10 @@ class TrainConfig:
         flow_windows: training windows whose posterior latents the flow is fitted to.
         seed: seeds batches, augmentation, initialisation and the model's noise.
         augment: use the dataset's augmentation (mirroring, rotation, speed).
+        max_minutes: a wall-time budget (0: none). The learning-rate schedule then follows whichever of
+            steps and time is further along (:func:`schedule_step`), and the run ends, annealed, when the budget
+            is spent or ``steps`` are done; the checkpoint records the steps actually done. On a shared
+            machine this keeps a run inside its budget, at the price of a step count that depends on the load.
     """
 
     steps: int = 3000
@@ -82,8 +86,11 @@ class TrainConfig:
     flow_windows: int = 4096
     seed: int = 0
     augment: bool = True
+    max_minutes: float = 0.0
 
     def __post_init__(self) -> None:
+        if self.max_minutes < 0:
+            raise ValueError(f"max_minutes must be >= 0, got {self.max_minutes}")
         if self.steps < 1 or self.batch_size < 1:
             raise ValueError(f"steps and batch_size must be >= 1, got {self.steps}, {self.batch_size}")
         if self.checkpoint_every < 1:
@@ -130,6 +137,15 @@ def make_optimizers(model: torch.nn.Module, config: TrainConfig) -> dict[str, to
 def _seed_step(seed: int, step: int) -> np.random.Generator:
     torch.manual_seed((seed * 1_000_003 + step) % (2 ** 63))
     return np.random.default_rng([seed, step])
+
+
+def schedule_step(step: int, config: TrainConfig, elapsed_s: float) -> int:
+    """The step the learning-rate schedule is at: ``step``, or with a time budget the share of
+    ``config.max_minutes`` spent times ``config.steps`` when that is further along (at most ``steps - 1``)."""
+    if config.max_minutes <= 0:
+        return step
+    by_time = int(elapsed_s / (60.0 * config.max_minutes) * config.steps)
+    return min(max(step, by_time), config.steps - 1)
 
 
 def _to_tensor(x: np.ndarray, device: torch.device) -> torch.Tensor:
@@ -236,6 +252,10 @@ def train_model(
     out = Path(out)
     last, sidecar = last_paths(out)
     full_config = {**model_config, "feature_dim": dataset.num_features}
+    fields = {f.name for f in dataclasses.fields(entry.config_cls)}
+    if "feature_scale" in fields and not full_config.get("feature_scale"):
+        # models that measure their loss in data units (mixer-dct) get the training set's feature scales
+        full_config["feature_scale"] = [float(v) for v in dataset.stats.std]
     torch.manual_seed(config.seed)
     try:
         model = build_model(model_name, full_config)
@@ -276,12 +296,17 @@ def train_model(
     model.train()
     bar = tqdm(range(start_step, config.steps), initial=start_step, total=config.steps, disable=not progress,
                desc=f"train {model_name}", unit="step", dynamic_ncols=True)
+    final_step = config.steps
     for step in bar:
+        elapsed = wall_before + time.perf_counter() - t0
+        if config.max_minutes > 0 and step > start_step and elapsed >= 60.0 * config.max_minutes:
+            final_step = step  # the time budget is spent: end here, annealed by the time-based schedule
+            break
         rng = _seed_step(config.seed, step)
         batch = dataset.sample_batch(rng, config.batch_size, augment=config.augment)  # (B, L, F)
         obs = _to_tensor(batch[:, :obs_len], device)
         fut = _to_tensor(batch[:, obs_len:], device)
-        lr = learning_rate(step, config)
+        lr = learning_rate(schedule_step(step, config, elapsed), config)
         for opt in optimizers.values():
             for group in opt.param_groups:
                 group["lr"] = lr
@@ -316,16 +341,18 @@ def train_model(
         if done % config.checkpoint_every == 0 and done < config.steps:
             periodic(done)
     bar.close()
-    if start_step < config.steps or not history or history[-1]["step"] != config.steps:
-        vl = validation_loss(model, dataset, step=config.steps, max_windows=config.val_windows, seed=config.seed)
+    if final_step < config.steps:
+        print(f"time budget of {config.max_minutes:g} min spent after {final_step} of {config.steps} steps", flush=True)
+    if start_step < final_step or not history or history[-1]["step"] != final_step:
+        vl = validation_loss(model, dataset, step=final_step, max_windows=config.val_windows, seed=config.seed)
         val = None if vl is None else vl["total"]
-        history.append({"step": config.steps, "train_loss": float(np.mean(recent)) if recent else None,
+        history.append({"step": final_step, "train_loss": float(np.mean(recent)) if recent else None,
                         "val_loss": val, "val_terms": vl})
     if hasattr(model, "fit_flow") and hasattr(model, "posterior_latents"):
         _fit_flow(model, dataset, config, device=device)
-    periodic(config.steps)
-    path = save_checkpoint(out, model=model, meta=record_meta(config.steps))
-    return TrainResult(path=path, steps=config.steps, wall_time_s=wall_before + time.perf_counter() - t0,
+    periodic(final_step)
+    path = save_checkpoint(out, model=model, meta=record_meta(final_step))
+    return TrainResult(path=path, steps=final_step, wall_time_s=wall_before + time.perf_counter() - t0,
                        train_loss=float(np.mean(recent)) if recent else float("nan"), val_loss=val,
                        history=history)
 
