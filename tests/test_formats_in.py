@@ -195,3 +195,26 @@ def test_pickles_and_unknown_arrays_are_refused(tmp_path, capsys):
     with pytest.raises(InputError, match="2 futures"):
         load_joint_array(tmp_path / "k.npy")
     assert not out.exists()
+
+
+def test_character_reaches_the_commands_that_read_folders(tmp_path, mocap_dir, capsys):
+    """--character on train / evaluate / corpus-stats: a folder of DeepMimic motion files of a character that is
+    not beside them loads with the flag; a missing character file is one line, exit 2."""
+    import shutil
+
+    from motion2video.cli import main
+    from motion2video.data.dataset import DatasetConfig, load_clips
+
+    folder = tmp_path / "motions"
+    folder.mkdir()
+    rows = [line for line in (mocap_dir / "manifest.csv").read_text().splitlines(keepends=True)
+            if line.startswith(("file,", "deepmimic-cmu/02_01.txt,", "deepmimic-cmu/02_02.txt,"))]
+    (folder / "manifest.csv").write_text("".join(r.replace("deepmimic-cmu/", "") for r in rows))
+    for name in ("02_01.txt", "02_02.txt"):
+        shutil.copy(mocap_dir / "deepmimic-cmu" / name, folder / name)
+    character = mocap_dir / "deepmimic" / "humanoid3d_character.txt"
+    clips = load_clips(folder, config=DatasetConfig(), character=character)
+    assert len(clips) == 2 and all(c.data.shape[1:] == (17, 3) for c in clips)
+    assert main(["corpus-stats", "--data", str(folder), "--character", str(tmp_path / "none.txt")]) == 2
+    err = capsys.readouterr().err
+    assert "no such character file" in err and len(err.strip().splitlines()) == 1

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from motion2video.core.atomic import write_json
-from motion2video.commands.common import add_command
+from motion2video.commands.common import CHARACTER_HELP, add_command
 from motion2video.core.errors import InputError
 
 HELP = "print minutes per source, action and split of a mocap folder as the trainer uses it"
@@ -31,6 +31,7 @@ the default data config (25 fps, 16 observed + 48 future frames).
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "corpus-stats", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--data", required=True, help="mocap folder (with manifest.csv)")
+    p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("--json", default=None, help="also write the statistics as JSON here")
     p.add_argument("--held-out", choices=("corpus", "hash"), default="corpus",
                    help="split rule (default corpus: the pinned held-out subjects and sources)")
@@ -48,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json is not None and not Path(args.json).parent.exists():
         raise InputError("the folder for --json does not exist", args.json)
     config = DatasetConfig(held_out=args.held_out, drop_duplicates=not args.keep_duplicates)
-    stats = corpus_stats(data, config)
+    stats = corpus_stats(data, config, character=args.character)
     print(stats_markdown(stats), end="")
     if args.json is not None:
         write_json(args.json, stats)

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from motion2video.core.atomic import write_json
-from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
+from motion2video.commands.common import CHARACTER_HELP, add_command, add_threads_argument, check_at_least, set_threads
 from motion2video.core.errors import InputError
 
 HELP = "score a motion model and the zero-velocity / last-step / sequence-motion baselines"
@@ -43,6 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="checkpoint path or shipped model name; repeat to compare models on the same windows "
                    "(they must share the layout and data settings; the first one's split picks the windows)")
     p.add_argument("--data", required=True, help="BVH folder or motion file (face models: .csv / .npz captures)")
+    p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("--samples", type=int, default=50, help="K futures per window (default 50)")
     p.add_argument("--json", default=None, help="write the results as JSON here")
     p.add_argument("--plot", default=None, help="draw ADE per future frame of every model and baseline into this PNG")
@@ -87,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"two models share the name {names!r}: give checkpoints with distinct file names")
     cfg = bundle.data_config
     dataset = build_dataset(args.data, cfg, split=bundle.meta.split, stats=bundle.stats,
-                            recorded_only=args.recorded_only)
+                            recorded_only=args.recorded_only, character=args.character)
     windows = dataset.windows(args.split, stride=args.stride)
     if len(windows) == 0:
         longest = max((c.num_frames for c in dataset.clips_of(args.split)), default=0)

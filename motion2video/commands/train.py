@@ -7,7 +7,7 @@ import dataclasses
 import json
 from pathlib import Path
 
-from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
+from motion2video.commands.common import CHARACTER_HELP, add_command, add_threads_argument, check_at_least, set_threads
 from motion2video.core.errors import InputError
 
 HELP = "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)"
@@ -38,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "train", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="registered model name, e.g. mtvae-add")
     p.add_argument("--data", required=True, help="folder of BVH files (with manifest.csv), or face captures")
+    p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("-o", "--output", required=True, help="final checkpoint (.safetensors)")
     p.add_argument("--base", default=None,
                    help="--model dlow only: the trained checkpoint (path or shipped name) DLow samples from; its "
@@ -158,9 +159,10 @@ def run(args: argparse.Namespace) -> int:
     train_config = _dataclass(TrainConfig, train_values, "train")
     base_meta = cfg.get("base_meta")
     if base_meta is not None:  # DLow: the base model's split and statistics, so its decoder sees its own units
-        dataset = build_dataset(args.data, data_config, split=base_meta.split, stats=base_meta.stats)
+        dataset = build_dataset(args.data, data_config, split=base_meta.split, stats=base_meta.stats,
+                                character=args.character)
     else:
-        dataset = build_dataset(args.data, data_config)
+        dataset = build_dataset(args.data, data_config, character=args.character)
     print(f"data: {dataset.summary['clips']} clips, {dataset.summary['frames']} frames at {data_config.fps:g} fps; "
           f"train/val/test clips {len(dataset.split.train)}/{len(dataset.split.val)}/{len(dataset.split.test)}; "
           f"layout {data_config.layout} ({dataset.num_features} features)")

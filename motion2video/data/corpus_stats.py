@@ -20,7 +20,8 @@ def _minutes(frames: float, fps: float) -> float:
     return frames / fps / 60.0
 
 
-def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig()) -> dict:
+def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
+                 character: str | Path | None = None) -> dict:
     """Minutes per source, action and split of the corpus ``build_dataset(folder, config)`` trains on.
 
     Returns:
@@ -30,7 +31,7 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig()) ->
         every ``config.length``-frame window ``config.stride`` frames apart.
     """
     index = corpus_index(folder, drop_duplicates=config.drop_duplicates)
-    dataset = build_dataset(folder, config)
+    dataset = build_dataset(folder, config, character=character)
     fps = config.fps
     split_of = {name: s for s in SPLITS for name in dataset.split.names(s)}
     per_split = {s: {"clips": 0, "minutes": 0.0, "windows": 0, "groups": 0} for s in SPLITS}

@@ -496,8 +496,9 @@ def _relative_name(path: Path, root: Path) -> str:
         return path.name
 
 
-def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
-    """Load every clip ``data`` names, resampled to ``config.fps``.
+def load_clips(data: str | Path, *, config: DatasetConfig, character: str | Path | None = None) -> list[Clip]:
+    """Load every clip ``data`` names, resampled to ``config.fps``. ``character``: the character file of its
+    DeepMimic motion files (default: found as the formats find it, else the shipped humanoid3d).
 
     Body layouts: a mocap folder (with ``manifest.csv``: its clips of every format, rates, labels and
     trims, duplicates dropped per ``config.drop_duplicates``; without one: its ``*.bvh`` files), one
@@ -506,6 +507,8 @@ def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
     """
     if str(data) == MULTIMODAL_SOURCE:
         return multimodal_clips(config)
+    if character is not None and not Path(character).is_file():
+        raise InputError("no such character file", character)
     path = Path(data)
     fps = config.fps
     if not path.exists():
@@ -519,13 +522,14 @@ def load_clips(data: str | Path, *, config: DatasetConfig) -> list[Clip]:
         from motion2video.formats.mocap import load_mocap
 
         index = corpus_index(path, drop_duplicates=config.drop_duplicates)
-        return [_body_clip_from_motion(load_mocap(path / row.name, manifest=row.entry or False), name=row.name,
+        return [_body_clip_from_motion(load_mocap(path / row.name, manifest=row.entry or False, character=character),
+                                       name=row.name,
                                        fps=fps, group=row.group) for row in index.rows]
     if path.suffix.lower() in (".csv",):
         raise InputError("this is a face capture, but the model is a body model", path)
     from motion2video.formats.io import load_motion
 
-    motion = load_motion(path)
+    motion = load_motion(path, character=character)
     if isinstance(motion, FaceMotion):
         raise InputError("this file holds face motion, but the model is a body model", path)
     return [_body_clip_from_motion(motion, name=path.name, fps=fps)]
@@ -569,7 +573,7 @@ def extend_split(split: Split, clips: list[Clip], *, new_clips: str = "unseen_su
 
 def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | None = None,
                   stats: W.NormStats | None = None, clips: list[Clip] | None = None,
-                  recorded_only: bool = False) -> MotionDataset:
+                  recorded_only: bool = False, character: str | Path | None = None) -> MotionDataset:
     """Load ``data`` and prepare it for training or evaluation.
 
     Args:
@@ -581,11 +585,12 @@ def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | Non
             None.
         clips: already loaded clips (skips loading ``data``; ``data`` is then only recorded).
         recorded_only: with ``split``, use only the clips it names (:func:`extend_split`).
+        character: the character file of DeepMimic motion files (``--character``; default as the readers find it).
     Returns:
         The :class:`MotionDataset`.
     """
     if clips is None:
-        clips = load_clips(data, config=config)
+        clips = load_clips(data, config=config, character=character)
     if not clips:
         raise InputError("no clips to use", data)
     if split is None:
