@@ -25,21 +25,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from motion2video.testing.golden import repeated_bvh
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def repeat_bvh(src: Path, dst: Path, repeat: int) -> int:
-    """Write ``src`` with its motion lines repeated ``repeat`` times; returns the frame count."""
-    lines = src.read_text().splitlines(keepends=True)
-    motion = next(i for i, line in enumerate(lines) if line.strip().upper() == "MOTION")
-    data = [line for line in lines[motion + 3:] if line.strip()]
-    with dst.open("w") as f:
-        f.writelines(lines[:motion + 1])
-        f.write(f"Frames: {len(data) * repeat}\n")
-        f.write(lines[motion + 2])
-        for _ in range(repeat):
-            f.writelines(data)
-    return len(data) * repeat
 
 
 def measure(path: Path, out: Path, size: int) -> dict:
@@ -66,7 +54,7 @@ def main() -> int:
     clip = Path(args.clip)
     with tempfile.TemporaryDirectory() as tmp:
         long = Path(tmp) / f"{clip.stem}_x{args.repeat}.bvh"
-        frames = repeat_bvh(clip, long, args.repeat)
+        frames = repeated_bvh(clip, long, args.repeat)
         result = {"long": {"frames": frames, **measure(long, Path(tmp) / "long.mp4", args.size)},
                   "original": {"frames": frames // args.repeat, **measure(clip, Path(tmp) / "orig.mp4", args.size)}}
     result["ratio_peak_to_file"] = round(result["long"]["peak_rss_mb"] / result["long"]["file_mb"], 2)

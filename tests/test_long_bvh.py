@@ -9,26 +9,14 @@ import pytest
 from motion2video.core.errors import InputError
 from motion2video.formats import bvh
 from motion2video.formats.io import load_motion
-
-
-def _repeated(src, dst, repeat: int, *, declared: int | None = None) -> int:
-    lines = src.read_text().splitlines(keepends=True)
-    motion = next(i for i, line in enumerate(lines) if line.strip().upper() == "MOTION")
-    data = [line for line in lines[motion + 3:] if line.strip()]
-    with dst.open("w") as f:
-        f.writelines(lines[:motion + 1])
-        f.write(f"Frames: {len(data) * repeat if declared is None else declared}\n")
-        f.write(lines[motion + 2])
-        for _ in range(repeat):
-            f.writelines(data)
-    return len(data) * repeat
+from motion2video.testing.golden import repeated_bvh
 
 
 def test_chunked_read_and_pose_equal_the_whole_clip(mocap_dir, tmp_path):
     """CMU 13_10 twice (4794 frames, three chunks of 2048): streamed values, chunked forward kinematics and
     the canonical joints (whole-clip medians in h36m_body_points) equal the all-at-once path exactly."""
     path = tmp_path / "long.bvh"
-    frames = _repeated(mocap_dir / "cmu" / "13_10.bvh", path, 2)
+    frames = repeated_bvh(mocap_dir / "cmu" / "13_10.bvh", path, 2)
     assert frames > 2 * bvh.CHUNK_FRAMES
     streamed = bvh.read_bvh(path)
     whole = bvh.parse_bvh(path.read_text(), str(path))
@@ -45,7 +33,7 @@ def test_chunked_read_and_pose_equal_the_whole_clip(mocap_dir, tmp_path):
                                                (4100, "more frame lines than the declared 4100")])
 def test_frame_count_errors_across_chunks(mocap_dir, tmp_path, declared, message):
     path = tmp_path / "bad.bvh"
-    _repeated(mocap_dir / "cmu" / "13_10.bvh", path, 2, declared=declared)
+    repeated_bvh(mocap_dir / "cmu" / "13_10.bvh", path, 2, declared=declared)
     with pytest.raises(InputError, match=message) as err:
         bvh.read_bvh(path)
     assert str(path) in str(err.value)

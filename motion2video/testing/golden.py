@@ -542,6 +542,22 @@ def command_peak_rss_mb(argv: list[str], *, env: dict | None = None, cwd: str | 
     return float(record["self"] + record["children"])
 
 
+def repeated_bvh(src, dst, repeat: int, *, declared: int | None = None) -> int:
+    """Write the BVH file ``src`` to ``dst`` with its motion lines repeated ``repeat`` times (a long capture for
+    memory benchmarks and streaming tests); the header's ``Frames:`` says ``declared`` when given (a truncated
+    file), else the true count. Returns the true frame count."""
+    lines = src.read_text().splitlines(keepends=True)
+    motion = next(i for i, line in enumerate(lines) if line.strip().upper() == "MOTION")
+    data = [line for line in lines[motion + 3:] if line.strip()]
+    with dst.open("w") as f:
+        f.writelines(lines[:motion + 1])
+        f.write(f"Frames: {len(data) * repeat if declared is None else declared}\n")
+        f.write(lines[motion + 2])
+        for _ in range(repeat):
+            f.writelines(data)
+    return len(data) * repeat
+
+
 def tiled_motion(motion, times: int):
     """``motion`` played ``times`` times in a row (joints tiled along time): a longer clip of the same
     content, for memory-versus-length measurements."""
