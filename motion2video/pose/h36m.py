@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motion2video.core.skeletons import H36M_17
+from motion2video.core.skeletons import H36M_17, H36M_BONES_MM, H36M_LEG_MM
 
 # BlazePose landmark indices.
 NOSE, L_EAR, R_EAR = 0, 7, 8
@@ -33,8 +33,8 @@ DIRECT = {
     "right_shoulder": R_SHOULDER, "right_elbow": R_ELBOW, "right_wrist": R_WRIST,
 }
 SPINE_FRACTION = 233.0 / (233.0 + 257.0)
-NECK_PER_LEG = 121.0 / 897.0  # 0.135
-HEAD_PER_LEG = 115.0 / 897.0  # 0.128
+NECK_PER_LEG = H36M_BONES_MM["thorax_nose"] / H36M_LEG_MM  # 0.135
+HEAD_PER_LEG = H36M_BONES_MM["nose_head"] / H36M_LEG_MM  # 0.128
 
 
 def leg_length(points: np.ndarray) -> np.ndarray:
