@@ -41,7 +41,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--crop", type=int, default=None,
                    help="train on CROP x CROP windows holding both poses of a pair (0: whole frames; "
                    "default size/2, about 8x less compute per step than whole frames for the same quality)")
-    p.add_argument("--model-kind", choices=("analogy", "warp"), default="analogy",
+    p.add_argument("--model-kind", choices=("analogy", "warp", "mesh"), default="analogy",
                    help="analogy: the feature-analogy generator; warp: the generator that warps the reference "
                    "person along per-limb transforms (body only)")
     p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
@@ -80,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
 
     set_threads(args.threads)
     check_at_least("--steps", args.steps)
-    if args.model_kind == "warp" and args.domain != "body":
-        raise InputError("--model-kind warp makes body frames only (use --domain body)")
+    if args.model_kind in ("warp", "mesh") and args.domain != "body":
+        raise InputError(f"--model-kind {args.model_kind} makes body frames only (use --domain body)")
     check_at_least("--batch-size", args.batch_size)
     output = Path(args.output)
     if output.suffix != ".safetensors":
@@ -94,11 +94,20 @@ def run(args: argparse.Namespace) -> int:
     crop = default_crop(args.domain, args.size) if args.crop is None else args.crop
     if crop < 0 or crop > args.size or crop % 16:
         raise InputError(f"--crop must be 0 or a multiple of 16 up to --size, got {crop}")
-    warp = args.model_kind == "warp"
+    warp = args.model_kind in ("warp", "mesh")
     edge = args.edge_weight if args.edge_weight is not None else (1.0 if warp else 0.0)
     person = args.person_weight if args.person_weight is not None else (2.0 if warp else 0.0)
     model_config = None  # checked before the data, which may take minutes to render
-    if warp:
+    if args.model_kind == "mesh":
+        from motion2video.frames.data import structure_channels
+        from motion2video.frames.mesh_warp import MeshWarpConfig
+
+        if args.net_scale == 4 or args.flow_correction:
+            raise InputError("--model-kind mesh: --net-scale is 1 or 2, and its flow residual is always on")
+        model_config = MeshWarpConfig(image_size=args.size, structure_channels=structure_channels("body"),
+                                      net_scale=args.net_scale or 2, sample_mode=args.sample_mode or "bicubic")
+        spec = replace(spec, vertices=True)  # the mesh correspondence of every frame
+    elif warp:
         from motion2video.frames.data import structure_channels
         from motion2video.frames.warp import WarpGeneratorConfig
 
@@ -106,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
                                            net_scale=args.net_scale or 4, flow_correction=args.flow_correction,
                                            sample_mode=args.sample_mode or "bilinear")
     elif args.net_scale is not None or args.flow_correction or args.sample_mode is not None:
-        raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp")
+        raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp or mesh")
     cache = Path(args.cache) if args.cache else default_cache_dir()
     seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
     config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,

@@ -24,6 +24,7 @@ from motion2video.frames.specs import FrameSequences
 from motion2video.frames.data import make_pairs, sample_pair_index, structure_channels
 from motion2video.frames.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
                                        images_to_tensor, reconstruction_loss)
+from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 
 
@@ -77,8 +78,8 @@ class TrainFramesConfig:
             raise ValueError("lr must be > 0")
         if self.crop < 0:
             raise ValueError("crop must be >= 0")
-        if self.model_kind not in ("analogy", "warp"):
-            raise ValueError(f"model_kind must be analogy or warp, got {self.model_kind!r}")
+        if self.model_kind not in ("analogy", "warp", "mesh"):
+            raise ValueError(f"model_kind must be analogy, warp or mesh, got {self.model_kind!r}")
 
 
 @dataclass
@@ -172,13 +173,17 @@ def train_frames(
             fresh optimiser and schedule. Ignored when resuming.
     """
     output = Path(output)
-    warp = config.model_kind == "warp"
-    if model_config is None and warp:
+    warp = config.model_kind in ("warp", "mesh")
+    if model_config is None and config.model_kind == "mesh":
+        model_config = MeshWarpConfig(image_size=seqs.image_size, structure_channels=structure_channels("body"))
+    elif model_config is None and warp:
         model_config = WarpGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
                                            structure_channels=structure_channels(seqs.domain))
     elif model_config is None:
         model_config = FrameGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
                                             structure_channels=structure_channels(seqs.domain))
+    if config.model_kind == "mesh" and seqs.vertex_uv is None:
+        raise ValueError("the mesh generator trains on sequences that keep their mesh vertices (DatasetSpec.vertices)")
     if (config.edge_weight or config.person_weight) and seqs.masks is None:
         raise ValueError("edge_weight / person_weight need sequences with person masks")
     factor = 2 ** (len(model_config.channels) - 1) if not warp else 8
@@ -261,7 +266,9 @@ def train_frames(
         for group in optimizer.param_groups:
             group["lr"] = lr
 
-        if isinstance(model, WarpGenerator):
+        if isinstance(model, MeshWarpGenerator):
+            pred = model(x_ref, *mesh_inputs(pairs), p_tgt)
+        elif isinstance(model, WarpGenerator):
             pred = model(x_ref, torch.from_numpy(pairs.ref_points), torch.from_numpy(pairs.tgt_points), p_tgt)
         else:
             pred = model(x_ref, p_ref, p_tgt)  # (B, 3, H, W)
