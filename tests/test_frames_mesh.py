@@ -75,6 +75,36 @@ def test_dense_flow_of_a_shifted_grid_is_the_shift():
     assert np.all(mf.visibility[mask & seen] > 0.98) and np.all(mf.visibility[mask & (centres[..., 0] - shift[0] < 9)] < 0.02)
 
 
+def test_extend_flow_continues_the_surface_into_a_band():
+    from motion2video.frames.mesh_flow import MeshFlow, extend_flow
+
+    sil = np.zeros((16, 16), bool)
+    sil[4:12, 4:12] = True
+    flow = identity_flow(16, 16)
+    flow[sil] += np.array([2.0, 1.0], np.float32)  # the person moved by (-2, -1) since the reference
+    vis = sil.astype(np.float32) * 0.75
+    out = extend_flow(MeshFlow(flow, vis, sil), 2)
+    ring = np.zeros_like(sil)
+    ring[2:14, 2:14] = True
+    ring &= ~sil
+    centres = identity_flow(16, 16)
+    np.testing.assert_allclose(out.flow[ring], centres[ring] + [2.0, 1.0])  # a translation carries on outside
+    assert np.all(out.visibility[ring] == 0.75) and np.array_equal(out.silhouette, sil)
+    far = ~(ring | sil)
+    np.testing.assert_allclose(out.flow[far], centres[far])
+
+
+def test_eroded_silhouettes_erode_about_half_of_them():
+    from motion2video.frames.train import eroded_silhouettes
+
+    masks = np.zeros((40, 16, 16), bool)
+    masks[:, 3:13, 3:13] = True
+    out = eroded_silhouettes(masks, np.random.default_rng(0), 3)
+    changed = np.array([not np.array_equal(a, b) for a, b in zip(out, masks)])
+    assert 10 < changed.sum() < 30 and np.all(out <= masks)
+    assert out[changed].sum(axis=(1, 2)).min() >= 4 * 4  # at most 3 px off each side
+
+
 def test_transform_uv_mirrors_then_crops():
     uv = np.array([[10.0, 20.0]])
     np.testing.assert_allclose(transform_uv(uv, size=64, flip=True, origin=(4, 6)), [[50.0, 14.0]])
@@ -190,6 +220,24 @@ def test_lifted_reference_projects_onto_the_reference_pose():
     lifted = lift_reference(points, joints[0], camera, scale, shift)
     np.testing.assert_allclose(project(lifted, camera)[:, :2] * scale + shift, points, atol=1e-6)
     np.testing.assert_allclose(project(lifted, camera)[:, 2], project(joints[0], camera)[:, 2], atol=1e-9)
+
+
+def test_width_fit_finds_a_stocky_body():
+    from motion2video.core.camera import fit_camera
+    from motion2video.formats.io import load_motion
+    from motion2video.stages.mesh_frames import fit_width, render_mesh_track
+
+    joints = load_motion(ROOT / "demo_inputs" / "cmu_walk.npz").joints[:1].astype(np.float64)
+    camera = fit_camera(joints, 96, 96)
+    stocky = render_mesh_track(joints, phenotype={"weight": 0.9}, camera=camera, transform=(1.0, np.zeros(2)),
+                               size=96).masks[0]
+    slim = render_mesh_track(joints, phenotype={"weight": 0.15}, camera=camera, transform=(1.0, np.zeros(2)),
+                             size=96).masks[0]
+    assert stocky.sum() > slim.sum() * 1.04  # a wider body (the height is fitted to the legs and torso)
+    fitted, iou = fit_width(joints[0], camera=camera, transform=(1.0, np.zeros(2)), size=96, person_mask=stocky)
+    assert fitted["weight"] == 0.9 and iou > 0.99
+    fitted, _ = fit_width(joints[0], camera=camera, transform=(1.0, np.zeros(2)), size=96, person_mask=slim)
+    assert fitted["weight"] == 0.15
 
 
 def test_synthesize_through_the_mesh_generator(tmp_path, capsys):

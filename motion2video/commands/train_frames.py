@@ -57,6 +57,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--person-weight", type=float, default=None,
                    help="weight of the L1 inside the target silhouette (default 2 for warp, 0 else)")
     p.add_argument("--adversarial", action="store_true", help="add the patch discriminator (slow on CPU)")
+    p.add_argument("--silhouette-erosion", type=int, default=0, metavar="PX",
+                   help="mesh model: erode half of the target silhouettes by 1 to PX pixels (robustness to a "
+                   "body fitted to a real person; default 0)")
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
@@ -83,6 +86,8 @@ def run(args: argparse.Namespace) -> int:
     if args.model_kind in ("warp", "mesh") and args.domain != "body":
         raise InputError(f"--model-kind {args.model_kind} makes body frames only (use --domain body)")
     check_at_least("--batch-size", args.batch_size)
+    if args.silhouette_erosion < 0 or (args.silhouette_erosion and args.model_kind != "mesh"):
+        raise InputError("--silhouette-erosion is a setting of --model-kind mesh (0 or more pixels)")
     output = Path(args.output)
     if output.suffix != ".safetensors":
         raise InputError("the checkpoint name must end in .safetensors", output)
@@ -120,7 +125,8 @@ def run(args: argparse.Namespace) -> int:
     seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
     config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
                                adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
-                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person)
+                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person,
+                               silhouette_erosion=args.silhouette_erosion)
     result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
                           progress=not args.no_progress, init_from=args.init_from,
                           extra_metadata={"dataset_spec": spec.key()})

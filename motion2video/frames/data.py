@@ -116,6 +116,8 @@ class FramePairs:
         mesh_flow: (B, H, W, 2) float32 the mesh correspondence target -> reference (reference pixels), or
             None when the sequences keep no mesh vertices (:func:`frames.mesh_flow.dense_flow`).
         mesh_visibility: (B, H, W) float32 how much of each target pixel's surface the reference shows, or None.
+        mesh_ref_masks, mesh_tgt_masks: (B, H, W) bool silhouettes of the fitted mesh when they differ from the
+            person masks (a body fitted to real frames), or None (rendered data: the masks are the mesh's).
     """
 
     ref_images: np.ndarray
@@ -128,6 +130,8 @@ class FramePairs:
     tgt_masks: np.ndarray | None = None
     mesh_flow: np.ndarray | None = None
     mesh_visibility: np.ndarray | None = None
+    mesh_ref_masks: np.ndarray | None = None
+    mesh_tgt_masks: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])
@@ -212,12 +216,13 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
 def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | None, origins: np.ndarray | None,
                     tgt_masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The mesh correspondence of every pair of ``index`` (B, 3) after its flip and crop (``origins`` (B, 2)
-    or None), filling the (already flipped and cropped) target silhouettes ``tgt_masks`` (B, h, w).
+    or None), filling the (already flipped and cropped) target silhouettes ``tgt_masks`` (B, h, w) and a band
+    around them (:func:`frames.mesh_flow.extend_flow`).
 
     Returns:
         flow (B, h, w, 2) float32 reference pixels, visibility (B, h, w) float32.
     """
-    from motion2video.frames.mesh_flow import dense_flow, transform_uv
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow, transform_uv
 
     flows, vis = [], []
     for k, (s, r, t) in enumerate(np.asarray(index, np.int64)):
@@ -226,6 +231,7 @@ def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | 
         ref_uv = transform_uv(seqs.vertex_uv[s, r], size=seqs.image_size, flip=f, origin=origin)
         tgt_uv = transform_uv(seqs.vertex_uv[s, t], size=seqs.image_size, flip=f, origin=origin)
         mf = dense_flow(ref_uv, seqs.vertex_visible[s, r], tgt_uv, seqs.vertex_visible[s, t], tgt_masks[k])
+        mf = extend_flow(mf, band_width(seqs.image_size))
         flows.append(mf.flow)
         vis.append(mf.visibility)
     return np.stack(flows), np.stack(vis)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 NEIGHBOURS = 4  # target vertices interpolated per pixel
+BAND_PX = 4  # the flow is carried this far outside the silhouette (at 128 px; extend_flow)
 WEIGHT_EPS_PX = 0.1  # Shepard's inverse-distance weights 1 / (d^2 + eps^2): a vertex at the pixel dominates
 
 
@@ -103,3 +104,36 @@ def transform_uv(uv: np.ndarray, *, size: int, flip: bool = False, origin: tuple
     out[..., 0] -= origin[0]
     out[..., 1] -= origin[1]
     return out
+
+
+def extend_flow(mesh: MeshFlow, band: int) -> MeshFlow:
+    """Carry the flow into a band of ``band`` pixels around the silhouette: each band pixel moves like its nearest
+    silhouette pixel (``flow(p) = flow(q) + (p - q)``, a translation continuing the surface), with its visibility.
+
+    A body fitted to a real person is thinner or wider than the person in places (clothes, hair, a body model's
+    proportions), so the generator needs a flow a little outside the mesh; the silhouette is unchanged (the
+    generator's alpha decides how much of the band is person).
+
+    Returns:
+        A new :class:`MeshFlow` with the same silhouette.
+    """
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+
+    sil = mesh.silhouette
+    if band <= 0 or not sil.any():
+        return mesh
+    ring = binary_dilation(sil, structure=np.ones((3, 3), bool), iterations=int(band)) & ~sil
+    _, (iy, ix) = distance_transform_edt(~sil, return_indices=True)
+    ys, xs = np.nonzero(ring)
+    qy, qx = iy[ys, xs], ix[ys, xs]
+    flow = mesh.flow.copy()
+    visibility = mesh.visibility.copy()
+    flow[ys, xs, 0] = mesh.flow[qy, qx, 0] + (xs - qx)
+    flow[ys, xs, 1] = mesh.flow[qy, qx, 1] + (ys - qy)
+    visibility[ys, xs] = mesh.visibility[qy, qx]
+    return MeshFlow(flow, visibility, sil)
+
+
+def band_width(size: int) -> int:
+    """The band :func:`extend_flow` adds at an image side of ``size`` pixels (4 at 128)."""
+    return max(1, round(BAND_PX * size / 128))

@@ -196,6 +196,9 @@ class MeshWarpGenerator(nn.Module):
 
 def mesh_inputs(pairs) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
     """The mesh generator's inputs besides the images, from :class:`frames.data.FramePairs` that carry the mesh
-    correspondence: ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility (B, 1, H, W), silhouette (B, 1, H, W)."""
-    return (torch.from_numpy(pairs.ref_masks)[:, None].float(), torch.from_numpy(pairs.mesh_flow),
-            torch.from_numpy(pairs.mesh_visibility)[:, None], torch.from_numpy(pairs.tgt_masks)[:, None].float())
+    correspondence: ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility (B, 1, H, W), silhouette (B, 1, H, W) (the
+    fitted mesh's silhouettes when the pairs carry them, else the person masks)."""
+    ref = pairs.ref_masks if pairs.mesh_ref_masks is None else pairs.mesh_ref_masks
+    tgt = pairs.tgt_masks if pairs.mesh_tgt_masks is None else pairs.mesh_tgt_masks
+    return (torch.from_numpy(np.ascontiguousarray(ref))[:, None].float(), torch.from_numpy(pairs.mesh_flow),
+            torch.from_numpy(pairs.mesh_visibility)[:, None], torch.from_numpy(np.ascontiguousarray(tgt))[:, None].float())

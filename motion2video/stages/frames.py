@@ -46,7 +46,20 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     n = structures.num_targets
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
-                      output_size=structures.size, model_size=net.config.image_size)
+                      output_size=structures.size, model_size=net.config.image_size,
+                      person_mask=None if phenotype else reference_person_mask(reference.image))
+
+
+def reference_person_mask(image: np.ndarray) -> np.ndarray | None:
+    """(H, W) bool the person BlazePose segments in a reference image, or None when it finds nobody."""
+    from motion2video.core.errors import InputError
+    from motion2video.pose.estimate import default_model, estimate_image
+
+    try:
+        pose = estimate_image(image, model=default_model())
+    except InputError:  # nobody found: no width fit
+        return None
+    return pose.landmarks.person_mask(image.shape[1], image.shape[0]) > 0.5
 
 
 def default_generator_threads() -> int:

@@ -30,6 +30,8 @@ import numpy as np
 from motion2video.core.errors import InputError
 
 MASK_GREY = (200, 200, 200)  # the colour the correspondence renders use (only depth and silhouette are read)
+# Anny "weight" values tried when fitting the body's width to the reference person's silhouette (fit_width).
+WEIGHT_GRID = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
 
 
 @dataclass
@@ -77,7 +79,7 @@ def affine_matrix(a: float, b: np.ndarray) -> np.ndarray:
     return np.array([[a, 0.0, off[0]], [0.0, a, off[1]]])
 
 
-def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple[float, np.ndarray],
+def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
                       size: int, progress=None) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
@@ -85,7 +87,8 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
         joints: (N, 17, 3) world joints (one body: a single size is fitted over all frames).
         phenotype: Anny phenotype values.
         camera: the render camera (PinholeCamera).
-        transform: ``(a, b)``: the camera's pixels map to the track's by ``x * a + b``.
+        transform: ``(a, b)``: the camera's pixels map to the track's by ``x * a + b``; ``a`` a float and ``b``
+            (2,), or per frame: ``a`` (N,) and ``b`` (N, 2).
         size: the track's image side (square).
         progress: called with the number of frames done.
     Returns:
@@ -98,12 +101,12 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     from renderers.body import pose_anny_from_joints, posed_vertices
     from renderers.mesh import MeshRenderer, vertex_visibility
 
-    a, b = float(transform[0]), np.asarray(transform[1], np.float64)
+    n = len(joints)
+    scales = np.broadcast_to(np.asarray(transform[0], np.float64), (n,))
+    shifts = np.broadcast_to(np.asarray(transform[1], np.float64), (n, 2))
     pose = pose_anny_from_joints(np.asarray(joints, np.float64), phenotype=phenotype)
     faces = anny_model.triangles()
     renderer = MeshRenderer(camera.width, camera.height)
-    n = len(joints)
-    matrix = affine_matrix(a, b)
     uv, visible, masks = None, None, np.zeros((n, size, size), bool)
     try:
         for start, verts in posed_vertices(pose):
@@ -111,11 +114,13 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                 uv = np.zeros((n, verts.shape[1], 2), np.float32)
                 visible = np.zeros((n, verts.shape[1]), bool)
             for k, v in enumerate(verts):
+                i = start + k
                 out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
                 uvz = project(v, camera)
-                visible[start + k] = vertex_visibility(uvz, out.depth)
-                uv[start + k] = uvz[:, :2] * a + b
-                m = cv2.warpAffine(out.mask.astype(np.float32), matrix, (size, size), flags=cv2.INTER_LINEAR)
+                visible[i] = vertex_visibility(uvz, out.depth)
+                uv[i] = uvz[:, :2] * scales[i] + shifts[i]
+                m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
+                                   flags=cv2.INTER_LINEAR)
                 masks[start + k] = m > 0.5
             if progress is not None:
                 progress(len(verts))
@@ -142,7 +147,7 @@ class MeshVideo:
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
-               output_size: int, model_size: int) -> MeshVideo:
+               output_size: int, model_size: int, person_mask: np.ndarray | None = None) -> MeshVideo:
     """The meshes of a placed body video.
 
     Args:
@@ -151,6 +156,8 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         target_rows: (N, 17, 2) the target joints in output pixels (to place the crop).
         phenotype: the reference person's Anny phenotype.
         output_size: the output frames' side; model_size: the generator's.
+        person_mask: (output_size, output_size) bool the reference person's pixels, or None: Anny's weight is
+            fitted to it (:func:`fit_width`).
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -163,6 +170,13 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift)
+    if person_mask is not None:
+        import cv2
+
+        small = cv2.warpAffine(np.asarray(person_mask, np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
+                               (model_size, model_size), flags=cv2.INTER_LINEAR) > 0.5
+        phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
+                                 person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
                              transform=to_crop, size=model_size)
     ref = MeshTrack(both.uv[:1], both.visible[:1], both.masks[:1])
@@ -170,6 +184,59 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
     tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
     return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32))
+
+
+def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
+              phenotype: dict | None = None) -> tuple[dict, float]:
+    """Anny's ``weight`` phenotype value whose silhouette in one pose best covers a person's mask (intersection
+    over union, over :data:`WEIGHT_GRID`): a stocky person gets a stocky body, a slim one a slim body.
+
+    Args:
+        joints: (17, 3) world joints of the pictured pose; camera, transform, size: as :func:`render_mesh_track`.
+        person_mask: (size, size) bool, the person's pixels (BlazePose's segmentation).
+        phenotype: the other phenotype values (Anny's defaults when None).
+    Returns:
+        (phenotype with the fitted weight, its IoU).
+    """
+    mask = np.asarray(person_mask, bool)
+    best, best_iou = dict(phenotype or {}), -1.0
+    for weight in WEIGHT_GRID:
+        candidate = {**(phenotype or {}), "weight": weight}
+        sil = render_mesh_track(np.asarray(joints, np.float64)[None], phenotype=candidate, camera=camera,
+                                transform=transform, size=size).masks[0]
+        iou = float((sil & mask).sum() / max(1, (sil | mask).sum()))
+        if iou > best_iou:
+            best, best_iou = candidate, iou
+    return best, best_iou
+
+
+def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, phenotype: dict | None = None,
+                     person_mask: np.ndarray | None = None) -> MeshTrack:
+    """The body mesh of a person seen in a real video, in the pixels of its frames.
+
+    The estimator's 3D joints (canonical metres) pose Anny; a frontal camera fitted over the frames renders it,
+    and each frame's 2D similarity (:func:`motion2video.stages.structure.similarity_fit` on the pelvis, legs,
+    spine and head) puts the render onto that frame's 2D joints.
+
+    Args:
+        joints3d: (N, 17, 3) canonical joints (z up). points2d: (N, 17, 2) the same joints in frame pixels.
+        size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
+        person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it (:func:`fit_width`).
+    """
+    from motion2video.core.camera import fit_camera, project
+    from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
+
+    joints3d = np.asarray(joints3d, np.float64)
+    camera = fit_camera(joints3d, size, size, elevation_deg=0.0)
+    projected = project(joints3d, camera)[..., :2]  # (N, 17, 2)
+    fits = [similarity_fit(p[list(ALIGN_JOINTS)], q[list(ALIGN_JOINTS)]) for p, q in zip(projected, points2d)]
+    scales = np.array([f[0] for f in fits])
+    shifts = np.stack([f[1] for f in fits])
+    if person_mask is not None:
+        phenotype, _ = fit_width(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
+                                 person_mask=person_mask, phenotype=phenotype)
+    return render_mesh_track(joints3d, phenotype=phenotype or {}, camera=camera, transform=(scales, shifts),
+                             size=size)
 
 
 def _crop(ref_points, tgt_points, size: int, model_size: int) -> tuple[int, int, int]:
@@ -194,7 +261,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     import torch
 
     from motion2video.frames.data import body_structures
-    from motion2video.frames.mesh_flow import dense_flow
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
     from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_mask
 
@@ -219,6 +286,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             for r in part:
                 mf = dense_flow(video.reference.uv[0], video.reference.visible[0], video.targets.uv[r],
                                 video.targets.visible[r], video.targets.masks[r])
+                mf = extend_flow(mf, band_width(size))
                 flows.append(mf.flow)
                 vis.append(mf.visibility)
             n = len(part)
