@@ -40,9 +40,19 @@ BEGIN, END = "<!-- issue22-real-motion:begin -->", "<!-- issue22-real-motion:end
 # Held-out real captures (none is in the frame generator's training clips), one walk, one jump, one dance.
 CLIPS = ("cmu/08_01.bvh", "cmu/13_42.bvh", "cmu/05_14.bvh")
 WINDOWS = 4
-ORDER = ("generator", "frames-body-128-v1", "copy-reference", "limb-warp")
-NAMES = {"generator": "**new** (`{model}`)", "frames-body-128-v1": "old (`frames-body-128-v1`)",
-         "copy-reference": "copy-reference", "limb-warp": "limb-warp"}
+BASELINES = ("copy-reference", "limb-warp")
+
+
+def order(results: dict) -> list[str]:
+    """The methods of a payload in table order: the generator, the previous generator(s), the baselines."""
+    old = [k for k in results if k != "generator" and k not in BASELINES]
+    return ["generator", *old, *BASELINES]
+
+
+def method_name(key: str, model: str) -> str:
+    if key == "generator":
+        return f"**new** (`{model}`)"
+    return key if key in BASELINES else f"old (`{key}`)"
 TARGETS = {"person_psnr_vs_limb_warp_3db": "person PSNR >= limb-warp + 3 dB",
            "head_psnr_vs_limb_warp_3db": "head PSNR >= limb-warp + 3 dB",
            "person_sharpness_0.9": "person sharpness ratio >= 0.9"}
@@ -94,7 +104,8 @@ def sheet_columns(evaluation, head_masks: np.ndarray, rows: list[int]) -> dict[s
 
     preds = evaluation.predictions
     names = [("reference", "reference"), ("target", "truth"), ("generator", "new")]
-    names += [(k, "old") for k in preds if k == "frames-body-128-v1"] + [("limb-warp", "limb-warp")]
+    names += [(k, "old") for k in preds if k not in ("generator", "reference", "target", *BASELINES)][:1]
+    names += [("limb-warp", "limb-warp")]
     out = {}
     for key, title in names:
         cells = []
@@ -115,10 +126,10 @@ def table(payloads: dict[str, dict], model: str) -> str:
             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     rows = []
     for clip, payload in payloads.items():
-        for key in ORDER:
+        for key in order(payload["results"]):
             r = payload["results"].get(key)
             if r is not None:
-                rows.append(f"| `{clip}` | {NAMES[key].format(model=model)} | {r['person_psnr']:.2f} "
+                rows.append(f"| `{clip}` | {method_name(key, model)} | {r['person_psnr']:.2f} "
                             f"| {r['person_ssim']:.3f} | {r['person_sharpness']:.2f} | {r['head_psnr']:.2f} "
                             f"| {r['head_ssim']:.3f} | {r['psnr']:.2f} |")
     return head + "\n" + "\n".join(rows)

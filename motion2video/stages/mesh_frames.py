@@ -32,6 +32,7 @@ from motion2video.core.errors import InputError
 MASK_GREY = (200, 200, 200)  # the colour the correspondence renders use (only depth and silhouette are read)
 # Anny "weight" values tried when fitting the body's width to the reference person's silhouette (fit_width).
 WEIGHT_GRID = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
+WIDTH_FIT_MARGIN = 0.01  # IoU another weight must gain over the given phenotype's to replace it
 
 
 @dataclass
@@ -189,7 +190,9 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
 def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
               phenotype: dict | None = None) -> tuple[dict, float]:
     """Anny's ``weight`` phenotype value whose silhouette in one pose best covers a person's mask (intersection
-    over union, over :data:`WEIGHT_GRID`): a stocky person gets a stocky body, a slim one a slim body.
+    over union, over :data:`WEIGHT_GRID`): a stocky person gets a stocky body, a slim one a slim body. The given
+    phenotype stays unless another weight covers the mask better by :data:`WIDTH_FIT_MARGIN` (a segmentation mask
+    is a few pixels off at the edges).
 
     Args:
         joints: (17, 3) world joints of the pictured pose; camera, transform, size: as :func:`render_mesh_track`.
@@ -200,12 +203,12 @@ def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person
     """
     mask = np.asarray(person_mask, bool)
     best, best_iou = dict(phenotype or {}), -1.0
-    for weight in WEIGHT_GRID:
-        candidate = {**(phenotype or {}), "weight": weight}
+    for weight in (None, *WEIGHT_GRID):  # None: the given phenotype as it is
+        candidate = dict(phenotype or {}) if weight is None else {**(phenotype or {}), "weight": weight}
         sil = render_mesh_track(np.asarray(joints, np.float64)[None], phenotype=candidate, camera=camera,
                                 transform=transform, size=size).masks[0]
         iou = float((sil & mask).sum() / max(1, (sil | mask).sum()))
-        if iou > best_iou:
+        if iou > best_iou + (0.0 if weight is None else WIDTH_FIT_MARGIN):  # another width must cover it better
             best, best_iou = candidate, iou
     return best, best_iou
 
