@@ -38,7 +38,7 @@ examples:
   motion2video evaluate-frames --model frames-body-128 --json out/eval_frames_body.json
   motion2video evaluate-frames --model out/frames-face-128.safetensors --contact-sheet out/face_sheet.png
   motion2video evaluate-frames --model frames-body-128 --video ../shared/data/video/dancer.avi --json out/dancer.json
-  motion2video evaluate-frames --model out/dancer-body-128.safetensors --video ../shared/data/video/dancer.avi \
+  motion2video evaluate-frames --model out/dancer-body-128.safetensors --video ../shared/data/video/dancer.avi \\
       --video-start-fraction 0.8 --json out/dancer_tail.json
   motion2video evaluate-frames --model frames-body-128 --poses ../shared/data/mocap/cmu/08_01.bvh --json out/real.json
 """

@@ -16,10 +16,10 @@ real captures, then train the frame generator with L1 + SSIM. Checkpoints (safet
 periodically; --resume continues an interrupted run.
 
 With --video V --init-from M (personalisation): fine-tune the body generator M on one person's video instead.
-The video is tracked once (BlazePose, cached in ~/.cache/motion2video/pose); its first 80%% of frames
+The video is tracked once (BlazePose, cached in ~/.cache/motion2video/pose); its first 80% of frames
 (--train-fraction) are the training data (pairs of its frames with their estimated poses and person masks, cut
 to one square around the person and resized to the model's size, as evaluate-frames --video cuts them). The
-last 20%% is never trained on: it is then scored by the reconstruction protocol of evaluate-frames --video
+last 20% is never trained on: it is then scored by the reconstruction protocol of evaluate-frames --video
 --video-start-fraction 0.8 (frame 0 the reference, targets from the tail only) for the fine-tuned model and for
 M on the same pairs; both are printed (l1, person_psnr, akd) with the ratio of their L1, and written to --json.
 """
@@ -29,7 +29,7 @@ examples:
   motion2video train-frames --domain body -o out/frames-body-128.safetensors --steps 4000 --cache /tmp/m2v-cache
   motion2video train-frames --domain face -o out/frames-face-128.safetensors --steps 3500 --resume
   motion2video train-frames --domain body -o out/tiny.safetensors --steps 50 --train-sequences 16
-  motion2video train-frames --video ../shared/data/video/dancer.avi --init-from frames-body-128 \
+  motion2video train-frames --video ../shared/data/video/dancer.avi --init-from frames-body-128 \\
       -o out/dancer-body-128.safetensors --steps 600 --json out/dancer_personalised.json
 """
 
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
                                            ("--video-frames", args.video_frames), ("--json", args.json))
                   if value is not None]
     if video_only:
-        raise InputError(f"{', '.join(video_only)} go(es) with --video")
+        raise InputError(f"{', '.join(video_only)}: only with --video")
     if args.domain is None:
         raise InputError("--domain body|face is required (unless fine-tuning on a --video)")
     args.model_kind = args.model_kind or "analogy"
@@ -190,7 +190,7 @@ def _run_video(args: argparse.Namespace) -> int:
     check_at_least("--video-frames", settings.targets)
     if not 0.0 < settings.train_fraction < 1.0:
         raise InputError(f"--train-fraction must be between 0 and 1, got {settings.train_fraction:g}")
-    if settings.crop < 0 or settings.crop > 128 or settings.crop % 16:
+    if settings.crop < 0 or settings.crop % 16:
         raise InputError(f"--crop must be 0 or a multiple of 16 up to the model's size, got {settings.crop}")
     if not settings.lr > 0:
         raise InputError(f"--lr must be > 0, got {settings.lr:g}")
@@ -207,9 +207,12 @@ def _run_video(args: argparse.Namespace) -> int:
     print(json.dumps(payload["train"]))
     print(f"tail of {Path(args.video).name}: frames {payload['train']['tail_start']}..{payload['tail']['frames'][-1]}"
           f" never trained on, {payload['tail']['num_pairs']} pairs against frame 0:")
+    def shown(value, digits: int) -> str:
+        return "n/a" if value is None else f"{value:.{digits}f}"
+
     for label, scores in (("generic " + payload["init_from"], g), ("personalised", p)):
-        akd = "n/a" if scores["akd"] is None else f"{scores['akd']:.2f}"
-        print(f"  {label:<28} l1 {scores['l1']:.4f}  person_psnr {scores['person_psnr']:.2f} dB  akd {akd} px")
+        print(f"  {label:<28} l1 {scores['l1']:.4f}  person_psnr {shown(scores['person_psnr'], 2)} dB  "
+              f"akd {shown(scores['akd'], 2)} px")
     print(f"  personalised / generic L1: {payload['l1_ratio']:.3f}")
     if args.json:
         write_json(args.json, payload)

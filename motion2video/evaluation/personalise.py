@@ -146,7 +146,8 @@ class PersonaliseResult:
             "personalised": personal,
             "generic": generic,
             "l1_ratio": round(ratio, 4),
-            "person_psnr_gain_db": round(personal["person_psnr"] - generic["person_psnr"], 3),
+            "person_psnr_gain_db": (None if personal["person_psnr"] is None or generic["person_psnr"] is None
+                                    else round(personal["person_psnr"] - generic["person_psnr"], 3)),
             "train": {"frames": int(len(self.data.frame_index)), "first_frame": int(self.data.frame_index[0]),
                       "last_frame": int(self.data.frame_index[-1]), "tail_start": int(self.data.end),
                       "crop_box": [int(v) for v in self.data.box], "steps": int(self.train.steps),
@@ -193,6 +194,8 @@ def personalise(video: str | Path, *, init_from: str | Path, output: str | Path,
     if cfg.domain != "body":
         raise InputError("fine-tuning on a video needs a body frame generator (this one makes face frames)",
                          generic.path)
+    if settings.crop > cfg.image_size:
+        raise InputError(f"--crop {settings.crop} is larger than the model's {cfg.image_size} px frames", generic.path)
     notes: list[str] = []  # said once the video is accepted: a refused input is one line
     if track is None:
         track = video_track(video, note=notes.append)
