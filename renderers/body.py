@@ -35,7 +35,7 @@ from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
-from motion2video.core.camera import PinholeCamera, fit_camera
+from motion2video.core.camera import PinholeCamera, fit_camera, project
 from motion2video.core.errors import InputError
 from motion2video.core.motion import Motion
 from motion2video.core.rotations import frame_from_axes, slerp_rotations, swing_rotation
@@ -46,7 +46,7 @@ from motion2video.core.skeletons import (
 from renderers import anny_model
 from renderers.anny_model import AnnyRest
 from renderers.base import RendererBase
-from renderers.mesh import MeshRenderer
+from renderers.mesh import MeshRenderer, vertex_visibility
 
 
 SPINE_BONES = ("spine05", "spine04", "spine03", "spine02", "spine01")
@@ -339,6 +339,9 @@ class BodyFrames:
         pose: the fitted Anny pose.
         head_masks: (T, H, W) bool pixels where the visible surface is the head
             (:func:`renderers.anny_model.head_vertices`), or None when not asked for.
+        vertex_uv: (T, V, 2) float32 every mesh vertex's pixel position, or None when not asked for.
+        vertex_visible: (T, V) bool, the vertex is the front surface at its pixel (the mesh generator's
+            correspondence, :mod:`motion2video.frames.mesh_flow`), or None.
     """
 
     frames: np.ndarray
@@ -346,6 +349,8 @@ class BodyFrames:
     camera: PinholeCamera
     pose: AnnyPose
     head_masks: np.ndarray | None = None
+    vertex_uv: np.ndarray | None = None
+    vertex_visible: np.ndarray | None = None
 
 
 def skin_vertices(rest: AnnyRest, bone_poses: np.ndarray) -> np.ndarray:
@@ -444,7 +449,8 @@ class BodyRenderer(RendererBase):
                           elevation_deg=s.elevation_deg, yfov_deg=s.yfov_deg, margin=s.margin)
 
     def render_with_masks(self, motion: Motion, *, camera: PinholeCamera | None = None,
-                          progress: Callable[[int], object] | None = None, head: bool = False) -> BodyFrames:
+                          progress: Callable[[int], object] | None = None, head: bool = False,
+                          vertices: bool = False) -> BodyFrames:
         """Render every frame of ``motion``; see :class:`BodyFrames`.
 
         Args:
@@ -468,6 +474,11 @@ class BodyRenderer(RendererBase):
         masks = np.zeros((motion.num_frames, self.height, self.width), dtype=bool)
         head_masks = np.zeros_like(masks) if head else None
         head_ids, head_faces = anny_model.head_submesh() if head else (None, None)
+        vertex_uv = vertex_visible = None
+        if vertices:
+            count = len(anny_model.anny_rest(self.style.phenotype).vertices)
+            vertex_uv = np.zeros((motion.num_frames, count, 2), np.float32)
+            vertex_visible = np.zeros((motion.num_frames, count), bool)
         for start, verts in (chunks if chunks is not None else posed_vertices(pose, batch=self.style.batch)):
             for k, v in enumerate(verts):
                 out = self._mesh.render_mesh(v, faces, vertex_colors=colors, camera=camera,
@@ -475,9 +486,14 @@ class BodyRenderer(RendererBase):
                 frames[start + k], masks[start + k] = out.color, out.mask
                 if head_masks is not None:
                     head_masks[start + k] = self._head_mask(v[head_ids], head_faces, out.depth, camera)
+                if vertex_uv is not None:
+                    uvz = project(v, camera)  # (V, 3)
+                    vertex_uv[start + k] = uvz[:, :2]
+                    vertex_visible[start + k] = vertex_visibility(uvz, out.depth)
             if progress is not None:
                 progress(len(verts))
-        return BodyFrames(frames=frames, masks=masks, camera=camera, pose=pose, head_masks=head_masks)
+        return BodyFrames(frames=frames, masks=masks, camera=camera, pose=pose, head_masks=head_masks,
+                          vertex_uv=vertex_uv, vertex_visible=vertex_visible)
 
     def _head_mask(self, head_vertices: np.ndarray, head_faces: np.ndarray, depth: np.ndarray,
                    camera: PinholeCamera) -> np.ndarray:

@@ -417,3 +417,28 @@ def _any_in_view(vertices: np.ndarray, camera: PinholeCamera) -> bool:
     inside = ((uvd[:, 2] > 0.05) & (uvd[:, 0] >= 0) & (uvd[:, 0] < camera.width)
               & (uvd[:, 1] >= 0) & (uvd[:, 1] < camera.height))
     return bool(inside.any())
+
+
+# A vertex is the front surface when its depth is within this of the depth map's at its pixel (metres; the
+# thinnest body parts, wrists and fingers, are a few centimetres thick).
+VISIBILITY_TOLERANCE_M = 0.025
+
+
+def vertex_visibility(uvz: np.ndarray, depth: np.ndarray, *, tolerance: float = VISIBILITY_TOLERANCE_M) -> np.ndarray:
+    """Which vertices are the front surface of a render.
+
+    Args:
+        uvz: (V, 3) projected vertices: pixel x, pixel y, depth in metres (:func:`core.camera.project`).
+        depth: (H, W) the render's depth map (0 where nothing was drawn).
+        tolerance: metres a vertex may lie behind the depth map and still count as seen.
+    Returns:
+        (V,) bool.
+    """
+    h, w = depth.shape
+    x = np.floor(uvz[:, 0]).astype(np.int64)
+    y = np.floor(uvz[:, 1]).astype(np.int64)
+    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h) & (uvz[:, 2] > 0)
+    seen = np.zeros(len(uvz), bool)
+    d = depth[y[inside], x[inside]]
+    seen[inside] = (d > 0) & (uvz[inside, 2] <= d + tolerance)
+    return seen

@@ -14,6 +14,11 @@ Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2v
   (default: the previous body generator ``frames-body-128-v1``), measured in the same run, each through
   its pipeline path at the pipeline's defaults (a warp generator through ``encode_reference`` /
   ``decode``: person crop, generation, paste, on the demo reference and poses moved around it).
+- ``generators_256``: frames/s of whole synthesized videos at 256x256 (the demo body reference, the real walk
+  ``cmu_walk.npz``, K=2 futures x 48 frames after 16 observed, sampled once), through
+  :func:`~motion2video.stages.frames.generate_video_frames` for the body generator and each
+  ``--mesh-frame-model`` (default: ``frames-body-mesh-128`` from --weights when it is there) side by side: the mesh
+  generator's time includes fitting, posing and rendering the body mesh of every frame.
 - ``end_to_end``: K=5 futures x 48 frames after 16 observed, body and face: the wall time of
   :func:`motion2video.apps.synthesize.synthesize` (checkpoint loading included) and each stage timed alone
   (sampling, structure rendering, generation, encoding of the three outputs); ``overhead_ratio`` =
@@ -244,6 +249,26 @@ def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> di
     }
 
 
+def bench_video_256(frame_models: dict, motion_model: Path, *, repeats: int, size: int = 256) -> dict:
+    """Frames/s of :func:`generate_video_frames` at ``size`` for each frame model (name -> loaded model) on the
+    same placed forecast (see ``generators_256`` in the module docstring)."""
+    from motion2video.models.checkpoint import load_model
+
+    bundle = load_model(motion_model)
+    ref = load_reference(demo.DEMO_INPUTS / "reference_body.png", size=size, domain="body")
+    from motion2video.stages.clips import load_clip
+
+    clip = load_clip(bundle, demo.DEMO_INPUTS / "cmu_walk.npz").data
+    fc = sample_forecast(bundle, clip, samples=2, observed=OBSERVED, horizon=HORIZON, start=0, seed=0)
+    st = render_structures(fc, domain="body", size=size, reference=ref)
+    out = {"size": size, "frames": st.num_targets}
+    for name, model in frame_models.items():
+        sec = median_seconds(lambda: generate_video_frames(model, ref, st, batch_size=SynthesisConfig.batch_size),
+                             repeats=repeats)
+        out[name] = round(st.num_targets / sec, 2)
+    return out
+
+
 def bench_demo(weights: Path, work: Path) -> dict:
     """Run scripts/demo.py in a child process; its wall time and peak resident memory."""
     t0 = time.perf_counter()
@@ -273,6 +298,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--compare-frame-model", action="append", default=None, metavar="MODEL",
                         help="also measure this body generator's frames/s at 128 in the same run (repeatable; "
                         "default: frames-body-128-v1 from --weights when it is there)")
+    parser.add_argument("--mesh-frame-model", action="append", default=None, metavar="MODEL",
+                        help="a mesh body generator measured at 256x256 beside the body generator (repeatable; "
+                        "default: frames-body-mesh-128 from --weights when it is there)")
     args = parser.parse_args(argv)
     files = demo.weight_files(args.weights)
     missing = [str(p) for p in files.values() if not p.is_file()]
@@ -299,6 +327,16 @@ def main(argv: list[str] | None = None) -> int:
             side[other.path.name.removesuffix(".safetensors")] = bench_any_generator(
                 other, repeats=args.repeats)["generator_fps_128"]
         result["generators_side_by_side"] = side
+        meshes = args.mesh_frame_model
+        if meshes is None:
+            shipped = args.weights / "frames-body-mesh-128.safetensors"
+            meshes = [str(shipped)] if shipped.is_file() else []
+        models = {demo.BODY["frame_model"]: load_frame_model(files[demo.BODY["frame_model"]])}
+        for name in meshes:
+            loaded = load_frame_model(name)
+            models[loaded.path.name.removesuffix(".safetensors")] = loaded
+        print("videos at 256x256 ...", flush=True)
+        result["generators_256"] = bench_video_256(models, files[demo.BODY["motion_model"]], repeats=args.repeats)
         result["end_to_end"] = {}
         for name, spec in (("body", demo.BODY), ("face", demo.FACE)):
             print(f"end to end ({name}) ...", flush=True)
@@ -318,6 +356,8 @@ def main(argv: list[str] | None = None) -> int:
     if "demo" in result:
         parts.append(f"demo {result['demo']['wall_s']} s, peak {result['demo']['peak_rss_mb']} MB")
     parts.append("side by side: " + ", ".join(f"{k} {v}" for k, v in result["generators_side_by_side"].items()))
+    parts.append("at 256: " + ", ".join(f"{k} {v}" for k, v in result["generators_256"].items()
+                                       if k not in ("size", "frames")))
     print(f"wrote {args.json}: " + "; ".join(parts))
     return 0
 

@@ -80,7 +80,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
-DEFAULT_BASELINE = {"body": "frames-body-128-v1"}  # the previous body generator, scored next to every new one
+# The previous body generator, scored next to every new one: the keypoint warp next to the mesh generator, the
+# feature-analogy generator next to the keypoint warp.
+DEFAULT_BASELINE = {"body": "frames-body-128-v1"}
+DEFAULT_BASELINE_BY_KIND = {"mesh": "frames-body-128"}
 
 
 def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str]]:
@@ -93,7 +96,8 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
     cfg = loaded.config
     explicit = names is not None
     if names is None:
-        names = [DEFAULT_BASELINE[cfg.domain]] if cfg.domain in DEFAULT_BASELINE else []
+        default = DEFAULT_BASELINE_BY_KIND.get(loaded.kind, DEFAULT_BASELINE.get(cfg.domain))
+        names = [default] if default else []
     baselines, left_out = {}, {}
     for name in names:
         if not explicit:  # the default baseline only goes with models of its size: look before loading it
@@ -167,6 +171,8 @@ def run(args: argparse.Namespace) -> int:
         extra["poses"] = posed.poses
     else:
         spec = default_spec(cfg.domain, "test", cfg.image_size)
+        if loaded.kind == "mesh":  # it needs the mesh correspondence of every frame
+            spec = replace(spec, vertices=True)
         if args.test_sequences is not None:
             check_at_least("--test-sequences", args.test_sequences)
             spec = replace(spec, num_sequences=args.test_sequences,

@@ -53,9 +53,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="train on CROP x CROP windows holding both poses of a pair (0: whole frames; "
                    "default size/2, about 8x less compute per step than whole frames for the same quality; "
                    "with --video 0)")
-    p.add_argument("--model-kind", choices=("analogy", "warp"), default=None,
+    p.add_argument("--model-kind", choices=("analogy", "warp", "mesh"), default=None,
                    help="analogy (default): the feature-analogy generator; warp: the generator that warps the "
-                   "reference person along per-limb transforms (body only); with --video: the --init-from model's")
+                   "reference person along per-limb transforms (body only); mesh: the generator that moves it "
+                   "along the correspondence of one Anny mesh in both poses (body only); with --video: the "
+                   "--init-from model's")
     p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
                    help="warp model: its network works at 1/NET_SCALE of the resolution (default 4)")
     p.add_argument("--flow-correction", action="store_true",
@@ -70,6 +72,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--person-weight", type=float, default=None,
                    help="weight of the L1 inside the target silhouette (default 2 for warp, 0 else)")
     p.add_argument("--adversarial", action="store_true", help="add the patch discriminator (slow on CPU)")
+    p.add_argument("--silhouette-erosion", type=int, default=0, metavar="PX",
+                   help="mesh model: erode half of the target silhouettes by 1 to PX pixels (robustness to a "
+                   "body fitted to a real person; default 0)")
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
@@ -112,9 +117,11 @@ def run(args: argparse.Namespace) -> int:
     args.steps = 3000 if args.steps is None else args.steps
     args.lr = 1e-3 if args.lr is None else args.lr
     check_at_least("--steps", args.steps)
-    if args.model_kind == "warp" and args.domain != "body":
-        raise InputError("--model-kind warp makes body frames only (use --domain body)")
+    if args.model_kind in ("warp", "mesh") and args.domain != "body":
+        raise InputError(f"--model-kind {args.model_kind} makes body frames only (use --domain body)")
     check_at_least("--batch-size", args.batch_size)
+    if args.silhouette_erosion < 0 or (args.silhouette_erosion and args.model_kind != "mesh"):
+        raise InputError("--silhouette-erosion is a setting of --model-kind mesh (0 or more pixels)")
     output = Path(args.output)
     if output.suffix != ".safetensors":
         raise InputError("the checkpoint name must end in .safetensors", output)
@@ -126,11 +133,20 @@ def run(args: argparse.Namespace) -> int:
     crop = default_crop(args.domain, args.size) if args.crop is None else args.crop
     if crop < 0 or crop > args.size or crop % 16:
         raise InputError(f"--crop must be 0 or a multiple of 16 up to --size, got {crop}")
-    warp = args.model_kind == "warp"
+    warp = args.model_kind in ("warp", "mesh")
     edge = args.edge_weight if args.edge_weight is not None else (1.0 if warp else 0.0)
     person = args.person_weight if args.person_weight is not None else (2.0 if warp else 0.0)
     model_config = None  # checked before the data, which may take minutes to render
-    if warp:
+    if args.model_kind == "mesh":
+        from motion2video.frames.data import structure_channels
+        from motion2video.frames.mesh_warp import MeshWarpConfig
+
+        if args.net_scale == 4 or args.flow_correction:
+            raise InputError("--model-kind mesh: --net-scale is 1 or 2, and its flow residual is always on")
+        model_config = MeshWarpConfig(image_size=args.size, structure_channels=structure_channels("body"),
+                                      net_scale=args.net_scale or 2, sample_mode=args.sample_mode or "bicubic")
+        spec = replace(spec, vertices=True)  # the mesh correspondence of every frame
+    elif warp:
         from motion2video.frames.data import structure_channels
         from motion2video.frames.warp import WarpGeneratorConfig
 
@@ -138,12 +154,13 @@ def run(args: argparse.Namespace) -> int:
                                            net_scale=args.net_scale or 4, flow_correction=args.flow_correction,
                                            sample_mode=args.sample_mode or "bilinear")
     elif args.net_scale is not None or args.flow_correction or args.sample_mode is not None:
-        raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp")
+        raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp or mesh")
     cache = Path(args.cache) if args.cache else default_cache_dir()
     seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
     config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
                                adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
-                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person)
+                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person,
+                               silhouette_erosion=args.silhouette_erosion)
     result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
                           progress=not args.no_progress, init_from=args.init_from,
                           extra_metadata={"dataset_spec": spec.key()})
@@ -171,6 +188,7 @@ def _run_video(args: argparse.Namespace) -> int:
              "--net-scale": args.net_scale is not None, "--flow-correction": args.flow_correction,
              "--sample-mode": args.sample_mode is not None, "--train-sequences": args.train_sequences is not None,
              "--adversarial": args.adversarial, "--cache": args.cache is not None,
+             "--silhouette-erosion": args.silhouette_erosion != 0,
              "--data-root": args.data_root is not None}
     ignored = [name for name, yes in given.items() if yes]
     if ignored:

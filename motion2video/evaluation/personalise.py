@@ -194,6 +194,9 @@ def personalise(video: str | Path, *, init_from: str | Path, output: str | Path,
     if cfg.domain != "body":
         raise InputError("fine-tuning on a video needs a body frame generator (this one makes face frames)",
                          generic.path)
+    if generic.kind == "mesh":
+        raise InputError("fine-tuning on a video takes a keypoint generator (warp or analogy): a mesh generator "
+                         "needs Anny fitted to every training frame, which this fine-tune does not do", generic.path)
     if settings.crop > cfg.image_size:
         raise InputError(f"--crop {settings.crop} is larger than the model's {cfg.image_size} px frames", generic.path)
     notes: list[str] = []  # said once the video is accepted: a refused input is one line

@@ -25,8 +25,8 @@ import numpy as np
 from motion2video.core.errors import InputError
 from motion2video.frames.data import FramePairs, body_structures
 from motion2video.frames.evaluate import FrameEvaluation, evaluate_pairs
-from motion2video.pose.blazepose import BlazePose
-from motion2video.pose.estimate import default_model, estimate_image, iter_video_frames
+from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose
+from motion2video.pose.estimate import default_model, estimate_image, iter_video_frames, landmarks_to_joints
 from motion2video.pose.h36m import blazepose_to_h36m
 from motion2video.pose.track import VideoTrack
 from motion2video.stages.people import video_track
@@ -46,6 +46,8 @@ class VideoFrames:
         fps: the video's rate.
         box: (x0, y0, side) of the square in the video's pixels.
         skipped: evaluated frames dropped because no person was found in them.
+        joints3d: (N, 17, 3) canonical joints (metres, z up) from BlazePose's world landmarks, for the mesh
+            generator's body fit.
     """
 
     images: np.ndarray
@@ -55,6 +57,7 @@ class VideoFrames:
     fps: float
     box: tuple[int, int, int]
     skipped: int
+    joints3d: np.ndarray | None = None
 
 
 def square_box(points: np.ndarray, *, margin: float = CROP_MARGIN) -> tuple[int, int, int]:
@@ -153,7 +156,9 @@ def video_frames(path: str | Path, *, size: int, targets: int = 64, stride: int 
         raise InputError("fewer than two frames with the person to evaluate", path)
     box = square_box(np.concatenate([track.body_landmarks(i) for i in kept]))
     images, points, masks = crop_frames(path, track, kept, size=size, box=box)
-    return VideoFrames(images, points, masks, np.array(kept), track.fps, box, len(wanted) - len(kept))
+    body = slice(0, NUM_BODY_LANDMARKS)
+    _, joints3d, _ = landmarks_to_joints(track.xy[kept, body], track.world[kept, body], track.visibility[kept, body])
+    return VideoFrames(images, points, masks, np.array(kept), track.fps, box, len(wanted) - len(kept), joints3d)
 
 
 def video_pairs(frames: VideoFrames) -> FramePairs:
@@ -165,6 +170,25 @@ def video_pairs(frames: VideoFrames) -> FramePairs:
     return FramePairs(np.repeat(frames.images[:1], n, axis=0), frames.images[1:], ref_pts, tgt_pts,
                       body_structures(ref_pts, size), body_structures(tgt_pts, size),
                       np.repeat(frames.masks[:1], n, axis=0), frames.masks[1:])
+
+
+def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
+    """The pairs with the correspondence of Anny fitted to every frame (:func:`stages.mesh_frames.video_mesh_track`),
+    for the mesh generator: the fitted mesh's silhouettes stand in for the masks it is given (the scores still use
+    BlazePose's person masks)."""
+    from dataclasses import replace
+
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
+    from motion2video.stages.mesh_frames import video_mesh_track
+
+    track = video_mesh_track(frames.joints3d, frames.points, size=frames.images.shape[1], person_mask=frames.masks[0])
+    band = band_width(frames.images.shape[1])
+    flows = [extend_flow(dense_flow(track.uv[0], track.visible[0], track.uv[t], track.visible[t], track.masks[t]),
+                         band) for t in range(1, len(track.uv))]
+    return replace(pairs, mesh_flow=np.stack([f.flow for f in flows]),
+                   mesh_visibility=np.stack([f.visibility for f in flows]),
+                   mesh_ref_masks=np.repeat(track.masks[:1], len(flows), axis=0),
+                   mesh_tgt_masks=track.masks[1:])
 
 
 def keypoint_distance(pred: np.ndarray, truth_points: np.ndarray, model: BlazePose | None = None
@@ -238,6 +262,9 @@ def evaluate_video_frames(model, frames: VideoFrames, *, video: str | Path, base
     metrics)."""
     pose_model = pose_model or default_model()
     pairs = video_pairs(frames)
+    if getattr(model, "kind", None) == "mesh" or any(getattr(m, "kind", None) == "mesh"
+                                                     for m in (baseline_models or {}).values()):
+        pairs = with_mesh(pairs, frames)
     evaluation = evaluate_pairs(model, pairs, domain="body", baseline_models=baseline_models)
     truth = truth_points(pairs.tgt_images, pairs.tgt_points, pose_model)
     l1, akd, missing = {}, {}, {}

@@ -26,7 +26,7 @@ from __future__ import annotations
 import json
 import os
 import zlib
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +113,11 @@ class FramePairs:
         ref_points, tgt_points: (B, K, 2) float32 control points, pixels.
         ref_structures, tgt_structures: (B, S, H, W) float32 structure maps.
         ref_masks, tgt_masks: (B, H, W) bool person silhouettes, or None when the sequences have none.
+        mesh_flow: (B, H, W, 2) float32 the mesh correspondence target -> reference (reference pixels), or
+            None when the sequences keep no mesh vertices (:func:`frames.mesh_flow.dense_flow`).
+        mesh_visibility: (B, H, W) float32 how much of each target pixel's surface the reference shows, or None.
+        mesh_ref_masks, mesh_tgt_masks: (B, H, W) bool silhouettes of the fitted mesh when they differ from the
+            person masks (a body fitted to real frames), or None (rendered data: the masks are the mesh's).
     """
 
     ref_images: np.ndarray
@@ -123,9 +128,18 @@ class FramePairs:
     tgt_structures: np.ndarray
     ref_masks: np.ndarray | None = None
     tgt_masks: np.ndarray | None = None
+    mesh_flow: np.ndarray | None = None
+    mesh_visibility: np.ndarray | None = None
+    mesh_ref_masks: np.ndarray | None = None
+    mesh_tgt_masks: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])
+
+    def subset(self, rows) -> "FramePairs":
+        """The pairs at ``rows`` (a slice or an index array)."""
+        return FramePairs(**{f.name: None if getattr(self, f.name) is None else getattr(self, f.name)[rows]
+                             for f in fields(self)})
 
 
 def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | None = None,
@@ -142,7 +156,8 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
             drawn at the crop size.
         rng: places the crops (required with ``crop``).
     Returns:
-        The pairs, structures computed for the (possibly flipped, cropped) frames.
+        The pairs, structures computed for the (possibly flipped, cropped) frames; with the mesh
+        correspondence when the sequences keep mesh vertices.
     """
     index = np.asarray(index, np.int64).reshape(-1, 3)
     s, r, t = index[:, 0], index[:, 1], index[:, 2]
@@ -186,13 +201,40 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
         if ref_mask is not None:
             ref_mask, tgt_mask = cut(ref_mask), cut(tgt_mask)
         size = crop
+    mesh_flow = mesh_vis = None
+    if seqs.vertex_uv is not None and tgt_mask is not None:
+        mesh_flow, mesh_vis = pair_mesh_flows(seqs, index, flip, origins if crop else None, tgt_mask)
     if seqs.domain == "body":
         ref_st, tgt_st = body_structures(ref_pts, size), body_structures(tgt_pts, size)
     else:
         ref_st, tgt_st = face_structures(ref_face), face_structures(tgt_face)
     masks = (None, None) if ref_mask is None else (np.ascontiguousarray(ref_mask), np.ascontiguousarray(tgt_mask))
     return FramePairs(np.ascontiguousarray(ref_img), np.ascontiguousarray(tgt_img), ref_pts, tgt_pts,
-                      ref_st, tgt_st, *masks)
+                      ref_st, tgt_st, *masks, mesh_flow=mesh_flow, mesh_visibility=mesh_vis)
+
+
+def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | None, origins: np.ndarray | None,
+                    tgt_masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh correspondence of every pair of ``index`` (B, 3) after its flip and crop (``origins`` (B, 2)
+    or None), filling the (already flipped and cropped) target silhouettes ``tgt_masks`` (B, h, w) and a band
+    around them (:func:`frames.mesh_flow.extend_flow`).
+
+    Returns:
+        flow (B, h, w, 2) float32 reference pixels, visibility (B, h, w) float32.
+    """
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow, transform_uv
+
+    flows, vis = [], []
+    for k, (s, r, t) in enumerate(np.asarray(index, np.int64)):
+        f = bool(flip[k]) if flip is not None else False
+        origin = tuple(float(v) for v in origins[k]) if origins is not None else (0.0, 0.0)
+        ref_uv = transform_uv(seqs.vertex_uv[s, r], size=seqs.image_size, flip=f, origin=origin)
+        tgt_uv = transform_uv(seqs.vertex_uv[s, t], size=seqs.image_size, flip=f, origin=origin)
+        mf = dense_flow(ref_uv, seqs.vertex_visible[s, r], tgt_uv, seqs.vertex_visible[s, t], tgt_masks[k])
+        mf = extend_flow(mf, band_width(seqs.image_size))
+        flows.append(mf.flow)
+        vis.append(mf.visibility)
+    return np.stack(flows), np.stack(vis)
 
 
 def crop_origins(rng: np.random.Generator, ref_points: np.ndarray, tgt_points: np.ndarray, *, size: int,
@@ -250,6 +292,9 @@ def save_shard(path: Path, seqs: FrameSequences) -> None:
         arrays["structure_images"] = seqs.structure_images
     if seqs.masks is not None:
         arrays["masks"] = seqs.masks
+    if seqs.vertex_uv is not None:
+        arrays["vertex_uv"] = seqs.vertex_uv.astype(np.float16)
+        arrays["vertex_visible"] = seqs.vertex_visible
     save_npz(path, arrays, compressed=True)
 
 
@@ -261,6 +306,8 @@ def load_shard(path: Path) -> FrameSequences:
                 structure_images=z["structure_images"] if "structure_images" in z.files else None,
                 identity=z["identity"], clip=z["clip"], start=z["start"],
                 masks=z["masks"] if "masks" in z.files else None,
+                vertex_uv=z["vertex_uv"] if "vertex_uv" in z.files else None,
+                vertex_visible=z["vertex_visible"] if "vertex_visible" in z.files else None,
             )
     except (OSError, KeyError, ValueError, zlib.error) as err:
         raise InputError(f"unreadable cache shard ({type(err).__name__}: {err}); delete it to regenerate",

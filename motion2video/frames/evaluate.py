@@ -25,12 +25,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import torch
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from motion2video.frames.baselines import BASELINES, run_baseline
 from motion2video.frames.data import FramePairs, evaluation_pair_index, make_pairs
 from motion2video.frames.specs import FrameSequences
-from motion2video.frames.model import FrameGenerator, generate
+from motion2video.frames.mesh_warp import MeshWarpGenerator, mesh_inputs
+from motion2video.frames.model import FrameGenerator, generate, images_to_tensor
 from motion2video.frames.warp import WarpGenerator, warp_generate
 
 METHODS = ("generator",) + BASELINES
@@ -233,12 +235,31 @@ class FrameEvaluation:
         return out
 
 
-def run_generator(model: FrameGenerator | WarpGenerator, pairs: FramePairs, *, batch_size: int = 16) -> np.ndarray:
-    """(N, H, W, 3) uint8 frames of a generator of either kind on ``pairs`` (the warp generator through its
-    inference path: person crop, generation, soft paste)."""
+def run_generator(model: FrameGenerator | WarpGenerator | MeshWarpGenerator, pairs: FramePairs, *,
+                  batch_size: int = 16) -> np.ndarray:
+    """(N, H, W, 3) uint8 frames of a generator of any kind on ``pairs`` (the warp generator through its
+    inference path: person crop, generation, soft paste; the mesh generator on the whole frames, with the
+    pairs' mesh correspondence)."""
+    if isinstance(model, MeshWarpGenerator):
+        return mesh_generate(model, pairs, batch_size=batch_size)
     if isinstance(model, WarpGenerator):
         return warp_generate(model, pairs.ref_images, pairs.ref_points, pairs.tgt_points)
     return generate(model, pairs.ref_images, pairs.ref_structures, pairs.tgt_structures, batch_size=batch_size)
+
+
+@torch.inference_mode()
+def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: int = 16) -> np.ndarray:
+    """(N, H, W, 3) uint8 frames of the mesh generator on pairs that carry their mesh correspondence."""
+    if pairs.mesh_flow is None:
+        raise ValueError("the mesh generator needs pairs with their mesh correspondence (sequences that keep "
+                         "their mesh vertices)")
+    model.eval()
+    out = []
+    for i in range(0, len(pairs), batch_size):
+        part = pairs.subset(slice(i, i + batch_size))
+        x = model(images_to_tensor(part.ref_images), *mesh_inputs(part), torch.from_numpy(part.tgt_structures))
+        out.append((x.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy())
+    return np.concatenate(out)
 
 
 def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePairs, *, domain: str,

@@ -136,17 +136,20 @@ def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, 
 
     people = identities("test", spec.num_identities, seed=spec.seed)
     pool = background_images()
-    images, points, masks, heads, names, starts, who = [], [], [], [], [], [], []
+    images, points, masks, heads, names, starts, who, uvs, seen = [], [], [], [], [], [], [], [], []
     for name, motion in clips:
         for frames in window_frames(motion.num_frames, motion.fps, spec):
             i = len(images)
             rng = np.random.default_rng([spec.seed, 3, i])
             window = Motion(motion.joints[frames], motion.fps, source=motion.source)
-            out = render_body_window(window, people[i % len(people)], rng, pool, spec.image_size, head=True)
+            out = render_body_window(window, people[i % len(people)], rng, pool, spec.image_size, head=True,
+                                     vertices=True)
             images.append(out.images)
             points.append(out.points)
             masks.append(out.masks)
             heads.append(out.head_masks)
+            uvs.append(out.vertex_uv.astype(np.float16))
+            seen.append(out.vertex_visible)
             names.append(name)
             starts.append(int(frames[0]))
             who.append(i % len(people))
@@ -154,5 +157,6 @@ def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, 
                 on_window(1)
     seqs = FrameSequences(domain="body", images=np.stack(images), points=np.stack(points), structure_images=None,
                           identity=np.asarray(who, np.int64), clip=np.asarray(names),
-                          start=np.asarray(starts, np.int64), masks=np.stack(masks))
+                          start=np.asarray(starts, np.int64), masks=np.stack(masks), vertex_uv=np.stack(uvs),
+                          vertex_visible=np.stack(seen))
     return SequencesWithHeads(seqs, np.stack(heads))

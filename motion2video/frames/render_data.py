@@ -143,15 +143,15 @@ def identity_vertex_colors(identity: Identity, palette: np.ndarray) -> np.ndarra
 
 
 def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
-    """One body sequence: returns (images (T, S, S, 3) uint8, points (T, 17, 2) float32, masks (T, S, S) bool,
+    """One body sequence: returns (a :class:`BodyWindow`, with the mesh vertices when the spec asks for them,
     clip index, start)."""
-    rendered, ci, start = _body_sequence(source, rng, identity)
-    return rendered.images, rendered.points, rendered.masks, ci, start
+    return _body_sequence(source, rng, identity, vertices=source.spec.vertices)
 
 
 def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity, *,
-                   head: bool = False) -> tuple["BodyWindow", int, int]:
-    """One body sequence as a :class:`BodyWindow` (with head masks when ``head``), its clip index and start."""
+                   head: bool = False, vertices: bool = False) -> tuple["BodyWindow", int, int]:
+    """One body sequence as a :class:`BodyWindow` (with head masks when ``head``, mesh vertices when
+    ``vertices``), its clip index and start."""
     from motion2video.core.motion import Motion
 
     spec = source.spec
@@ -160,7 +160,9 @@ def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: I
     times = window_times(rng, clip.num_frames, clip.fps, frames=spec.frames_per_sequence,
                          seconds=spec.window_seconds)
     motion = Motion(clip.joints[times], clip.fps, source=clip.source)
-    return render_body_window(motion, identity, rng, source.backgrounds, spec.image_size, head=head), ci, int(times[0])
+    window = render_body_window(motion, identity, rng, source.backgrounds, spec.image_size, head=head,
+                                vertices=vertices)
+    return window, ci, int(times[0])
 
 
 @dataclass
@@ -184,11 +186,14 @@ def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | N
         for i in range(spec.num_sequences):
             rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
             ident_index = i % spec.num_identities
-            out, ci, start = _body_sequence(source, rng, source.identities[ident_index], head=True)
+            out, ci, start = _body_sequence(source, rng, source.identities[ident_index], head=True,
+                                            vertices=spec.vertices)
+            mesh = {} if not spec.vertices else dict(vertex_uv=out.vertex_uv[None].astype(np.float16),
+                                                     vertex_visible=out.vertex_visible[None])
             parts.append(FrameSequences(domain="body", images=out.images[None], points=out.points[None],
                                         structure_images=None, identity=np.asarray([ident_index], np.int64),
                                         clip=np.asarray([source.clip_names[ci]]),
-                                        start=np.asarray([start], np.int64), masks=out.masks[None]))
+                                        start=np.asarray([start], np.int64), masks=out.masks[None], **mesh))
             heads.append(out.head_masks)
             if on_sequence is not None:
                 on_sequence(1)
@@ -200,19 +205,23 @@ def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | N
 @dataclass
 class BodyWindow:
     """A rendered body window: images (T, S, S, 3) uint8, points (T, 17, 2) float32 projected joints,
-    masks (T, S, S) bool silhouettes, head_masks (T, S, S) bool visible head or None."""
+    masks (T, S, S) bool silhouettes, head_masks (T, S, S) bool visible head or None; vertex_uv (T, V, 2)
+    float32 and vertex_visible (T, V) bool the mesh vertices' pixels and front-surface flags, or None."""
 
     images: np.ndarray
     points: np.ndarray
     masks: np.ndarray
     head_masks: np.ndarray | None = None
+    vertex_uv: np.ndarray | None = None
+    vertex_visible: np.ndarray | None = None
 
 
 def render_body_window(motion, identity: Identity, rng: np.random.Generator, backgrounds: list[np.ndarray],
-                       size: int, *, head: bool = False) -> BodyWindow:
+                       size: int, *, head: bool = False, vertices: bool = False) -> BodyWindow:
     """Render the frames of ``motion`` (canonical 3D) as ``identity`` the way the training data is made: a
     background crop, camera yaw and elevation and a light level drawn from ``rng`` (in that order), the
-    camera fitted over the window; ``head`` also renders the visible head masks."""
+    camera fitted over the window; ``head`` also renders the visible head masks, ``vertices`` keeps the mesh
+    vertices' pixels and visibility (the mesh generator's correspondence)."""
     from motion2video.core.camera import project
     from renderers.body import BodyStyle
     from renderers.registry import renderer_for
@@ -228,10 +237,10 @@ def render_body_window(motion, identity: Identity, rng: np.random.Generator, bac
     look["vertex_colors"] = identity_vertex_colors(identity, BodyStyle(size=(size, size), **look).region_colors())
     gain = light_jitter(rng)
     with renderer_for("body3d", "mesh", size=size, **look) as renderer:
-        out = renderer.renderer.render_with_masks(motion, head=head)
+        out = renderer.renderer.render_with_masks(motion, head=head, vertices=vertices)
     images = relight(out.frames, out.masks, gain)
     points = project(motion.joints, out.camera)[..., :2].astype(np.float32)  # (T, 17, 2)
-    return BodyWindow(images, points, out.masks, out.head_masks)
+    return BodyWindow(images, points, out.masks, out.head_masks, out.vertex_uv, out.vertex_visible)
 
 
 def render_shard(source: SequenceSource, shard: int, *,
@@ -242,13 +251,17 @@ def render_shard(source: SequenceSource, shard: int, *,
     last = min(spec.num_sequences, first + spec.sequences_per_shard)
     if first >= last:
         raise ValueError(f"shard {shard} is past the end of the split ({spec.num_shards} shards)")
-    images, points, structs, ident, clips, starts, masks = [], [], [], [], [], [], []
+    images, points, structs, ident, clips, starts, masks, uvs, seen = [], [], [], [], [], [], [], [], []
     for i in range(first, last):
         rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
         ident_index = i % spec.num_identities
         identity = source.identities[ident_index]
         if spec.domain == "body":
-            im, pts, mk, ci, start = render_body_sequence(source, rng, identity)
+            window, ci, start = render_body_sequence(source, rng, identity)
+            im, pts, mk = window.images, window.points, window.masks
+            if spec.vertices:
+                uvs.append(window.vertex_uv.astype(np.float16))
+                seen.append(window.vertex_visible)
         else:
             im, pts, st, mk, ci, start = render_face_sequence(source, rng, identity)
             structs.append(st)
@@ -265,6 +278,7 @@ def render_shard(source: SequenceSource, shard: int, *,
         structure_images=np.stack(structs) if structs else None,
         identity=np.asarray(ident, np.int64), clip=np.asarray(clips), start=np.asarray(starts, np.int64),
         masks=np.stack(masks),
+        vertex_uv=np.stack(uvs) if uvs else None, vertex_visible=np.stack(seen) if seen else None,
     )
 
 

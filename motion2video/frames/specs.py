@@ -42,6 +42,8 @@ class FrameSequences:
         clip: (N,) str, the capture each sequence comes from.
         start: (N,) int64, the first source frame of each sequence.
         masks: (N, T, H, W) bool silhouettes of the person (rendered), or None (old caches).
+        vertex_uv: (N, T, V, 2) float16 the body mesh vertices' pixel positions, or None.
+        vertex_visible: (N, T, V) bool, each vertex is the front surface (:mod:`frames.mesh_flow`), or None.
     """
 
     domain: str
@@ -52,9 +54,17 @@ class FrameSequences:
     clip: np.ndarray
     start: np.ndarray
     masks: np.ndarray | None = None
+    vertex_uv: np.ndarray | None = None
+    vertex_visible: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n, t, h, w, c = self.images.shape
+        if (self.vertex_uv is None) != (self.vertex_visible is None):
+            raise ValueError("vertex_uv and vertex_visible come together")
+        if self.vertex_uv is not None and (self.vertex_uv.shape[:2] != (n, t) or self.vertex_uv.shape[-1] != 2
+                                           or self.vertex_visible.shape != self.vertex_uv.shape[:3]):
+            raise ValueError(f"vertex_uv must be (N, T, V, 2) and vertex_visible (N, T, V) matching images, got "
+                             f"{self.vertex_uv.shape} and {self.vertex_visible.shape}")
         if c != 3 or h != w:
             raise ValueError(f"images must be (N, T, S, S, 3), got {self.images.shape}")
         if self.points.shape[:2] != (n, t) or self.points.shape[-1] != 2:
@@ -94,6 +104,7 @@ class FrameSequences:
             raise ValueError("nothing to concatenate")
         face = parts[0].structure_images is not None
         masked = all(p.masks is not None for p in parts)
+        meshed = all(p.vertex_uv is not None for p in parts)
         return FrameSequences(
             domain=parts[0].domain,
             images=np.concatenate([p.images for p in parts]),
@@ -103,6 +114,8 @@ class FrameSequences:
             clip=np.concatenate([p.clip for p in parts]),
             start=np.concatenate([p.start for p in parts]),
             masks=np.concatenate([p.masks for p in parts]) if masked else None,
+            vertex_uv=np.concatenate([p.vertex_uv for p in parts]) if meshed else None,
+            vertex_visible=np.concatenate([p.vertex_visible for p in parts]) if meshed else None,
         )
 
 
@@ -296,6 +309,8 @@ class DatasetSpec:
         window_seconds: each sequence spreads its frames evenly over this much of a capture.
         sequences_per_shard: sequences per npz shard.
         seed: base seed.
+        vertices: body: also keep the mesh vertices' pixels and visibility of every frame (the mesh
+            generator's correspondence; about 69 KB per frame).
     """
 
     domain: str = "body"
@@ -307,8 +322,11 @@ class DatasetSpec:
     window_seconds: float = 1.2
     sequences_per_shard: int = 16
     seed: int = 0
+    vertices: bool = False
 
     def __post_init__(self) -> None:
+        if self.vertices and self.domain != "body":
+            raise ValueError("vertices are kept for body splits only")
         if self.domain not in ("body", "face"):
             raise ValueError(f"domain must be body or face, got {self.domain!r}")
         if self.split not in SPLITS:
@@ -323,7 +341,10 @@ class DatasetSpec:
         return -(-self.num_sequences // self.sequences_per_shard)
 
     def key(self) -> str:
-        blob = json.dumps({**asdict(self), "version": DATA_VERSION}, sort_keys=True).encode()
+        fields = asdict(self)
+        if not self.vertices:  # the key of a split without vertices is what it was before the field existed
+            del fields["vertices"]
+        blob = json.dumps({**fields, "version": DATA_VERSION}, sort_keys=True).encode()
         return f"{self.domain}-{self.image_size}-{self.split}-{hashlib.sha1(blob).hexdigest()[:10]}"
 
 

@@ -24,6 +24,7 @@ from motion2video.frames.specs import FrameSequences
 from motion2video.frames.data import make_pairs, sample_pair_index, structure_channels
 from motion2video.frames.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
                                        images_to_tensor, reconstruction_loss)
+from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 
 
@@ -51,6 +52,9 @@ class TrainFramesConfig:
         edge_weight: weight of the L1 between Sobel gradients of the output and the truth inside the
             target person's silhouette (needs sequences with masks); it pushes towards sharp people.
         person_weight: weight of an extra L1 inside the target person's silhouette.
+        silhouette_erosion: mesh model: half of the pairs get their target silhouette input eroded by 1 to this
+            many pixels (a fitted body thinner than the person: the generator learns to carry the person past
+            the mesh's silhouette, along the flow's band); 0 = off.
     """
 
     steps: int = 3000
@@ -67,6 +71,7 @@ class TrainFramesConfig:
     log_every: int = 25
     seed: int = 0
     model_kind: str = "analogy"
+    silhouette_erosion: int = 0
     edge_weight: float = 0.0
     person_weight: float = 0.0
 
@@ -77,8 +82,8 @@ class TrainFramesConfig:
             raise ValueError("lr must be > 0")
         if self.crop < 0:
             raise ValueError("crop must be >= 0")
-        if self.model_kind not in ("analogy", "warp"):
-            raise ValueError(f"model_kind must be analogy or warp, got {self.model_kind!r}")
+        if self.model_kind not in ("analogy", "warp", "mesh"):
+            raise ValueError(f"model_kind must be analogy, warp or mesh, got {self.model_kind!r}")
 
 
 @dataclass
@@ -102,6 +107,17 @@ def _batch_tensors(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | N
     p_ref = torch.from_numpy(pairs.ref_structures)  # (B, S, H, W)
     p_tgt = torch.from_numpy(pairs.tgt_structures)
     return x_ref, x_tgt, p_ref, p_tgt, pairs
+
+
+def eroded_silhouettes(masks: np.ndarray, rng: np.random.Generator, most: int) -> np.ndarray:
+    """(B, H, W) bool silhouettes, half of them (drawn with ``rng``) eroded by 1 to ``most`` pixels."""
+    from scipy.ndimage import binary_erosion
+
+    out = np.array(masks, bool, copy=True)
+    for k in range(len(out)):
+        if rng.random() < 0.5:
+            out[k] = binary_erosion(out[k], iterations=int(rng.integers(1, most + 1)))
+    return out
 
 
 def sobel(x: torch.Tensor) -> torch.Tensor:
@@ -172,13 +188,17 @@ def train_frames(
             fresh optimiser and schedule. Ignored when resuming.
     """
     output = Path(output)
-    warp = config.model_kind == "warp"
-    if model_config is None and warp:
+    warp = config.model_kind in ("warp", "mesh")
+    if model_config is None and config.model_kind == "mesh":
+        model_config = MeshWarpConfig(image_size=seqs.image_size, structure_channels=structure_channels("body"))
+    elif model_config is None and warp:
         model_config = WarpGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
                                            structure_channels=structure_channels(seqs.domain))
     elif model_config is None:
         model_config = FrameGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
                                             structure_channels=structure_channels(seqs.domain))
+    if config.model_kind == "mesh" and seqs.vertex_uv is None:
+        raise ValueError("the mesh generator trains on sequences that keep their mesh vertices (DatasetSpec.vertices)")
     if (config.edge_weight or config.person_weight) and seqs.masks is None:
         raise ValueError("edge_weight / person_weight need sequences with person masks")
     factor = 2 ** (len(model_config.channels) - 1) if not warp else 8
@@ -261,7 +281,11 @@ def train_frames(
         for group in optimizer.param_groups:
             group["lr"] = lr
 
-        if isinstance(model, WarpGenerator):
+        if isinstance(model, MeshWarpGenerator):
+            if config.silhouette_erosion:
+                pairs.mesh_tgt_masks = eroded_silhouettes(pairs.tgt_masks, rng, config.silhouette_erosion)
+            pred = model(x_ref, *mesh_inputs(pairs), p_tgt)
+        elif isinstance(model, WarpGenerator):
             pred = model(x_ref, torch.from_numpy(pairs.ref_points), torch.from_numpy(pairs.tgt_points), p_tgt)
         else:
             pred = model(x_ref, p_ref, p_tgt)  # (B, 3, H, W)

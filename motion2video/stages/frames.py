@@ -28,6 +28,40 @@ def is_warp(net) -> bool:
     return getattr(net, "kind", "analogy") == "warp"
 
 
+def is_mesh(net) -> bool:
+    """Whether ``net`` is the mesh generator (:mod:`motion2video.frames.mesh_warp`), which takes the body mesh's
+    correspondence (:mod:`motion2video.stages.mesh_frames`) and frames of any size."""
+    return getattr(net, "kind", "analogy") == "mesh"
+
+
+def mesh_setup(net, reference: Reference, structures: Structures):
+    """The :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
+    reference person's Anny body (the reference pose file's phenotype, Anny's defaults otherwise) in the
+    reference pose and in every target pose."""
+    from motion2video.core.errors import InputError
+    from motion2video.stages.mesh_frames import mesh_video
+
+    if structures.domain != "body" or structures.placement is None:
+        raise InputError("the mesh frame generator makes body frames from a body motion")
+    n = structures.num_targets
+    phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
+    return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
+                      output_size=structures.size, model_size=net.config.image_size,
+                      person_mask=None if phenotype else reference_person_mask(reference.image))
+
+
+def reference_person_mask(image: np.ndarray) -> np.ndarray | None:
+    """(H, W) bool the person BlazePose segments in a reference image, or None when it finds nobody."""
+    from motion2video.core.errors import InputError
+    from motion2video.pose.estimate import default_model, estimate_image
+
+    try:
+        pose = estimate_image(image, model=default_model())
+    except InputError:  # nobody found: no width fit
+        return None
+    return pose.landmarks.person_mask(image.shape[1], image.shape[0]) > 0.5
+
+
 def default_generator_threads() -> int:
     """Half the CPU cores, 1 to 4. On the 2-core machines this was built on, two threads were slower than
     one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench_pipeline.py``."""
@@ -99,6 +133,16 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
     (:class:`~motion2video.frames.warp.WarpGenerator`) goes through its ``encode_reference`` / ``decode``
     at the structures' size instead (the person generated at the model's size, pasted into the reference)."""
     net = getattr(model, "model", model)
+    if is_mesh(net):
+        from motion2video.stages.mesh_frames import generate_mesh_frames
+
+        n = structures.num_targets
+        with torch_threads(threads):
+            video = mesh_setup(net, reference, structures)
+            frames = generate_mesh_frames(net, reference.image, video, np.arange(n), batch_size=batch_size)
+        to, k, tf = structures.observed, structures.samples, structures.horizon
+        size = structures.size
+        return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
     if is_warp(net):
         n = structures.num_targets
         with torch_threads(threads):
@@ -138,7 +182,13 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
     """
     net = getattr(model, "model", model)
     warp = is_warp(net)
-    if warp:  # the warp generator works at any frame size: its person crop is resized to the model's size
+    mesh = is_mesh(net)
+    if mesh:  # the meshes of every target row, once
+        from motion2video.stages.mesh_frames import generate_mesh_frames
+
+        with torch_threads(threads):
+            video = mesh_setup(net, reference, structures)
+    elif warp:  # the warp generator works at any frame size: its person crop is resized to the model's size
         with torch_threads(threads):
             state = net.encode_reference(reference.image, structures.points[0])
     else:
@@ -152,7 +202,9 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
         unique, inverse = np.unique(rows, return_inverse=True)
         t0 = time.perf_counter()
         with torch_threads(threads):
-            if warp:
+            if mesh:
+                frames = generate_mesh_frames(net, reference.image, video, unique - 1, batch_size=batch_size)
+            elif warp:
                 frames = net.decode(state, structures.points[unique], batch_size=batch_size)
             else:
                 frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),

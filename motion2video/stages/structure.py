@@ -17,7 +17,7 @@ The frame generator's structures (:func:`render_structures`) follow its training
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Iterator
 
 import numpy as np
@@ -105,6 +105,8 @@ class BodyPlacement:
         world_observed, world_futures: (To, 17, 3) / (K, Tf, 17, 3) the followed, front-facing world joints
             the camera looked at (None for 2D models), for the mesh video.
         camera: that camera (None for 2D models), before the 2D similarity.
+        scale, shift: the 2D similarity from the camera's (or the 2D framing's) pixels to the generator's:
+            ``pixel * scale + shift``.
     """
 
     observed: np.ndarray
@@ -113,6 +115,8 @@ class BodyPlacement:
     world_observed: np.ndarray | None = None
     world_futures: np.ndarray | None = None
     camera: object | None = None
+    scale: float = 1.0
+    shift: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
 
 def place_body(observed: np.ndarray, futures: np.ndarray, *, size: int,
@@ -161,7 +165,8 @@ def place_body(observed: np.ndarray, futures: np.ndarray, *, size: int,
     return BodyPlacement(
         observed=pts[:to], futures=pts[to:].reshape(k, tf, 17, 2), reference=reference_points,
         world_observed=None if world is None else world[:to],
-        world_futures=None if world is None else world[to:].reshape(k, tf, 17, 3), camera=camera)
+        world_futures=None if world is None else world[to:].reshape(k, tf, 17, 3), camera=camera,
+        scale=float(scale), shift=np.asarray(shift, np.float64).reshape(2))
 
 
 @dataclass(frozen=True)

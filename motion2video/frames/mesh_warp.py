@@ -1,0 +1,204 @@
+"""A body frame generator that moves the reference person through a body mesh.
+
+The keypoint warp (:mod:`motion2video.frames.warp`) guesses a dense flow from 2D joints: per-limb rigid
+transforms blended by soft part masks. 2D joints carry neither limb twist nor which side of a limb faces the
+camera, so moved limbs tear and blur. Here the flow comes from the correspondence of one body mesh rendered in
+the reference pose and in the target pose (:mod:`motion2video.frames.mesh_flow`), as in Liquid Warping GAN
+(Liu et al., ICCV 2019) and Dense Pose Transfer (Neverova et al., ECCV 2018):
+
+1. *Background.* The reference person's silhouette (grown by :data:`PLATE_GROW_PX`) is removed from the
+   reference and filled by OpenCV's Telea inpainting: the plate every target frame is composited over.
+2. *Prior.* Inside the target silhouette the reference is sampled along the mesh flow; the mesh's visibility
+   map says where the reference shows that surface point.
+3. *Network.* A small U-Net sees the prior frame, the plate, the target's joint heatmaps, silhouette and
+   visibility, and the reference's encoder features warped along the flow at every scale. It predicts
+   corrections (all zero at initialisation, so the untrained model is the prior): the person's alpha (hair
+   and clothes the mesh does not have), the visibility, a flow residual, and an inpainting for what the
+   reference does not show (the back of the head, the hidden side of a limb), painted as a change to the
+   warped colour.
+
+Output = ``alpha * (v * warped + (1 - v) * inpainting) + (1 - alpha) * plate``.
+
+Images in the network are float (B, 3, H, W) in [0, 1]; flows are (B, H, W, 2) reference pixel coordinates
+(x right, y down, pixel centres at integer + 0.5).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from motion2video.frames.warp import FLOW_UNIT, SAMPLE_MODES, Pyramid, UpDecoder, _conv, warp_image
+
+PLATE_GROW_PX = 3  # the reference silhouette is grown by this many pixels (at 128 px) before inpainting
+ALPHA_PRIOR = 4.0  # logit of the person's alpha from the target silhouette: +-this
+VISIBILITY_PRIOR = 3.0  # logit of the visibility from the mesh's visibility map: (2 v - 1) x this
+OUT_CHANNELS = 7  # alpha, visibility, inpainting RGB, flow residual (x, y)
+
+
+@dataclass(frozen=True)
+class MeshWarpConfig:
+    """Architecture of the mesh generator.
+
+    Attributes:
+        domain: ``"body"`` (the mesh is Anny's body).
+        image_size: the model's square size; a multiple of net_scale * 2**(levels - 1).
+        structure_channels: channels of the target's joint structure map (17 heatmaps + 16 limb maps).
+        channels: feature channels per network level (level 0 at 1 / net_scale of the image size).
+        net_scale: the network's level 0 works at 1 / net_scale of the image size (1 or 2); the warp and the
+            composite are at full resolution.
+        sample_mode: how the reference is sampled along the flow, ``"bilinear"`` or ``"bicubic"``.
+    """
+
+    domain: str = "body"
+    image_size: int = 128
+    structure_channels: int = 33
+    channels: tuple[int, ...] = (16, 32, 64, 96)
+    net_scale: int = 2
+    sample_mode: str = "bicubic"
+
+    def __post_init__(self) -> None:
+        if self.domain != "body":
+            raise ValueError(f"the mesh generator makes body frames only, got domain {self.domain!r}")
+        if len(self.channels) < 2:
+            raise ValueError("channels needs at least two levels")
+        if self.net_scale not in (1, 2):
+            raise ValueError(f"net_scale must be 1 or 2, got {self.net_scale}")
+        if self.sample_mode not in SAMPLE_MODES:
+            raise ValueError(f"sample_mode must be one of {SAMPLE_MODES}, got {self.sample_mode!r}")
+        factor = self.net_scale * 2 ** (len(self.channels) - 1)
+        if self.image_size < factor or self.image_size % factor:
+            raise ValueError(f"image_size {self.image_size} must be a positive multiple of {factor}")
+
+    def to_json(self) -> str:
+        return json.dumps(dataclasses.asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_dict(cls, values: dict) -> "MeshWarpConfig":
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(values) - known
+        if unknown:
+            raise ValueError(f"MeshWarpConfig has no field(s) {sorted(unknown)}")
+        values = dict(values)
+        if "channels" in values:
+            values["channels"] = tuple(int(c) for c in values["channels"])
+        return cls(**values)
+
+
+def mesh_plate(ref_image: torch.Tensor, ref_mask: torch.Tensor) -> torch.Tensor:
+    """The reference frame with its person removed: the silhouette grown by :data:`PLATE_GROW_PX` (scaled
+    with the image size), filled by OpenCV's Telea inpainting (not learned, no gradient).
+
+    Args:
+        ref_image: (B, 3, H, W) in [0, 1]; ref_mask: (B, 1, H, W) or (B, H, W) person silhouette in [0, 1].
+    Returns:
+        (B, 3, H, W) in [0, 1].
+    """
+    import cv2
+
+    b, _, h, w = ref_image.shape
+    grow = max(1, round(PLATE_GROW_PX * w / 128))
+    kernel = np.ones((2 * grow + 1, 2 * grow + 1), np.uint8)
+    with torch.no_grad():
+        images = (ref_image.detach().clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).cpu().numpy()
+        masks = (ref_mask.detach().reshape(b, h, w) > 0.5).cpu().numpy().astype(np.uint8)
+    out = np.empty_like(images)
+    for i in range(b):
+        out[i] = cv2.inpaint(np.ascontiguousarray(images[i]), cv2.dilate(masks[i], kernel), 3, cv2.INPAINT_TELEA)
+    return torch.from_numpy(out).permute(0, 3, 1, 2).to(ref_image.dtype).div(255.0)
+
+
+@dataclass
+class MeshWarpOutput:
+    """What :meth:`MeshWarpGenerator.forward_parts` computes (all (B, ., H, W) unless said).
+
+    Attributes:
+        image: the output frame, about [0, 1].
+        warped: the reference sampled along the final flow.
+        inpainting: the painted RGB of the person.
+        visibility: (B, 1, H, W) weight of ``warped`` inside the person.
+        alpha: (B, 1, H, W) the person's coverage.
+        flow: (B, H, W, 2) the final backward flow, reference pixels.
+        plate: (B, 3, H, W) the background without the reference person.
+    """
+
+    image: torch.Tensor
+    warped: torch.Tensor
+    inpainting: torch.Tensor
+    visibility: torch.Tensor
+    alpha: torch.Tensor
+    flow: torch.Tensor
+    plate: torch.Tensor
+
+
+class MeshWarpGenerator(nn.Module):
+    """Reference frame + mesh correspondence -> target frame.
+
+    forward(ref_image (B, 3, H, W) in [0, 1], ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility
+    (B, 1, H, W), silhouette (B, 1, H, W), tgt_structure (B, S, H, W)) -> (B, 3, H, W) about [0, 1].
+    """
+
+    kind = "mesh"
+
+    def __init__(self, config: MeshWarpConfig) -> None:
+        super().__init__()
+        self.config = config
+        ch = config.channels
+        self.image_encoder = Pyramid(3, ch)
+        self.encoder = Pyramid(3 + 3 + config.structure_channels + 3, ch)
+        self.fuse = nn.ModuleList([_conv(2 * c, c) for c in ch])
+        self.decoder = UpDecoder(ch, OUT_CHANNELS)
+        nn.init.zeros_(self.decoder.head.weight)
+        nn.init.zeros_(self.decoder.head.bias)
+
+    def forward_parts(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor,
+                      visibility: torch.Tensor, silhouette: torch.Tensor, tgt_structure: torch.Tensor,
+                      plate: torch.Tensor | None = None) -> MeshWarpOutput:
+        b, _, h, w = ref_image.shape
+        dtype = ref_image.dtype
+        flow, visibility, silhouette = flow.to(dtype), visibility.to(dtype), silhouette.to(dtype)
+        if plate is None:
+            plate = mesh_plate(ref_image, ref_mask)
+        mode = self.config.sample_mode
+        prior_person = warp_image(ref_image, flow, mode)
+        prior = silhouette * prior_person + (1.0 - silhouette) * plate
+        net_in = torch.cat([prior * 2.0 - 1.0, plate * 2.0 - 1.0, tgt_structure.to(dtype), silhouette, visibility,
+                            warp_image(ref_mask.to(dtype), flow)], dim=1)
+        scale = self.config.net_scale
+        ref_in = ref_image * 2.0 - 1.0
+        if scale > 1:
+            net_in, ref_in = F.avg_pool2d(net_in, scale), F.avg_pool2d(ref_in, scale)
+        ref_feats = [warp_image(f, flow) for f in self.image_encoder(ref_in)]
+        feats = [fuse(torch.cat([a, r], dim=1)) for fuse, a, r in zip(self.fuse, self.encoder(net_in), ref_feats)]
+        out = self.decoder(feats)
+        if scale > 1:
+            out = F.interpolate(out, size=(h, w), mode="bilinear", align_corners=False)
+        alpha = torch.sigmoid(ALPHA_PRIOR * (2.0 * silhouette - 1.0) + out[:, 0:1])
+        vis = torch.sigmoid(VISIBILITY_PRIOR * (2.0 * visibility - 1.0) + out[:, 1:2])
+        final_flow = flow + out[:, 5:7].permute(0, 2, 3, 1) * (FLOW_UNIT * w)
+        warped = warp_image(ref_image, final_flow, mode)
+        inpainting = torch.sigmoid(out[:, 2:5] + torch.logit(warped.clamp(0.02, 0.98)))
+        person = vis * warped + (1.0 - vis) * inpainting
+        image = alpha * person + (1.0 - alpha) * plate
+        return MeshWarpOutput(image=image, warped=warped, inpainting=inpainting, visibility=vis, alpha=alpha,
+                              flow=final_flow, plate=plate)
+
+    def forward(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor, visibility: torch.Tensor,
+                silhouette: torch.Tensor, tgt_structure: torch.Tensor) -> torch.Tensor:
+        return self.forward_parts(ref_image, ref_mask, flow, visibility, silhouette, tgt_structure).image
+
+
+def mesh_inputs(pairs) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The mesh generator's inputs besides the images, from :class:`frames.data.FramePairs` that carry the mesh
+    correspondence: ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility (B, 1, H, W), silhouette (B, 1, H, W) (the
+    fitted mesh's silhouettes when the pairs carry them, else the person masks)."""
+    ref = pairs.ref_masks if pairs.mesh_ref_masks is None else pairs.mesh_ref_masks
+    tgt = pairs.tgt_masks if pairs.mesh_tgt_masks is None else pairs.mesh_tgt_masks
+    return (torch.from_numpy(np.ascontiguousarray(ref))[:, None].float(), torch.from_numpy(pairs.mesh_flow),
+            torch.from_numpy(pairs.mesh_visibility)[:, None], torch.from_numpy(np.ascontiguousarray(tgt))[:, None].float())

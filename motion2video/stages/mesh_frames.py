@@ -1,0 +1,309 @@
+"""Generate body frames through a body mesh: the mesh generator's stage.
+
+The keypoint generators take 2D joints; the mesh generator (:mod:`motion2video.frames.mesh_warp`) takes the
+correspondence of one body mesh in the reference pose and in each target pose. This stage makes that mesh
+for a video:
+
+1. **The reference person's body.** Anny with the reference's phenotype (``pose.identity`` of the reference
+   pose file, Anny's defaults otherwise), in the reference pose. The pose file gives 2D joints; they are lifted
+   to 3D through the placement's camera at the depths of the first observed pose (each joint keeps the depth
+   the clip's first frame has there), which is exact when the reference shows the first observed pose and a
+   close guess otherwise.
+2. **Every target pose on that body.** Anny's inverse kinematics follows the driving joints' directions, so
+   the target meshes keep the motion's joint angles with the reference person's proportions (one scale for
+   the whole video, fitted to leg + torso length; feet flat on the floor near it).
+3. **Correspondence.** Each mesh is rendered (depth and silhouette) through the placement's camera; every
+   vertex's pixel and front-surface flag go through the placement's 2D similarity onto the reference picture
+   and into the generator's person crop; :func:`motion2video.frames.mesh_flow.dense_flow` makes the flow.
+
+The crop and the paste follow the keypoint warp generator's (:func:`motion2video.frames.warp.person_crop`,
+:func:`~motion2video.frames.warp.paste_mask`): the person is generated at the model's size inside a square crop
+holding both poses and pasted back with a feathered mask, so the background keeps its resolution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from motion2video.core.errors import InputError
+
+MASK_GREY = (200, 200, 200)  # the colour the correspondence renders use (only depth and silhouette are read)
+# Anny "weight" values tried when fitting the body's width to the reference person's silhouette (fit_width).
+WEIGHT_GRID = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
+
+
+@dataclass
+class MeshTrack:
+    """A body mesh seen over frames, in the pixels of one image.
+
+    Attributes:
+        uv: (N, V, 2) float32 vertex pixel positions.
+        visible: (N, V) bool front-surface flags.
+        masks: (N, h, w) bool silhouettes.
+    """
+
+    uv: np.ndarray
+    visible: np.ndarray
+    masks: np.ndarray
+
+
+def lift_reference(points: np.ndarray, guide: np.ndarray, camera, scale: float, shift: np.ndarray) -> np.ndarray:
+    """3D joints whose projection is the reference pose, at the depths of a guide pose.
+
+    Args:
+        points: (17, 2) reference joints in output pixels.
+        guide: (17, 3) world joints (the first observed pose, placed).
+        camera: the placement's PinholeCamera; its pixels map to output pixels by ``pixel * scale + shift``.
+        scale, shift: that 2D similarity (float, (2,)).
+    Returns:
+        (17, 3) world joints.
+    """
+    from motion2video.core.camera import project
+
+    depth = project(guide, camera)[:, 2]  # (17,)
+    pix = (np.asarray(points, np.float64) - np.asarray(shift, np.float64)) / scale  # camera pixels
+    f = camera.focal
+    x = (pix[:, 0] - 0.5 * camera.width) * depth / f
+    y = (0.5 * camera.height - pix[:, 1]) * depth / f
+    right, up, forward = camera.axes()
+    return (np.asarray(camera.position, np.float64)[None] + x[:, None] * right + y[:, None] * up
+            + depth[:, None] * forward)
+
+
+def affine_matrix(a: float, b: np.ndarray) -> np.ndarray:
+    """(2, 3) OpenCV matrix of ``x' = a x + b`` in this project's pixel convention (centres at integer + 0.5)
+    for ``cv2.warpAffine``, which works on pixel indices."""
+    off = a * 0.5 + np.asarray(b, np.float64) - 0.5
+    return np.array([[a, 0.0, off[0]], [0.0, a, off[1]]])
+
+
+def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
+                      size: int, progress=None) -> MeshTrack:
+    """Pose Anny on ``joints`` and render its correspondence.
+
+    Args:
+        joints: (N, 17, 3) world joints (one body: a single size is fitted over all frames).
+        phenotype: Anny phenotype values.
+        camera: the render camera (PinholeCamera).
+        transform: ``(a, b)``: the camera's pixels map to the track's by ``x * a + b``; ``a`` a float and ``b``
+            (2,), or per frame: ``a`` (N,) and ``b`` (N, 2).
+        size: the track's image side (square).
+        progress: called with the number of frames done.
+    Returns:
+        The :class:`MeshTrack`.
+    """
+    import cv2
+
+    from motion2video.core.camera import project
+    from renderers import anny_model
+    from renderers.body import pose_anny_from_joints, posed_vertices
+    from renderers.mesh import MeshRenderer, vertex_visibility
+
+    n = len(joints)
+    scales = np.broadcast_to(np.asarray(transform[0], np.float64), (n,))
+    shifts = np.broadcast_to(np.asarray(transform[1], np.float64), (n, 2))
+    pose = pose_anny_from_joints(np.asarray(joints, np.float64), phenotype=phenotype)
+    faces = anny_model.triangles()
+    renderer = MeshRenderer(camera.width, camera.height)
+    uv, visible, masks = None, None, np.zeros((n, size, size), bool)
+    try:
+        for start, verts in posed_vertices(pose):
+            if uv is None:
+                uv = np.zeros((n, verts.shape[1], 2), np.float32)
+                visible = np.zeros((n, verts.shape[1]), bool)
+            for k, v in enumerate(verts):
+                i = start + k
+                out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
+                uvz = project(v, camera)
+                visible[i] = vertex_visibility(uvz, out.depth)
+                uv[i] = uvz[:, :2] * scales[i] + shifts[i]
+                m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
+                                   flags=cv2.INTER_LINEAR)
+                masks[start + k] = m > 0.5
+            if progress is not None:
+                progress(len(verts))
+    finally:
+        renderer.close()
+    return MeshTrack(uv=uv, visible=visible, masks=masks)
+
+
+@dataclass
+class MeshVideo:
+    """Everything the mesh generator needs for one video, in the person crop at the model's size.
+
+    Attributes:
+        crop: (x0, y0, side) of the square crop in output pixels.
+        reference: the reference mesh (1 frame); targets: the target meshes (N frames).
+        ref_points, tgt_points: (17, 2) / (N, 17, 2) joints in crop pixels (for the structure maps).
+    """
+
+    crop: tuple[int, int, int]
+    reference: MeshTrack
+    targets: MeshTrack
+    ref_points: np.ndarray
+    tgt_points: np.ndarray
+
+
+def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
+               output_size: int, model_size: int, person_mask: np.ndarray | None = None) -> MeshVideo:
+    """The meshes of a placed body video.
+
+    Args:
+        placement: the :class:`motion2video.stages.structure.BodyPlacement` (3D: world joints and camera).
+        reference_points: (17, 2) the reference pose in output pixels.
+        target_rows: (N, 17, 2) the target joints in output pixels (to place the crop).
+        phenotype: the reference person's Anny phenotype.
+        output_size: the output frames' side; model_size: the generator's.
+        person_mask: (output_size, output_size) bool the reference person's pixels, or None: Anny's weight is
+            fitted to it (:func:`fit_width`).
+    Raises:
+        InputError: the placement has no 3D joints (a 2D motion model).
+    """
+    if placement.world_observed is None or placement.camera is None:
+        raise InputError("the mesh frame generator needs a 3D body motion (this motion model predicts 2D "
+                         "keypoints); use --frame-model frames-body-128")
+    world = np.concatenate([placement.world_observed, placement.world_futures.reshape(-1, 17, 3)])  # (N, 17, 3)
+    scale, shift = placement.scale, placement.shift
+    x0, y0, side = _crop(reference_points, target_rows, output_size, model_size)
+    k = model_size / side
+    to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
+    lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift)
+    if person_mask is not None:
+        import cv2
+
+        small = cv2.warpAffine(np.asarray(person_mask, np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
+                               (model_size, model_size), flags=cv2.INTER_LINEAR) > 0.5
+        phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
+                                 person_mask=small, phenotype=phenotype)
+    both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
+                             transform=to_crop, size=model_size)
+    ref = MeshTrack(both.uv[:1], both.visible[:1], both.masks[:1])
+    tgt = MeshTrack(both.uv[1:], both.visible[1:], both.masks[1:])
+    ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
+    tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
+    return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32))
+
+
+def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
+              phenotype: dict | None = None) -> tuple[dict, float]:
+    """Anny's ``weight`` phenotype value whose silhouette in one pose best covers a person's mask (intersection
+    over union, over :data:`WEIGHT_GRID`): a stocky person gets a stocky body, a slim one a slim body.
+
+    Args:
+        joints: (17, 3) world joints of the pictured pose; camera, transform, size: as :func:`render_mesh_track`.
+        person_mask: (size, size) bool, the person's pixels (BlazePose's segmentation).
+        phenotype: the other phenotype values (Anny's defaults when None).
+    Returns:
+        (phenotype with the fitted weight, its IoU).
+    """
+    mask = np.asarray(person_mask, bool)
+    best, best_iou = dict(phenotype or {}), -1.0
+    for weight in WEIGHT_GRID:
+        candidate = {**(phenotype or {}), "weight": weight}
+        sil = render_mesh_track(np.asarray(joints, np.float64)[None], phenotype=candidate, camera=camera,
+                                transform=transform, size=size).masks[0]
+        iou = float((sil & mask).sum() / max(1, (sil | mask).sum()))
+        if iou > best_iou:
+            best, best_iou = candidate, iou
+    return best, best_iou
+
+
+def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, phenotype: dict | None = None,
+                     person_mask: np.ndarray | None = None) -> MeshTrack:
+    """The body mesh of a person seen in a real video, in the pixels of its frames.
+
+    The estimator's 3D joints (canonical metres) pose Anny; a frontal camera fitted over the frames renders it,
+    and each frame's 2D similarity (:func:`motion2video.stages.structure.similarity_fit` on the pelvis, legs,
+    spine and head) puts the render onto that frame's 2D joints.
+
+    Args:
+        joints3d: (N, 17, 3) canonical joints (z up). points2d: (N, 17, 2) the same joints in frame pixels.
+        size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
+        person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it (:func:`fit_width`).
+    """
+    from motion2video.core.camera import fit_camera, project
+    from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
+
+    joints3d = np.asarray(joints3d, np.float64)
+    camera = fit_camera(joints3d, size, size, elevation_deg=0.0)
+    projected = project(joints3d, camera)[..., :2]  # (N, 17, 2)
+    fits = [similarity_fit(p[list(ALIGN_JOINTS)], q[list(ALIGN_JOINTS)]) for p, q in zip(projected, points2d)]
+    scales = np.array([f[0] for f in fits])
+    shifts = np.stack([f[1] for f in fits])
+    if person_mask is not None:
+        phenotype, _ = fit_width(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
+                                 person_mask=person_mask, phenotype=phenotype)
+    return render_mesh_track(joints3d, phenotype=phenotype or {}, camera=camera, transform=(scales, shifts),
+                             size=size)
+
+
+def _crop(ref_points, tgt_points, size: int, model_size: int) -> tuple[int, int, int]:
+    from motion2video.frames.warp import person_crop
+
+    return person_crop(ref_points, tgt_points, width=size, height=size, model_size=model_size)
+
+
+def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
+                         batch_size: int = 8) -> np.ndarray:
+    """Frames of the mesh generator for target ``rows`` of ``video``, pasted into the reference.
+
+    Args:
+        net: a :class:`motion2video.frames.mesh_warp.MeshWarpGenerator`.
+        image: (S, S, 3) uint8 the reference at the output size.
+        video: from :func:`mesh_video`.
+        rows: (R,) indices into ``video.targets``.
+    Returns:
+        (R, S, S, 3) uint8.
+    """
+    import cv2
+    import torch
+
+    from motion2video.frames.data import body_structures
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
+    from motion2video.frames.mesh_warp import mesh_plate
+    from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_mask
+
+    size = net.config.image_size
+    x0, y0, side = video.crop
+    crop = image[y0:y0 + side, x0:x0 + side]
+    small = crop if side == size else cv2.resize(crop, (size, size), interpolation=cv2.INTER_AREA)
+    x_ref = torch.from_numpy(np.ascontiguousarray(small)).permute(2, 0, 1)[None].float() / 255.0
+    ref_mask = torch.from_numpy(video.reference.masks[:1, None].astype(np.float32))
+    # The background plate removes the mesh's silhouette and the keypoint warp's person region: a real person's
+    # hair and clothes reach past the Anny mesh.
+    ref_pts = torch.from_numpy(video.ref_points[None]).float()
+    region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
+    plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
+    out = np.repeat(image[None], len(rows), axis=0)
+    net.eval()
+    rows = np.asarray(rows, np.int64)
+    with torch.inference_mode():
+        for start in range(0, len(rows), batch_size):
+            part = rows[start:start + batch_size]
+            flows, vis = [], []
+            for r in part:
+                mf = dense_flow(video.reference.uv[0], video.reference.visible[0], video.targets.uv[r],
+                                video.targets.visible[r], video.targets.masks[r])
+                mf = extend_flow(mf, band_width(size))
+                flows.append(mf.flow)
+                vis.append(mf.visibility)
+            n = len(part)
+            sil = torch.from_numpy(video.targets.masks[part][:, None].astype(np.float32))
+            structure = torch.from_numpy(body_structures(video.tgt_points[part], size))
+            parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
+                                      torch.from_numpy(np.stack(flows)), torch.from_numpy(np.stack(vis))[:, None],
+                                      sil, structure, plate=plate.expand(n, -1, -1, -1))
+            gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
+            region = np.maximum(parts.alpha[:, 0].numpy(), video.reference.masks[0][None].astype(np.float32))
+            alpha = paste_mask(region, size)
+            for k in range(n):
+                g, a = gen[k], alpha[k]
+                if side != size:
+                    g = cv2.resize(g, (side, side), interpolation=cv2.INTER_CUBIC)
+                    a = cv2.resize(a, (side, side), interpolation=cv2.INTER_LINEAR)
+                base = crop.astype(np.float32) / 255.0
+                mixed = a[..., None] * np.clip(g, 0, 1) + (1.0 - a[..., None]) * base
+                out[start + k, y0:y0 + side, x0:x0 + side] = np.clip(np.rint(mixed * 255.0), 0, 255)
+    return out
