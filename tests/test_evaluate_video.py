@@ -18,6 +18,12 @@ from tests.test_pose import _cut_video
 pytestmark = pytest.mark.slow  # real video decoded and a tiny generator trained: seconds each
 
 
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path_factory, monkeypatch):
+    """The video's track is cached in a temporary folder, not the user's ~/.cache."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
 @pytest.fixture(scope="module")
 def dancer_clip(dancer_video, tmp_path_factory) -> Path:
     return _cut_video(dancer_video, tmp_path_factory.mktemp("clip") / "dancer120.avi", 120)

@@ -329,8 +329,11 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     for name, path in names.items():
         (weights / f"{name}.safetensors").symlink_to(path)
     out = tmp_path / "out"
-    assert demo.main(["--out", str(out), "--weights", str(weights), "--samples", "1"]) == 0
+    # the real-photo video needs the shipped (warp) generator: tests/test_demo_photo.py runs it
+    assert demo.main(["--out", str(out), "--weights", str(weights), "--samples", "1",
+                      "--photos", str(tmp_path / "no-photos")]) == 0
     printed = capsys.readouterr().out
+    assert "photo: skipped" in printed
     for name in ("futures_body.mp4", "futures_body-structure.mp4", "futures_body-sheet.png", "mesh_body.mp4",
                  "mesh_body-sheet.png", "futures_face.mp4", "futures_face-structure.mp4", "futures_face-sheet.png",
                  "transfer_body.mp4", "transfer_body-sheet.png", "transfer_body.npz"):

@@ -20,7 +20,10 @@ protocol of FOMM / TPSMM on a real video instead: frame 0 is the reference, the 
 (BlazePose) drive the generator, the real frames are the truth, all cut to one square around the person; per
 method l1 (mean absolute error in [0, 1]), PSNR, SSIM, person PSNR / SSIM / sharpness inside BlazePose's
 segmentation of the real frame, and akd (pixels between the poses BlazePose finds on the generated and on the
-real frame; akd_missing: generated frames where it finds none).
+real frame; akd_missing: generated frames where it finds none). The video is tracked once and cached in
+~/.cache/motion2video/pose. --video-start-fraction F takes the targets from the video's tail only (frames from
+F of the video on; frame 0 stays the reference): the part train-frames --video --train-fraction F never trains
+on.
 
 With --poses PATH (a body motion file or a folder of them, any format the readers know), the pairs come from
 real motion instead: the frame test split's held-out identities, posed by windows spread evenly over each clip
@@ -35,6 +38,8 @@ examples:
   motion2video evaluate-frames --model frames-body-128 --json out/eval_frames_body.json
   motion2video evaluate-frames --model out/frames-face-128.safetensors --contact-sheet out/face_sheet.png
   motion2video evaluate-frames --model frames-body-128 --video ../shared/data/video/dancer.avi --json out/dancer.json
+  motion2video evaluate-frames --model out/dancer-body-128.safetensors --video ../shared/data/video/dancer.avi \\
+      --video-start-fraction 0.8 --json out/dancer_tail.json
   motion2video evaluate-frames --model frames-body-128 --poses ../shared/data/mocap/cmu/08_01.bvh --json out/real.json
 """
 
@@ -61,6 +66,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="--video: later frames scored against frame 0 (default 64, spread over the video)")
     p.add_argument("--video-stride", type=int, default=None,
                    help="--video: video frames between two scored frames (default: spread over the whole video)")
+    p.add_argument("--video-start-fraction", type=float, default=0.0, metavar="F",
+                   help="--video: take the targets from the tail only, from F of the video's frames on (e.g. 0.8, "
+                   "the part train-frames --video leaves out); frame 0 stays the reference (default 0)")
     p.add_argument("--poses", default=None, metavar="PATH",
                    help="pose the held-out identities by the body motion file(s) at PATH (a file or a folder) "
                    "instead of the held-out pairs; adds head_psnr / head_ssim")
@@ -132,8 +140,12 @@ def run(args: argparse.Namespace) -> int:
         check_at_least("--video-frames", args.video_frames)
         if args.video_stride is not None:
             check_at_least("--video-stride", args.video_stride)
+        if not 0.0 <= args.video_start_fraction < 1.0:
+            raise InputError(f"--video-start-fraction must be in [0, 1), got {args.video_start_fraction:g}")
         if not Path(args.video).is_file():
             raise InputError("no such video file", args.video)
+    if args.video is None and args.video_start_fraction:
+        raise InputError("--video-start-fraction goes with --video")
     loaded = load_frame_model(args.model)
     cfg = loaded.config
     if args.video is not None and cfg.domain != "body":
@@ -233,7 +245,8 @@ def _run_video(args: argparse.Namespace, loaded, baselines: dict) -> int:
     from motion2video.frames.evaluate import evaluation_contact_sheet
 
     result = evaluate_video(loaded.model, args.video, size=loaded.config.image_size, targets=args.video_frames,
-                            stride=args.video_stride, baseline_models=baselines)
+                            stride=args.video_stride, baseline_models=baselines,
+                            start_fraction=args.video_start_fraction)
     payload = result.to_dict()
     payload.update(model=str(loaded.path), model_kind=loaded.kind, model_step=loaded.step)
     print(json.dumps(payload, indent=2, sort_keys=True))

@@ -14,6 +14,14 @@ DESCRIPTION = """\
 Render (or reuse from the cache) a synthetic appearance dataset with the Anny body or face renderer, posed by
 real captures, then train the frame generator with L1 + SSIM. Checkpoints (safetensors) are written
 periodically; --resume continues an interrupted run.
+
+With --video V --init-from M (personalisation): fine-tune the body generator M on one person's video instead.
+The video is tracked once (BlazePose, cached in ~/.cache/motion2video/pose); its first 80% of frames
+(--train-fraction) are the training data (pairs of its frames with their estimated poses and person masks, cut
+to one square around the person and resized to the model's size, as evaluate-frames --video cuts them). The
+last 20% is never trained on: it is then scored by the reconstruction protocol of evaluate-frames --video
+--video-start-fraction 0.8 (frame 0 the reference, targets from the tail only) for the fine-tuned model and for
+M on the same pairs; both are printed (l1, person_psnr, akd) with the ratio of their L1, and written to --json.
 """
 
 EXAMPLES = """\
@@ -21,17 +29,20 @@ examples:
   motion2video train-frames --domain body -o out/frames-body-128.safetensors --steps 4000 --cache /tmp/m2v-cache
   motion2video train-frames --domain face -o out/frames-face-128.safetensors --steps 3500 --resume
   motion2video train-frames --domain body -o out/tiny.safetensors --steps 50 --train-sequences 16
+  motion2video train-frames --video ../shared/data/video/dancer.avi --init-from frames-body-128 \\
+      -o out/dancer-body-128.safetensors --steps 600 --json out/dancer_personalised.json
 """
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "train-frames", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
-    p.add_argument("--domain", choices=("body", "face"), required=True, help="body or face frames")
+    p.add_argument("--domain", choices=("body", "face"), default=None,
+                   help="body or face frames (required, except with --video: body)")
     p.add_argument("-o", "--output", required=True, help="checkpoint to write (.safetensors)")
-    p.add_argument("--steps", type=int, default=3000, help="optimisation steps (default 3000)")
+    p.add_argument("--steps", type=int, default=None, help="optimisation steps (default 3000; with --video 600)")
     p.add_argument("--size", type=int, default=128, choices=(64, 128, 256), help="frame size (default 128)")
     p.add_argument("--batch-size", type=int, default=8, help="pairs per step (default 8)")
-    p.add_argument("--lr", type=float, default=1e-3, help="peak learning rate (default 1e-3)")
+    p.add_argument("--lr", type=float, default=None, help="peak learning rate (default 1e-3; with --video 5e-4)")
     p.add_argument("--cache", default=None,
                    help="directory for the rendered npz shards (default ~/.cache/motion2video/frames)")
     p.add_argument("--data-root", default=None,
@@ -40,10 +51,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="rendered training sequences (default 240, 12 frames each)")
     p.add_argument("--crop", type=int, default=None,
                    help="train on CROP x CROP windows holding both poses of a pair (0: whole frames; "
-                   "default size/2, about 8x less compute per step than whole frames for the same quality)")
-    p.add_argument("--model-kind", choices=("analogy", "warp", "mesh"), default="analogy",
-                   help="analogy: the feature-analogy generator; warp: the generator that warps the reference "
-                   "person along per-limb transforms (body only)")
+                   "default size/2, about 8x less compute per step than whole frames for the same quality; "
+                   "with --video 0)")
+    p.add_argument("--model-kind", choices=("analogy", "warp", "mesh"), default=None,
+                   help="analogy (default): the feature-analogy generator; warp: the generator that warps the "
+                   "reference person along per-limb transforms (body only); mesh: the generator that moves it "
+                   "along the correspondence of one Anny mesh in both poses (body only); with --video: the "
+                   "--init-from model's")
     p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
                    help="warp model: its network works at 1/NET_SCALE of the resolution (default 4)")
     p.add_argument("--flow-correction", action="store_true",
@@ -53,7 +67,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--init-from", default=None,
                    help="start from this checkpoint's weights (same kind), with a fresh optimiser and schedule")
     p.add_argument("--edge-weight", type=float, default=None,
-                   help="weight of the gradient (Sobel) L1 inside the target silhouette (default 1 for warp, 0 else)")
+                   help="weight of the gradient (Sobel) L1 inside the target silhouette (default 1 for warp, 0 else; "
+                   "with --video 2)")
     p.add_argument("--person-weight", type=float, default=None,
                    help="weight of the L1 inside the target silhouette (default 2 for warp, 0 else)")
     p.add_argument("--adversarial", action="store_true", help="add the patch discriminator (slow on CPU)")
@@ -63,6 +78,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
+    p.add_argument("--video", default=None,
+                   help="personalisation: fine-tune --init-from on this video of one person (module help above)")
+    p.add_argument("--train-fraction", type=float, default=None,
+                   help="--video: the share of its frames trained on, from frame 0 (default 0.8); the rest is scored")
+    p.add_argument("--video-frames", type=int, default=None,
+                   help="--video: tail frames scored against frame 0 (default 64, spread over the tail)")
+    p.add_argument("--json", default=None, help="--video: write the generic and personalised scores here as JSON")
     add_threads_argument(p)
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
@@ -82,6 +104,18 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.frames.train import TrainFramesConfig, train_frames
 
     set_threads(args.threads)
+    if args.video is not None:
+        return _run_video(args)
+    video_only = [name for name, value in (("--train-fraction", args.train_fraction),
+                                           ("--video-frames", args.video_frames), ("--json", args.json))
+                  if value is not None]
+    if video_only:
+        raise InputError(f"{', '.join(video_only)}: only with --video")
+    if args.domain is None:
+        raise InputError("--domain body|face is required (unless fine-tuning on a --video)")
+    args.model_kind = args.model_kind or "analogy"
+    args.steps = 3000 if args.steps is None else args.steps
+    args.lr = 1e-3 if args.lr is None else args.lr
     check_at_least("--steps", args.steps)
     if args.model_kind in ("warp", "mesh") and args.domain != "body":
         raise InputError(f"--model-kind {args.model_kind} makes body frames only (use --domain body)")
@@ -135,4 +169,71 @@ def run(args: argparse.Namespace) -> int:
                       "wall_s": round(result.wall_s, 1), "total_wall_s": round(result.total_wall_s, 1),
                       "steps_per_second": round(result.steps_per_second, 3),
                       "last_loss": {k: round(v, 5) for k, v in last.items() if k != "step"}}))
+    return 0
+
+
+def _run_video(args: argparse.Namespace) -> int:
+    """``--video``: fine-tune ``--init-from`` on the video and score it and the model it started from on the
+    video's tail (:mod:`motion2video.evaluation.personalise`)."""
+    import sys
+
+    from motion2video.core.atomic import check_output_path, write_json
+    from motion2video.core.errors import InputError
+    from motion2video.evaluation.personalise import PersonaliseSettings, personalise
+
+    if args.init_from is None:
+        raise InputError("--video fine-tunes a trained body generator: give it with --init-from (e.g. "
+                         "--init-from frames-body-128)")
+    given = {"--domain": args.domain not in (None, "body"), "--model-kind": args.model_kind is not None,
+             "--net-scale": args.net_scale is not None, "--flow-correction": args.flow_correction,
+             "--sample-mode": args.sample_mode is not None, "--train-sequences": args.train_sequences is not None,
+             "--adversarial": args.adversarial, "--cache": args.cache is not None,
+             "--silhouette-erosion": args.silhouette_erosion != 0,
+             "--data-root": args.data_root is not None}
+    ignored = [name for name, yes in given.items() if yes]
+    if ignored:
+        raise InputError(f"--video fine-tunes the --init-from model as it is, on the video's frames: leave out "
+                         f"{', '.join(ignored)}")
+    defaults = PersonaliseSettings()
+    settings = PersonaliseSettings(
+        steps=defaults.steps if args.steps is None else args.steps, batch_size=args.batch_size,
+        lr=defaults.lr if args.lr is None else args.lr, crop=defaults.crop if args.crop is None else args.crop,
+        edge_weight=defaults.edge_weight if args.edge_weight is None else args.edge_weight,
+        person_weight=defaults.person_weight if args.person_weight is None else args.person_weight,
+        seed=args.seed, checkpoint_every=args.checkpoint_every,
+        train_fraction=defaults.train_fraction if args.train_fraction is None else args.train_fraction,
+        targets=defaults.targets if args.video_frames is None else args.video_frames)
+    check_at_least("--steps", settings.steps)
+    check_at_least("--batch-size", settings.batch_size)
+    check_at_least("--video-frames", settings.targets)
+    if not 0.0 < settings.train_fraction < 1.0:
+        raise InputError(f"--train-fraction must be between 0 and 1, got {settings.train_fraction:g}")
+    if settings.crop < 0 or settings.crop % 16:
+        raise InputError(f"--crop must be 0 or a multiple of 16 up to the model's size, got {settings.crop}")
+    if not settings.lr > 0:
+        raise InputError(f"--lr must be > 0, got {settings.lr:g}")
+    output = check_output_path(args.output, (".safetensors",))
+    if args.json is not None:
+        check_output_path(args.json, (".json",))
+    if not Path(args.video).is_file():
+        raise InputError("no such video file", args.video)
+    result = personalise(args.video, init_from=args.init_from, output=output, settings=settings,
+                         resume=args.resume, progress=not args.no_progress,
+                         note=lambda line: print(f"note: {line}", file=sys.stderr))
+    payload = result.to_dict()
+    p, g = payload["personalised"], payload["generic"]
+    print(json.dumps(payload["train"]))
+    print(f"tail of {Path(args.video).name}: frames {payload['train']['tail_start']}..{payload['tail']['frames'][-1]}"
+          f" never trained on, {payload['tail']['num_pairs']} pairs against frame 0:")
+    def shown(value, digits: int) -> str:
+        return "n/a" if value is None else f"{value:.{digits}f}"
+
+    for label, scores in (("generic " + payload["init_from"], g), ("personalised", p)):
+        print(f"  {label:<28} l1 {scores['l1']:.4f}  person_psnr {shown(scores['person_psnr'], 2)} dB  "
+              f"akd {shown(scores['akd'], 2)} px")
+    print(f"  personalised / generic L1: {payload['l1_ratio']:.3f}")
+    if args.json:
+        write_json(args.json, payload)
+        print(f"wrote {args.json}")
+    print(f"wrote {result.checkpoint}")
     return 0

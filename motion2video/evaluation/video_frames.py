@@ -26,9 +26,10 @@ from motion2video.core.errors import InputError
 from motion2video.frames.data import FramePairs, body_structures
 from motion2video.frames.evaluate import FrameEvaluation, evaluate_pairs
 from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose
-from motion2video.pose.estimate import (default_model, estimate_image, iter_video_frames, landmarks_to_joints,
-                                        open_video, track_frames)
+from motion2video.pose.estimate import default_model, estimate_image, iter_video_frames, landmarks_to_joints
 from motion2video.pose.h36m import blazepose_to_h36m
+from motion2video.pose.track import VideoTrack
+from motion2video.stages.people import video_track
 
 CROP_MARGIN = 0.1
 
@@ -80,55 +81,84 @@ def cut_square(image: np.ndarray, box: tuple[int, int, int], *, replicate: bool 
     return np.ascontiguousarray(image[y0 + pad:y0 + pad + side, x0 + pad:x0 + pad + side])
 
 
+def tail_start(total: int, fraction: float) -> int:
+    """The first frame of a video's tail: ``round(fraction * total)`` of its ``total`` frames come before it
+    (the part a generator may be fine-tuned on; :mod:`motion2video.evaluation.personalise`)."""
+    if not 0.0 <= fraction < 1.0:
+        raise InputError(f"the start fraction must be in [0, 1), got {fraction:g}")
+    return int(round(fraction * total))
+
+
+def protocol_frames(total: int, *, targets: int = 64, stride: int | None = None, start_fraction: float = 0.0
+                    ) -> list[int]:
+    """The video frames the protocol scores: frame 0 (the reference), then ``targets`` frames ``stride`` apart
+    (default: spread over the video), from the tail's first frame (:func:`tail_start`) on when
+    ``start_fraction`` > 0."""
+    first = tail_start(total, start_fraction)
+    if first == 0:
+        stride = max(1, (total - 1) // max(targets, 1)) if stride is None else int(stride)
+        return list(range(0, total, stride)[: targets + 1])
+    stride = max(1, (total - first) // max(targets, 1)) if stride is None else int(stride)
+    return [0] + list(range(first, total, stride)[:targets])
+
+
+def crop_frames(path: str | Path, track: VideoTrack, indices: list[int], *, size: int,
+                box: tuple[int, int, int] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frames ``indices`` of a video (the person found in each) cut to the square ``box`` (default: the
+    :func:`square_box` of their landmarks) and resized to ``size``.
+
+    Returns:
+        images (N, S, S, 3) uint8, points (N, 17, 2) float32 canonical joints in the crop's pixels, masks
+        (N, S, S) bool person masks (BlazePose's segmentation above one half).
+    Raises:
+        InputError: the video decodes to fewer frames than ``indices`` need.
+    """
+    if box is None:
+        box = square_box(np.concatenate([track.body_landmarks(i) for i in indices]))
+    scale = size / box[2]
+    wanted = set(indices)
+    images, points, masks = {}, {}, {}
+    last = max(indices)
+    for i, frame in enumerate(iter_video_frames(path)):
+        if i in wanted:
+            images[i] = cv2.resize(cut_square(frame, box), (size, size), interpolation=cv2.INTER_AREA)
+            mask = track.person_mask(i)
+            masks[i] = cv2.resize(cut_square(mask, box, replicate=False), (size, size)) > 0.5
+            pts, _ = blazepose_to_h36m(track.body_landmarks(i))
+            points[i] = (pts - box[:2]) * scale
+        if i >= last:
+            break
+    missing = [i for i in indices if i not in images]
+    if missing:
+        raise InputError(f"the video ended before frame {missing[0]} (it was tracked with more frames)", path)
+    return (np.stack([images[i] for i in indices]), np.stack([points[i] for i in indices]).astype(np.float32),
+            np.stack([masks[i] for i in indices]))
+
+
 def video_frames(path: str | Path, *, size: int, targets: int = 64, stride: int | None = None,
-                 person: str | int = "largest", model: BlazePose | None = None) -> VideoFrames:
-    """Track the person through a video and keep frame 0 and ``targets`` later frames, ``stride`` apart
-    (default: spread over the whole video).
+                 person: str | int = "largest", model: BlazePose | None = None, start_fraction: float = 0.0,
+                 track: VideoTrack | None = None) -> VideoFrames:
+    """Track the person through a video (or take ``track``; tracks are cached:
+    :func:`motion2video.stages.people.video_track`) and keep frame 0 and ``targets`` later frames,
+    ``stride`` apart (default: spread over the whole video, or over its tail from ``start_fraction`` of it
+    on).
 
     Raises:
         InputError: unreadable video, no person in the first frame, fewer than two usable frames.
     """
-    cap, info = open_video(path)
-    cap.release()
-    total = info.frames or sum(1 for _ in iter_video_frames(path))
-    stride = max(1, (total - 1) // max(targets, 1)) if stride is None else int(stride)
-    wanted = set(range(0, total, stride)[: targets + 1])
-    model = model or default_model()
-    kept: list[tuple[int, np.ndarray, object]] = []
-    skipped = 0
-    current: list[np.ndarray] = []
-
-    def frames():  # the tracker yields once per frame it takes: current[-1] is that frame
-        for frame in iter_video_frames(path):
-            current[:] = [frame]
-            yield frame
-
-    for i, lm in enumerate(track_frames(frames(), person=person, model=model, source=path)):
-        if i == 0 and lm is None:
-            raise InputError("no person in the first frame (the reference of the reconstruction protocol)", path)
-        if i in wanted:
-            if lm is None:
-                skipped += 1
-            else:
-                kept.append((i, current[0], lm))
-        if i >= max(wanted):
-            break
+    if track is None:
+        track = video_track(path, person=person, model=model)
+    wanted = protocol_frames(track.num_frames, targets=targets, stride=stride, start_fraction=start_fraction)
+    if not track.found[0]:
+        raise InputError("no person in the first frame (the reference of the reconstruction protocol)", path)
+    kept = [i for i in wanted if track.found[i]]
     if len(kept) < 2:
         raise InputError("fewer than two frames with the person to evaluate", path)
-    box = square_box(np.concatenate([lm.xy[:NUM_BODY_LANDMARKS] for _, _, lm in kept]))
-    scale = size / box[2]
-    images, points, masks = [], [], []
-    for _, frame, lm in kept:
-        images.append(cv2.resize(cut_square(frame, box), (size, size), interpolation=cv2.INTER_AREA))
-        mask = lm.person_mask(frame.shape[1], frame.shape[0])
-        masks.append(cv2.resize(cut_square(mask, box, replicate=False), (size, size)) > 0.5)
-        pts, _ = blazepose_to_h36m(lm.xy[:NUM_BODY_LANDMARKS])
-        points.append((pts - box[:2]) * scale)
-    _, joints3d, _ = landmarks_to_joints(np.stack([lm.xy[:NUM_BODY_LANDMARKS] for _, _, lm in kept]),
-                                         np.stack([lm.world[:NUM_BODY_LANDMARKS] for _, _, lm in kept]),
-                                         np.stack([lm.visibility[:NUM_BODY_LANDMARKS] for _, _, lm in kept]))
-    return VideoFrames(np.stack(images), np.stack(points).astype(np.float32), np.stack(masks),
-                       np.array([i for i, _, _ in kept]), info.fps, box, skipped, joints3d)
+    box = square_box(np.concatenate([track.body_landmarks(i) for i in kept]))
+    images, points, masks = crop_frames(path, track, kept, size=size, box=box)
+    body = slice(0, NUM_BODY_LANDMARKS)
+    _, joints3d, _ = landmarks_to_joints(track.xy[kept, body], track.world[kept, body], track.visibility[kept, body])
+    return VideoFrames(images, points, masks, np.array(kept), track.fps, box, len(wanted) - len(kept), joints3d)
 
 
 def video_pairs(frames: VideoFrames) -> FramePairs:
@@ -206,6 +236,8 @@ class VideoEvaluation:
     video: str
     frame_index: np.ndarray
     skipped: int
+    start_fraction: float = 0.0
+    box: tuple[int, int, int] | None = None
 
     def to_dict(self) -> dict:
         out = self.frames.to_dict()
@@ -217,14 +249,18 @@ class VideoEvaluation:
                             "are the truth", video=self.video, num_frames=int(len(self.frame_index)),
                    frames=[int(i) for i in self.frame_index[:1]] + [int(self.frame_index[-1])],
                    skipped_frames=self.skipped, person_mask="BlazePose segmentation")
+        if self.start_fraction:
+            out.update(start_fraction=self.start_fraction, targets_from=int(self.frame_index[1]))
+        if self.box is not None:
+            out["crop_box"] = [int(v) for v in self.box]
         return out
 
 
-def evaluate_video(model, path: str | Path, *, size: int, targets: int = 64, stride: int | None = None,
-                   baseline_models: dict | None = None) -> VideoEvaluation:
-    """Run the protocol (module docstring) on one video for a body frame generator (either kind)."""
-    pose_model = default_model()
-    frames = video_frames(path, size=size, targets=targets, stride=stride, model=pose_model)
+def evaluate_video_frames(model, frames: VideoFrames, *, video: str | Path, baseline_models: dict | None = None,
+                          start_fraction: float = 0.0, pose_model: BlazePose | None = None) -> VideoEvaluation:
+    """Score a generator (and the baselines) on frames of :func:`video_frames` (the module docstring's
+    metrics)."""
+    pose_model = pose_model or default_model()
     pairs = video_pairs(frames)
     if getattr(model, "kind", None) == "mesh" or any(getattr(m, "kind", None) == "mesh"
                                                      for m in (baseline_models or {}).values()):
@@ -236,4 +272,17 @@ def evaluate_video(model, path: str | Path, *, size: int, targets: int = 64, str
         pred = evaluation.predictions[name]
         l1[name] = float(np.abs(pred.astype(np.float64) - pairs.tgt_images).mean() / 255.0)
         akd[name], missing[name] = keypoint_distance(pred, truth, pose_model)
-    return VideoEvaluation(evaluation, l1, akd, missing, str(path), frames.frame_index, frames.skipped)
+    return VideoEvaluation(evaluation, l1, akd, missing, str(video), frames.frame_index, frames.skipped,
+                           start_fraction, frames.box)
+
+
+def evaluate_video(model, path: str | Path, *, size: int, targets: int = 64, stride: int | None = None,
+                   baseline_models: dict | None = None, start_fraction: float = 0.0,
+                   track: VideoTrack | None = None) -> VideoEvaluation:
+    """Run the protocol (module docstring) on one video for a body frame generator (either kind); with
+    ``start_fraction`` > 0 the targets come from the video's tail only (frame 0 stays the reference)."""
+    pose_model = default_model()
+    frames = video_frames(path, size=size, targets=targets, stride=stride, model=pose_model,
+                          start_fraction=start_fraction, track=track)
+    return evaluate_video_frames(model, frames, video=path, baseline_models=baseline_models,
+                                 start_fraction=start_fraction, pose_model=pose_model)

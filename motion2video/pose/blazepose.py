@@ -295,16 +295,22 @@ class Landmarks:
         (0 outside the ROI); zeros when there is no segmentation."""
         if self.segmentation is None:
             return np.zeros((height, width), np.float32)
-        n = self.segmentation.shape[0]
-        mat = roi_matrix(self.roi, n)
-        mat[:, 2] += mat[:, :2] @ np.array([0.5, 0.5]) - 0.5  # pixel indices, as in crop_roi
         prob = (1.0 / (1.0 + np.exp(-np.clip(self.segmentation, -50, 50)))).astype(np.float32)
-        return cv2.warpAffine(prob, mat, (width, height), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                              borderValue=0.0)
+        return roi_map_to_image(prob, self.roi, width, height)
 
     def next_roi(self) -> Roi:
         """The ROI for the next video frame, from the two ROI landmarks (PoseLandmarksToRoi)."""
         return roi_from_points(self.xy[33], self.xy[34])
+
+
+def roi_map_to_image(values: np.ndarray, roi: Roi, width: int, height: int) -> np.ndarray:
+    """An (n, n) float32 map over a ROI crop (the segmentation's grid) drawn into a (height, width) image
+    (bilinear, 0 outside the ROI)."""
+    n = values.shape[0]
+    mat = roi_matrix(roi, n)
+    mat[:, 2] += mat[:, :2] @ np.array([0.5, 0.5]) - 0.5  # pixel indices, as in crop_roi
+    return cv2.warpAffine(np.asarray(values, np.float32), mat, (width, height), flags=cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
 
 
 def _sigmoid(x: np.ndarray) -> np.ndarray:

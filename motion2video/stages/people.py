@@ -5,6 +5,9 @@
 - :func:`video_pose`: a video -> :class:`~motion2video.pose.estimate.VideoPose`, cached by the file's
   sha256 (next to an output, or in ``~/.cache/motion2video/pose``), so that running two commands on the
   same video estimates it once;
+- :func:`video_track`: a video -> :class:`~motion2video.pose.track.VideoTrack` (every frame's raw landmarks
+  and person segmentation: the reconstruction protocol and fine-tuning on a video), cached in the same folder;
+  :func:`video_pose` derives its pose from a cached track instead of tracking the video again;
 - :func:`write_photo_overlay` / :func:`write_video_overlay`: the keypoints drawn on the input.
 """
 
@@ -20,8 +23,9 @@ import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.pose.estimate import (IMAGE_SUFFIXES, VIDEO_SUFFIXES, PersonPose, VideoPose, estimate_image,
-                                        estimate_video, iter_video_frames, read_image_rgb)
+                                        estimate_video, iter_video_frames, poses_from_landmarks, read_image_rgb)
 from motion2video.pose.files import ESTIMATOR, load_video_pose, save_video_pose
+from motion2video.pose.track import VideoTrack, load_video_track, save_video_track, track_video
 
 def is_video(path: str | Path) -> bool:
     """A video file by its extension (``.mp4``, ``.avi``, ``.mov``, ...)."""
@@ -54,6 +58,57 @@ def cache_path(video: str | Path, person: str | int, folder: str | Path | None =
     return folder / f"{file_sha256(video)[:16]}-{person}.{ESTIMATOR}.npz"
 
 
+def track_cache_path(video: str | Path, person: str | int, folder: str | Path | None = None) -> Path:
+    """Where the track of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.track.npz``
+    beside the pose cache."""
+    pose = cache_path(video, person, folder)
+    return pose.with_name(pose.name.removesuffix(".npz") + ".track.npz")
+
+
+def _read_cached_track(cached: Path | None) -> VideoTrack | None:
+    if cached is None or not cached.is_file():
+        return None
+    try:
+        return load_video_track(cached)
+    except InputError:
+        return None  # a damaged (or older) entry is tracked again and overwritten
+
+
+def video_track(path: str | Path, *, person: str | int = "largest", cache: str | Path | None | bool = None,
+                note: Callable[[str], None] | None = None, model=None) -> VideoTrack:
+    """Every frame's landmarks and person segmentation of one person in a video, read from the cache when it
+    was tracked before.
+
+    Args:
+        path: the video.
+        person: ``"largest"`` or an index left to right.
+        cache: a folder to cache in; None: the user cache (:func:`cache_dir`); False: no cache.
+        note: called with one line when the video is tracked or read from the cache.
+        model: the :class:`~motion2video.pose.blazepose.BlazePose` to track with (default: the shared one).
+    Raises:
+        InputError: unreadable video, no person in any frame.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    cached = None if cache is False else track_cache_path(path, person, None if cache is None else cache)
+    track = _read_cached_track(cached)
+    if track is not None:
+        if note:
+            note(f"track of {path.name} read from the cache {cached}")
+        return track
+    track = track_video(path, person=person, model=model)
+    if note:
+        note(f"tracked {path.name} (BlazePose full): the person in {int(track.found.sum())} of "
+             f"{track.num_frames} frames")
+    if cached is not None:
+        try:
+            save_video_track(cached, track)
+        except OSError:
+            pass  # a read-only cache only costs the next run the tracking
+    return track
+
+
 def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | Path | None | bool = None,
                note: Callable[[str], None] | None = None) -> VideoPose:
     """The pose of one person in a video, read from the cache when it was estimated before.
@@ -78,9 +133,15 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
             return pose
         except InputError:
             pass  # a damaged cache entry is estimated again and overwritten
-    pose = estimate_video(path, person=person)
+    track = None if cache is False else _read_cached_track(track_cache_path(path, person, cache or None))
+    if track is not None:  # tracked before by evaluate-frames / train-frames --video: the same landmarks
+        pose = poses_from_landmarks([track.landmarks(i) for i in range(track.num_frames)], fps=track.fps,
+                                    width=track.width, height=track.height, source=path)
+    else:
+        pose = estimate_video(path, person=person)
     if note:
-        note(f"estimated the pose of {path.name} (BlazePose full): {pose.num_frames} frames at {pose.fps:g} fps"
+        how = "from its cached track" if track is not None else "BlazePose full"
+        note(f"estimated the pose of {path.name} ({how}): {pose.num_frames} frames at {pose.fps:g} fps"
              + (f", {pose.gaps} gap frames interpolated" if pose.gaps else ""))
     if cached is not None:
         try:
