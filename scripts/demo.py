@@ -5,12 +5,13 @@
 Writes, from the committed ``demo_inputs/`` (and one photo of ``../shared`` when it is there):
 
 - ``out/futures_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``cmu_walk.npz`` (a real CMU walk)
-  sampled by ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-128``;
+  sampled by ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-mesh-128`` (the
+  reference person moved through a fitted body mesh);
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
   ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``;
 - ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``jump.npz`` (procedural)
-  re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-128``, side by side
+  re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-mesh-128``, side by side
   with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
   ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
 - ``out/photo_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): a real photo as the reference (issue 23):
@@ -33,7 +34,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 DEMO_INPUTS = REPO / "demo_inputs"
 WEIGHTS = REPO / "motion2video" / "weights"
-BODY = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="cmu_walk.npz",
+BODY = dict(motion_model="mtvae-add", frame_model="frames-body-mesh-128", clip="cmu_walk.npz",
             reference="reference_body_128.png", start=24)
 FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-128", clip="smile.npz",
             reference="reference_face.png", start=0)
@@ -46,17 +47,20 @@ MESH_SIZE = 256
 # 640x425 photo would otherwise be padded to a square) and generated at 256 px. Two futures of the CMU walk;
 # 13-18 s on 2 shared cores. The other photos were tried: man_by_truck.jpg leaves a dark smear where the truck
 # was behind him, three_walking.jpg takes the largest of three people and pads the crop with stretched edges.
+# The photo keeps the keypoint warp generator (frames-body-128): the mesh generator's Anny body, fitted to a real
+# person from 2D joints, is thinner than her and leaves white gaps at the jacket's edge (docs/results.md, issue 22).
 SHARED_PHOTOS = REPO.parent / "shared" / "data" / "photos"
 PHOTO = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="cmu_walk.npz", photo="skier.jpg",
              start=24, samples=2, size=256, crop_person=True)
-TRANSFER = dict(motion_model="behavior", frame_model="frames-body-128", behavior="jump.npz", behavior_start=10,
+TRANSFER = dict(motion_model="behavior", frame_model="frames-body-mesh-128", behavior="jump.npz", behavior_start=10,
                 target="wave.npz", target_frame=0, reference="reference_body_128.png")
 
 
 def weight_files(weights: Path = WEIGHTS) -> dict[str, Path]:
-    """Checkpoint name -> file in ``weights`` for the four checkpoints the demo uses."""
+    """Checkpoint name -> file in ``weights`` for every checkpoint the demo uses."""
     names = [BODY["motion_model"], BODY["frame_model"], FACE["motion_model"], FACE["frame_model"],
-             TRANSFER["motion_model"]]
+             TRANSFER["motion_model"], TRANSFER["frame_model"], PHOTO["frame_model"]]
+    names = list(dict.fromkeys(names))  # each once, in order
     return {name: Path(weights) / f"{name}.safetensors" for name in names}
 
 

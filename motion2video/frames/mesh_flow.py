@@ -138,3 +138,4 @@ def band_width(size: int) -> int:
     """The band :func:`extend_flow` adds at an image side of ``size`` pixels (4 at 128)."""
     return max(1, round(BAND_PX * size / 128))
 
+
