@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -37,6 +38,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+REDELIVER_DELAY_S = 0.01  # an interrupt dropped by a finaliser is sent again this much later
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised like Ctrl-C so that every ``finally`` and atomic writer cleans up on the way out."""
 
@@ -45,14 +49,35 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated()
 
 
+def _redeliver_interrupts(unraisable) -> None:
+    """``sys.unraisablehook``: a SIGTERM or Ctrl-C that arrives while Python runs a finaliser (``__del__``, e.g.
+    OpenGL freeing a buffer) is printed and dropped by Python, and the command would run on to the end. Send the
+    signal again, so it stops the command at the next ordinary line; other unraisable errors are printed as usual."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        sig = signal.SIGTERM if isinstance(unraisable.exc_value, Terminated) else signal.SIGINT
+        # From another thread a moment later: sent from here, it would be handled inside this hook and dropped again.
+        timer = threading.Timer(REDELIVER_DELAY_S, os.kill, (os.getpid(), sig))
+        timer.daemon = True
+        timer.start()
+        return
+    sys.__unraisablehook__(unraisable)
+
+
+def install_signal_handlers() -> None:
+    """SIGTERM raises :class:`Terminated`; an interrupt swallowed by a finaliser is delivered again. Main thread
+    only (Python allows signal handlers there alone)."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _raise_terminated)
+        sys.unraisablehook = _redeliver_interrupts
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 2
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _raise_terminated)
+    install_signal_handlers()
     try:
         return int(args.run(args) or 0)
     except InputError as err:

@@ -129,3 +129,25 @@ def test_batch(sig, tmp_path, mocap_dir):
     assert not (out_dir / "results.jsonl").exists()
     for video in out_dir.glob("*.mp4"):  # a job that finished before the signal is whole; no partial video
         assert video_frame_count(video) == 400, video
+
+
+def test_an_interrupt_swallowed_by_a_finaliser_is_delivered_again():
+    """SIGTERM landing inside a ``__del__`` (here raised from one, as the signal handler would) is not lost: it is
+    sent again and stops the code at the next ordinary line (the race that once let a terminated render finish)."""
+    from motion2video.cli import Terminated, install_signal_handlers
+
+    class Freed:
+        def __del__(self):
+            raise Terminated()
+
+    old_handler, old_hook = signal.getsignal(signal.SIGTERM), sys.unraisablehook
+    try:
+        install_signal_handlers()
+        with pytest.raises(Terminated):
+            Freed()  # dropped at once: its __del__ raises inside the finaliser
+            for _ in range(1000):  # the re-sent signal is handled at one of these lines
+                time.sleep(0.001)
+    finally:
+        signal.signal(signal.SIGTERM, old_handler)
+        sys.unraisablehook = old_hook
+
