@@ -503,15 +503,33 @@ class WarpGenerator(nn.Module):
                                        .expand(n, -1, -1), t, structure)
             gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()  # (b, s, s, 3)
             alpha = paste_mask(parts.person[:, 0].numpy(), size)  # (b, s, s)
-            for k in range(n):
-                g, a = gen[k], alpha[k]
-                if side != size:
-                    g = cv2.resize(g, (side, side), interpolation=cv2.INTER_CUBIC)
-                    a = cv2.resize(a, (side, side), interpolation=cv2.INTER_LINEAR)
-                base = crop.astype(np.float32) / 255.0
-                mixed = a[..., None] * np.clip(g, 0, 1) + (1.0 - a[..., None]) * base
-                out[start + k, y0:y0 + side, x0:x0 + side] = np.clip(np.rint(mixed * 255.0), 0, 255)
+            paste_generated(out[start:start + n], crop, (x0, y0, side), gen, alpha)
         return out
+
+
+def paste_generated(frames: np.ndarray, crop: np.ndarray, box: tuple[int, int, int], generated: np.ndarray,
+                    alpha: np.ndarray) -> None:
+    """Paste person crops generated at the model's size back into full-resolution frames, in place.
+
+    Args:
+        frames: (n, H, W, 3) uint8 frames to write into (copies of the reference).
+        crop: (side, side, 3) uint8 the reference's crop, the base the generated person is blended over.
+        box: (x0, y0, side) of the crop in the frames.
+        generated: (n, s, s, 3) float frames in about [0, 1] at the model's size s.
+        alpha: (n, s, s) paste masks (:func:`paste_mask`).
+    """
+    import cv2
+
+    x0, y0, side = box
+    size = generated.shape[1]
+    base = crop.astype(np.float32) / 255.0
+    for k in range(len(generated)):
+        g, a = generated[k], alpha[k]
+        if side != size:
+            g = cv2.resize(g, (side, side), interpolation=cv2.INTER_CUBIC)
+            a = cv2.resize(a, (side, side), interpolation=cv2.INTER_LINEAR)
+        mixed = a[..., None] * np.clip(g, 0, 1) + (1.0 - a[..., None]) * base
+        frames[k, y0:y0 + side, x0:x0 + side] = np.clip(np.rint(mixed * 255.0), 0, 255)
 
 
 def paste_mask(person: np.ndarray, size: int) -> np.ndarray:

@@ -167,7 +167,10 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
                          "keypoints); use --frame-model frames-body-128")
     world = np.concatenate([placement.world_observed, placement.world_futures.reshape(-1, 17, 3)])  # (N, 17, 3)
     scale, shift = placement.scale, placement.shift
-    x0, y0, side = _crop(reference_points, target_rows, output_size, model_size)
+    from motion2video.frames.warp import person_crop
+
+    x0, y0, side = person_crop(reference_points, target_rows, width=output_size, height=output_size,
+                               model_size=model_size)
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift)
@@ -242,12 +245,6 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
                              size=size)
 
 
-def _crop(ref_points, tgt_points, size: int, model_size: int) -> tuple[int, int, int]:
-    from motion2video.frames.warp import person_crop
-
-    return person_crop(ref_points, tgt_points, width=size, height=size, model_size=model_size)
-
-
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
                          batch_size: int = 8) -> np.ndarray:
     """Frames of the mesh generator for target ``rows`` of ``video``, pasted into the reference.
@@ -266,7 +263,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     from motion2video.frames.data import body_structures
     from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
     from motion2video.frames.mesh_warp import mesh_plate
-    from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_mask
+    from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
     size = net.config.image_size
     x0, y0, side = video.crop
@@ -301,12 +298,5 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
             region = np.maximum(parts.alpha[:, 0].numpy(), video.reference.masks[0][None].astype(np.float32))
             alpha = paste_mask(region, size)
-            for k in range(n):
-                g, a = gen[k], alpha[k]
-                if side != size:
-                    g = cv2.resize(g, (side, side), interpolation=cv2.INTER_CUBIC)
-                    a = cv2.resize(a, (side, side), interpolation=cv2.INTER_LINEAR)
-                base = crop.astype(np.float32) / 255.0
-                mixed = a[..., None] * np.clip(g, 0, 1) + (1.0 - a[..., None]) * base
-                out[start + k, y0:y0 + side, x0:x0 + side] = np.clip(np.rint(mixed * 255.0), 0, 255)
+            paste_generated(out[start:start + n], crop, (x0, y0, side), gen, alpha)
     return out
