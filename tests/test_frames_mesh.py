@@ -18,7 +18,7 @@ import torch
 from motion2video.cli import main
 from motion2video.core.errors import InputError
 from motion2video.frames.data import load_or_generate, make_pairs
-from motion2video.frames.mesh_flow import dense_flow, identity_flow, transform_uv
+from motion2video.frames.mesh_flow import dense_flow, edge_visibility, fill_hidden, identity_flow, transform_uv
 from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
 from motion2video.frames.specs import DatasetSpec
 from motion2video.frames.warp import warp_image
@@ -92,6 +92,52 @@ def test_extend_flow_continues_the_surface_into_a_band():
     assert np.all(out.visibility[ring] == 0.75) and np.array_equal(out.silhouette, sil)
     far = ~(ring | sil)
     np.testing.assert_allclose(out.flow[far], centres[far])
+
+
+def test_edge_visibility_turns_down_points_at_the_reference_edge():
+    ref_mask = np.zeros((32, 32), bool)
+    ref_mask[8:24, 8:24] = True
+    flow = identity_flow(32, 32)
+    vis = np.ones((32, 32), np.float32)
+    out = edge_visibility(flow, vis, ref_mask, edge_px=2.0)
+    assert out[16, 16] == 1.0  # deep inside: untouched
+    assert out[16, 8] == pytest.approx(0.25)  # on the edge (distance 1): (1 - 0.5) / 2
+    assert out[16, 9] == pytest.approx(0.75)
+    assert out[2, 2] == 0.0  # samples outside the reference person
+    np.testing.assert_array_equal(edge_visibility(flow, vis, ref_mask, edge_px=0.0), vis)
+
+
+def test_fill_hidden_takes_the_flow_of_the_nearest_well_seen_pixel():
+    flow = identity_flow(16, 16)
+    flow[:, 8:] = (100.0, 100.0)  # the right half samples a point the reference hides
+    vis = np.zeros((16, 16), np.float32)
+    vis[:, :8] = 1.0
+    support = np.zeros((16, 16), bool)
+    support[4:12, 2:14] = True
+    out = fill_hidden(flow, vis, support)
+    np.testing.assert_array_equal(out[6, 9], flow[6, 7])  # hidden: the well-seen pixel beside it
+    np.testing.assert_array_equal(out[6, 13], flow[6, 7])
+    np.testing.assert_array_equal(out[0, 12], flow[0, 12])  # outside the support: untouched
+    np.testing.assert_array_equal(out[6, 3], flow[6, 3])  # well seen: untouched
+    np.testing.assert_array_equal(fill_hidden(flow, np.zeros_like(vis), support), flow)  # nothing seen: unchanged
+
+
+def test_edge_settings_change_the_inputs_only_where_the_reference_sees_badly(mesh_seqs):
+    pairs = make_pairs(mesh_seqs, np.array([[0, 0, 1], [1, 0, 2]]))
+    ref_mask, flow, vis, sil = mesh_inputs(pairs)
+    net = MeshWarpGenerator(MeshWarpConfig(image_size=64, edge_px=2.0, fill_hidden=True))
+    new_flow, new_vis = net.seen_well(flow, vis, ref_mask, sil)
+    assert new_flow.shape == flow.shape and new_vis.shape == vis.shape
+    assert (new_vis <= vis + 1e-6).all() and (new_vis < vis - 0.1).any()
+    changed = (new_flow - flow).abs().amax(dim=-1) > 0
+    assert changed.any() and (new_vis[:, 0][changed] >= 0.0).all()
+    assert (vis[:, 0][changed] * 0 + new_vis[:, 0][changed] < 0.5).all()  # only badly seen pixels move
+
+
+def test_a_128_model_runs_at_256_with_the_same_weights():
+    small = MeshWarpGenerator(MeshWarpConfig(image_size=128, net_scale=2))
+    big = MeshWarpGenerator(MeshWarpConfig(image_size=256, net_scale=4))
+    big.load_state_dict(small.state_dict())  # the network sees the body at the same scale
 
 
 def test_eroded_silhouettes_erode_about_half_of_them():
@@ -200,9 +246,15 @@ def test_mesh_model_trains_saves_loads_and_evaluates(tmp_path, capsys):
 def test_mesh_settings_are_checked(tmp_path, capsys):
     rc = main(["train-frames", "--domain", "face", "--model-kind", "mesh", "-o", str(tmp_path / "m.safetensors")])
     assert rc == 2 and "body frames only" in capsys.readouterr().err
-    rc = main(["train-frames", "--domain", "body", "--model-kind", "mesh", "--net-scale", "4",
+    rc = main(["train-frames", "--domain", "body", "--model-kind", "mesh", "--flow-correction",
                "-o", str(tmp_path / "m.safetensors")])
-    assert rc == 2 and "--net-scale is 1 or 2" in capsys.readouterr().err
+    assert rc == 2 and "flow residual is always on" in capsys.readouterr().err
+    rc = main(["train-frames", "--domain", "body", "--model-kind", "warp", "--fill-hidden",
+               "-o", str(tmp_path / "m.safetensors")])
+    assert rc == 2 and "settings of --model-kind mesh" in capsys.readouterr().err
+    rc = main(["train-frames", "--domain", "body", "--model-kind", "mesh", "--size", "64", "--net-scale", "4",
+               "--crop", "48", "-o", str(tmp_path / "m.safetensors")])
+    assert rc == 2 and "multiple of 32" in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
 
 

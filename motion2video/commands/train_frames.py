@@ -59,7 +59,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "along the correspondence of one Anny mesh in both poses (body only); with --video: the "
                    "--init-from model's")
     p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
-                   help="warp model: its network works at 1/NET_SCALE of the resolution (default 4)")
+                   help="warp or mesh model: its network works at 1/NET_SCALE of the resolution (default: warp 4; mesh size/64, 2 at 128 and 4 at 256)")
     p.add_argument("--flow-correction", action="store_true",
                    help="warp model: the network also predicts a dense residual of the person's flow")
     p.add_argument("--sample-mode", choices=("bilinear", "bicubic"), default=None,
@@ -75,6 +75,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--silhouette-erosion", type=int, default=0, metavar="PX",
                    help="mesh model: erode half of the target silhouettes by 1 to PX pixels (robustness to a "
                    "body fitted to a real person; default 0)")
+    p.add_argument("--edge-px", type=float, default=None, metavar="PX",
+                   help="mesh model: reference points within PX pixels (at 128 px) of the reference silhouette's edge "
+                   "count as partly unseen (surfaces seen at a grazing angle; default 0 = off)")
+    p.add_argument("--fill-hidden", action="store_true",
+                   help="mesh model: pixels the reference does not show well start from the colour of the nearest "
+                   "well-seen pixel")
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
@@ -122,6 +128,10 @@ def run(args: argparse.Namespace) -> int:
     check_at_least("--batch-size", args.batch_size)
     if args.silhouette_erosion < 0 or (args.silhouette_erosion and args.model_kind != "mesh"):
         raise InputError("--silhouette-erosion is a setting of --model-kind mesh (0 or more pixels)")
+    if (args.edge_px is not None or args.fill_hidden) and args.model_kind != "mesh":
+        raise InputError("--edge-px and --fill-hidden are settings of --model-kind mesh")
+    if args.edge_px is not None and not args.edge_px >= 0:
+        raise InputError(f"--edge-px must be 0 or more pixels, got {args.edge_px}")
     output = Path(args.output)
     if output.suffix != ".safetensors":
         raise InputError("the checkpoint name must end in .safetensors", output)
@@ -141,10 +151,14 @@ def run(args: argparse.Namespace) -> int:
         from motion2video.frames.data import structure_channels
         from motion2video.frames.mesh_warp import MeshWarpConfig
 
-        if args.net_scale == 4 or args.flow_correction:
-            raise InputError("--model-kind mesh: --net-scale is 1 or 2, and its flow residual is always on")
+        if args.flow_correction:
+            raise InputError("--model-kind mesh: its flow residual is always on (leave out --flow-correction)")
+        net_scale = args.net_scale or max(1, args.size // 64)  # the network at 64 px: 2 at 128, 4 at 256
+        if crop % (net_scale * 8):
+            raise InputError(f"--crop {crop} must be a multiple of {net_scale * 8} at --net-scale {net_scale}")
         model_config = MeshWarpConfig(image_size=args.size, structure_channels=structure_channels("body"),
-                                      net_scale=args.net_scale or 2, sample_mode=args.sample_mode or "bicubic")
+                                      net_scale=net_scale, sample_mode=args.sample_mode or "bicubic",
+                                      edge_px=args.edge_px or 0.0, fill_hidden=args.fill_hidden)
         spec = replace(spec, vertices=True)  # the mesh correspondence of every frame
     elif warp:
         from motion2video.frames.data import structure_channels
@@ -189,6 +203,7 @@ def _run_video(args: argparse.Namespace) -> int:
              "--sample-mode": args.sample_mode is not None, "--train-sequences": args.train_sequences is not None,
              "--adversarial": args.adversarial, "--cache": args.cache is not None,
              "--silhouette-erosion": args.silhouette_erosion != 0,
+             "--edge-px": args.edge_px is not None, "--fill-hidden": args.fill_hidden,
              "--data-root": args.data_root is not None}
     ignored = [name for name, yes in given.items() if yes]
     if ignored:

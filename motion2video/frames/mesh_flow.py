@@ -139,3 +139,64 @@ def band_width(size: int) -> int:
     return max(1, round(BAND_PX * size / 128))
 
 
+
+
+# --- what the reference shows badly -----------------------------------------------------------------------
+#
+# A surface the reference sees at a grazing angle (the side of a leg that turns towards the camera in the
+# target) lands in the last pixel or two inside the reference silhouette, where the colour is half background.
+# Sampled there, a turned limb shows streaks of the background. Two pure functions let the generator treat such
+# points as unseen and start their colour from the nearest well-seen surface instead.
+
+def edge_visibility(flow: np.ndarray, visibility: np.ndarray, ref_mask: np.ndarray, edge_px: float) -> np.ndarray:
+    """The visibility map with the points that the reference shows within ``edge_px`` pixels of its silhouette's
+    edge turned down: each pixel's visibility is multiplied by ``clip((d - 0.5) / edge_px, 0, 1)``, where ``d``
+    is the distance (pixels) from the reference point it samples to the nearest pixel outside the reference
+    silhouette (1 for a pixel on the edge).
+
+    Args:
+        flow: (H, W, 2) reference pixel coordinates (x, y; centres at integer + 0.5).
+        visibility: (H, W) in [0, 1].
+        ref_mask: (H, W) the reference silhouette (> 0.5 = person).
+        edge_px: width of the turned-down band, pixels; <= 0 returns ``visibility`` unchanged.
+    Returns:
+        (H, W) float32.
+    """
+    import cv2
+    from scipy.ndimage import distance_transform_edt
+
+    visibility = np.asarray(visibility, np.float32)
+    if edge_px <= 0:
+        return visibility
+    inside = np.asarray(ref_mask) > 0.5
+    depth = distance_transform_edt(inside).astype(np.float32)
+    flow = np.asarray(flow, np.float32)
+    sampled = cv2.remap(depth, flow[..., 0] - 0.5, flow[..., 1] - 0.5, cv2.INTER_LINEAR,
+                        borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    return visibility * np.clip((sampled - 0.5) / float(edge_px), 0.0, 1.0)
+
+
+def fill_hidden(flow: np.ndarray, visibility: np.ndarray, support: np.ndarray, threshold: float = 0.5) -> np.ndarray:
+    """The flow with every pixel of ``support`` whose visibility is below ``threshold`` sampling where its nearest
+    well-seen pixel (visibility >= threshold) samples: the colour a hidden surface starts from is that of the
+    visible surface beside it, not of whatever lies at its own (unseen or grazing) reference point.
+
+    Args:
+        flow: (H, W, 2) reference pixel coordinates.
+        visibility: (H, W) in [0, 1].
+        support: (H, W) bool, the pixels that may be filled (the target silhouette and its band).
+        threshold: what counts as well seen.
+    Returns:
+        (H, W, 2) float32; ``flow`` unchanged when no pixel is well seen.
+    """
+    from scipy.ndimage import distance_transform_edt
+
+    flow = np.array(flow, np.float32, copy=True)
+    good = (np.asarray(visibility) >= threshold) & np.asarray(support, bool)
+    bad = np.asarray(support, bool) & ~good
+    if not good.any() or not bad.any():
+        return flow
+    _, (iy, ix) = distance_transform_edt(~good, return_indices=True)
+    ys, xs = np.nonzero(bad)
+    flow[ys, xs] = flow[iy[ys, xs], ix[ys, xs]]
+    return flow

@@ -201,7 +201,12 @@ def train_frames(
         raise ValueError("the mesh generator trains on sequences that keep their mesh vertices (DatasetSpec.vertices)")
     if (config.edge_weight or config.person_weight) and seqs.masks is None:
         raise ValueError("edge_weight / person_weight need sequences with person masks")
-    factor = 2 ** (len(model_config.channels) - 1) if not warp else 8
+    if config.model_kind == "mesh":  # the network's 4 levels at 1 / net_scale of the crop
+        factor = 8 * model_config.net_scale
+    elif warp:
+        factor = 8
+    else:
+        factor = 2 ** (len(model_config.channels) - 1)
     if config.crop and (config.crop > seqs.image_size or config.crop % factor):
         raise ValueError(f"crop {config.crop} must be <= the image size {seqs.image_size} and a multiple of {factor}")
     if (model_config.domain, model_config.image_size) != (seqs.domain, seqs.image_size):
