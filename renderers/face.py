@@ -32,7 +32,7 @@ from motion2video.core.rotations import axis_angle_to_matrix
 from renderers import anny_model
 from renderers.anny_model import AnnyRest
 from renderers.base import RendererBase
-from renderers.mesh import MeshRenderer
+from renderers.mesh import MeshRenderer, vertex_visibility
 
 STYLES = ("appearance", "structure")
 # Face landmarks (Anny vertices picked on the rest mesh by :func:`face_landmark_vertices`), in this order.
@@ -169,12 +169,18 @@ class FaceFrames:
         camera: the camera used.
         landmarks: (T, K, 2) float32 pixel positions (x, y) of :data:`FACE_LANDMARK_NAMES` on the posed
             mesh (whether or not they are occluded).
+        vertex_uv: (T, V, 2) float32 pixel positions of all Anny's V vertices (so that identities whose drawn
+            sub-meshes differ share one index), or None (asked for with ``vertices=True``: the mesh generator's
+            correspondence).
+        vertex_visible: (T, V) bool, the vertex is drawn and the front surface (depth test), or None.
     """
 
     frames: np.ndarray
     masks: np.ndarray
     camera: PinholeCamera
     landmarks: np.ndarray
+    vertex_uv: np.ndarray | None = None
+    vertex_visible: np.ndarray | None = None
 
 
 @dataclass
@@ -274,13 +280,14 @@ class FaceRenderer(RendererBase):
             yield start, out["vertices"][:, ids].cpu().numpy().astype(np.float32)
 
     def render_with_masks(self, face: FaceMotion, *, camera: PinholeCamera | None = None,
-                          progress: Callable[[int], object] | None = None) -> FaceFrames:
+                          progress: Callable[[int], object] | None = None, vertices: bool = False) -> FaceFrames:
         """Render every frame of ``face``; see :class:`FaceFrames`.
 
         Args:
             face: the face motion.
             camera: the camera; None places the close-up camera of :meth:`camera_for`.
             progress: called with the number of frames rendered after each batch.
+            vertices: also keep every vertex's pixel and front-surface flag (``vertex_uv``, ``vertex_visible``).
         """
         if not isinstance(face, FaceMotion):
             raise InputError(f"the face renderer needs a FaceMotion, got {type(face).__name__}")
@@ -292,15 +299,25 @@ class FaceRenderer(RendererBase):
         frames = np.zeros((face.num_frames, self.height, self.width, 3), dtype=np.uint8)
         masks = np.zeros((face.num_frames, self.height, self.width), dtype=bool)
         landmarks = np.zeros((face.num_frames, len(FACE_LANDMARK_NAMES), 2), dtype=np.float32)
+        vertex_uv = vertex_visible = None
+        if vertices:
+            count = len(head.rest.vertices)
+            vertex_uv = np.zeros((face.num_frames, count, 2), np.float32)
+            vertex_visible = np.zeros((face.num_frames, count), bool)
         for start, verts in self.vertices(face):
             landmarks[start:start + len(verts)] = camera.project(verts[:, head.landmarks])[..., :2]
             for k, v in enumerate(verts):
                 out = self._mesh.render_mesh(v, head.faces, vertex_colors=head.colors, camera=camera,
                                              background=self.style.background)
                 frames[start + k], masks[start + k] = out.color, out.mask
+                if vertex_uv is not None:
+                    uvz = camera.project(v)  # (K, 3) the drawn vertices
+                    vertex_uv[start + k, head.vertex_ids] = uvz[:, :2]
+                    vertex_visible[start + k, head.vertex_ids] = vertex_visibility(uvz, out.depth)
             if progress is not None:
                 progress(len(verts))
-        return FaceFrames(frames=frames, masks=masks, camera=camera, landmarks=landmarks)
+        return FaceFrames(frames=frames, masks=masks, camera=camera, landmarks=landmarks, vertex_uv=vertex_uv,
+                          vertex_visible=vertex_visible)
 
     def iter_frames(self, face: FaceMotion, *, camera: PinholeCamera | None = None) -> Iterator[np.ndarray]:
         """Yield ``face``'s close-up frames as (b, H, W, 3) uint8 chunks (equal to :meth:`render`'s)."""

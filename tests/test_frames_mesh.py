@@ -244,7 +244,7 @@ def test_mesh_model_trains_saves_loads_and_evaluates(tmp_path, capsys):
 
 
 def test_mesh_settings_are_checked(tmp_path, capsys):
-    rc = main(["train-frames", "--domain", "face", "--model-kind", "mesh", "-o", str(tmp_path / "m.safetensors")])
+    rc = main(["train-frames", "--domain", "face", "--model-kind", "warp", "-o", str(tmp_path / "m.safetensors")])
     assert rc == 2 and "body frames only" in capsys.readouterr().err
     rc = main(["train-frames", "--domain", "body", "--model-kind", "mesh", "--flow-correction",
                "-o", str(tmp_path / "m.safetensors")])

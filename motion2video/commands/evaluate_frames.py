@@ -80,10 +80,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
-# The previous body generator, scored next to every new one: the keypoint warp next to the mesh generator, the
-# feature-analogy generator next to the keypoint warp.
+# The previous generator, scored next to every new one: the keypoint warp next to the body mesh generator, the
+# feature-analogy face generator next to the face mesh generator, the feature-analogy body generator next to the
+# keypoint warp.
 DEFAULT_BASELINE = {"body": "frames-body-128-v1"}
-DEFAULT_BASELINE_BY_KIND = {"mesh": "frames-body-128"}
+DEFAULT_BASELINE_BY_KIND = {("mesh", "body"): "frames-body-128", ("mesh", "face"): "frames-face-128"}
 
 
 def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str]]:
@@ -96,7 +97,7 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
     cfg = loaded.config
     explicit = names is not None
     if names is None:
-        default = DEFAULT_BASELINE_BY_KIND.get(loaded.kind, DEFAULT_BASELINE.get(cfg.domain))
+        default = DEFAULT_BASELINE_BY_KIND.get((loaded.kind, cfg.domain), DEFAULT_BASELINE.get(cfg.domain))
         names = [default] if default else []
     baselines, left_out = {}, {}
     for name in names:

@@ -56,7 +56,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model-kind", choices=("analogy", "warp", "mesh"), default=None,
                    help="analogy (default): the feature-analogy generator; warp: the generator that warps the "
                    "reference person along per-limb transforms (body only); mesh: the generator that moves it "
-                   "along the correspondence of one Anny mesh in both poses (body only); with --video: the "
+                   "along the correspondence of one Anny mesh in both poses (body, or face: the head mesh); with --video: the "
                    "--init-from model's")
     p.add_argument("--net-scale", type=int, default=None, choices=(1, 2, 4),
                    help="warp or mesh model: its network works at 1/NET_SCALE of the resolution (default: warp 4; mesh size/64, 2 at 128 and 4 at 256)")
@@ -123,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     args.steps = 3000 if args.steps is None else args.steps
     args.lr = 1e-3 if args.lr is None else args.lr
     check_at_least("--steps", args.steps)
-    if args.model_kind in ("warp", "mesh") and args.domain != "body":
+    if args.model_kind == "warp" and args.domain != "body":
         raise InputError(f"--model-kind {args.model_kind} makes body frames only (use --domain body)")
     check_at_least("--batch-size", args.batch_size)
     if args.silhouette_erosion < 0 or (args.silhouette_erosion and args.model_kind != "mesh"):
@@ -156,7 +156,8 @@ def run(args: argparse.Namespace) -> int:
         net_scale = args.net_scale or max(1, args.size // 64)  # the network at 64 px: 2 at 128, 4 at 256
         if crop % (net_scale * 8):
             raise InputError(f"--crop {crop} must be a multiple of {net_scale * 8} at --net-scale {net_scale}")
-        model_config = MeshWarpConfig(image_size=args.size, structure_channels=structure_channels("body"),
+        model_config = MeshWarpConfig(domain=args.domain, image_size=args.size,
+                                      structure_channels=structure_channels(args.domain),
                                       net_scale=net_scale, sample_mode=args.sample_mode or "bicubic",
                                       edge_px=args.edge_px or 0.0, fill_hidden=args.fill_hidden)
         spec = replace(spec, vertices=True)  # the mesh correspondence of every frame

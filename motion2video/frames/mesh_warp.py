@@ -47,9 +47,10 @@ class MeshWarpConfig:
     """Architecture of the mesh generator.
 
     Attributes:
-        domain: ``"body"`` (the mesh is Anny's body).
+        domain: ``"body"`` (the mesh is Anny's body) or ``"face"`` (the head sub-mesh of the face renderer).
         image_size: the model's square size; a multiple of net_scale * 2**(levels - 1).
-        structure_channels: channels of the target's joint structure map (17 heatmaps + 16 limb maps).
+        structure_channels: channels of the target's structure map (body: 17 joint heatmaps + 16 limb maps;
+            face: 1, the grey render).
         channels: feature channels per network level (level 0 at 1 / net_scale of the image size).
         net_scale: the network's level 0 works at 1 / net_scale of the image size (1, 2 or 4); the warp and the
             composite are at full resolution. A 128 px model at net_scale 2 and a 256 px model at net_scale 4
@@ -72,8 +73,8 @@ class MeshWarpConfig:
     fill_hidden: bool = False
 
     def __post_init__(self) -> None:
-        if self.domain != "body":
-            raise ValueError(f"the mesh generator makes body frames only, got domain {self.domain!r}")
+        if self.domain not in ("body", "face"):
+            raise ValueError(f"the mesh generator makes body or face frames, got domain {self.domain!r}")
         if len(self.channels) < 2:
             raise ValueError("channels needs at least two levels")
         if self.net_scale not in (1, 2, 4):

@@ -263,8 +263,11 @@ def render_shard(source: SequenceSource, shard: int, *,
                 uvs.append(window.vertex_uv.astype(np.float16))
                 seen.append(window.vertex_visible)
         else:
-            im, pts, st, mk, ci, start = render_face_sequence(source, rng, identity)
+            im, pts, st, mk, ci, start, mesh = render_face_sequence(source, rng, identity)
             structs.append(st)
+            if spec.vertices:
+                uvs.append(mesh[0].astype(np.float16))
+                seen.append(mesh[1])
         images.append(im)
         masks.append(mk)
         points.append(pts)
@@ -323,7 +326,9 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
 
     Returns:
         images (T, S, S, 3) uint8, points (T, K, 2) float32 projected control vertices, structures
-        (T, S, S) uint8 grey structure renders, masks (T, S, S) bool, clip index, first source frame.
+        (T, S, S) uint8 grey structure renders, masks (T, S, S) bool, clip index, first source frame, and
+        (vertex_uv (T, V, 2) float32, vertex_visible (T, V) bool) of the head mesh when the spec keeps vertices,
+        else None.
     """
     from motion2video.data.face_dynamics import head_pose_track
     from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion
@@ -351,7 +356,7 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
     with renderer_for("face", "face", size=size, **appearance) as drawer:
         renderer = drawer.renderer
         camera = yawed_camera(renderer.camera_for(face), azimuth)
-        out = renderer.render_with_masks(face, camera=camera)
+        out = renderer.render_with_masks(face, camera=camera, vertices=spec.vertices)
         verts = np.concatenate([v for _, v in renderer.vertices(face)])  # (T, K, 3)
     with renderer_for("face", "structure", size=size) as drawer:
         grey = drawer.draw(face, camera=camera)  # (T, S, S, 3)
@@ -360,4 +365,5 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
     points = np.concatenate([out.landmarks, camera.project(verts[:, control])[..., :2]], axis=1)  # (T, 8+K, 2)
     points = points.astype(np.float32)
     structures = np.rint(grey.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # (T, S, S)
-    return images, points, structures, out.masks, ci, int(times[0])
+    mesh = (out.vertex_uv, out.vertex_visible) if spec.vertices else None
+    return images, points, structures, out.masks, ci, int(times[0]), mesh

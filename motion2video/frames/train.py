@@ -190,7 +190,8 @@ def train_frames(
     output = Path(output)
     warp = config.model_kind in ("warp", "mesh")
     if model_config is None and config.model_kind == "mesh":
-        model_config = MeshWarpConfig(image_size=seqs.image_size, structure_channels=structure_channels("body"))
+        model_config = MeshWarpConfig(domain=seqs.domain, image_size=seqs.image_size,
+                                      structure_channels=structure_channels(seqs.domain))
     elif model_config is None and warp:
         model_config = WarpGeneratorConfig(domain=seqs.domain, image_size=seqs.image_size,
                                            structure_channels=structure_channels(seqs.domain))
