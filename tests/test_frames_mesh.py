@@ -315,3 +315,62 @@ def test_synthesize_through_the_mesh_generator(tmp_path, capsys):
     errors = [line for line in err.strip().splitlines() if "note:" not in line]
     assert rc == 2 and len(errors) == 1 and "needs a 3D body motion" in errors[0]
     assert not bad.exists()
+
+
+# --- the face through the face mesh (issue 22, item 3) --------------------------------------------------------
+
+def test_face_renderer_keeps_the_head_mesh_correspondence():
+    from motion2video.core.motion import FaceMotion
+    from renderers.face import FaceRenderer, FaceStyle
+
+    params = np.zeros((2, 58), np.float32)
+    params[1, 52 + 2] = 0.3  # the head turns
+    out = FaceRenderer(FaceStyle(size=(64, 64))).render_with_masks(FaceMotion(params, 25.0), vertices=True)
+    assert out.vertex_uv.shape[:2] == out.vertex_visible.shape == (2, 13718)
+    seen = out.vertex_visible[0]
+    assert 300 < seen.sum() < 13718 // 2  # the front of the head only
+    px = np.floor(out.vertex_uv[0, seen]).astype(int)
+    assert out.masks[0][px[:, 1].clip(0, 63), px[:, 0].clip(0, 63)].mean() > 0.98  # seen vertices lie on the head
+    assert not np.array_equal(out.vertex_visible[0], out.vertex_visible[1])
+
+
+def test_colour_difference_finds_hair_that_changed_colour():
+    from motion2video.frames.evaluate import mean_colour_difference, vertex_region_masks
+
+    truth = np.full((16, 16, 3), (72, 48, 32), np.uint8)  # brown
+    olive = np.full((16, 16, 3), (80, 80, 40), np.uint8)
+    mask = np.ones((16, 16), bool)
+    assert mean_colour_difference(truth, truth, mask) == 0.0
+    assert mean_colour_difference(olive, truth, mask) > 10.0
+    assert np.isnan(mean_colour_difference(olive, truth, np.zeros_like(mask)))
+    uv = np.array([[[4.0, 8.0], [12.0, 8.0]]], np.float32)  # two vertices: left is hair (4), right skin (0)
+    regions = vertex_region_masks(uv, np.ones((1, 2), bool), mask[None], np.array([4, 0]), {"hair": 4, "skin": 0})
+    assert regions["hair"][0, :, :8].all() and not regions["hair"][0, :, 8:].any()
+    assert regions["skin"][0, :, 8:].all()
+
+
+def test_face_mesh_model_trains_evaluates_and_synthesizes(tmp_path, capsys):
+    import imageio.v3 as iio
+
+    cache = tmp_path / "cache"
+    ckpt = tmp_path / "face-mesh.safetensors"
+    rc = main(["train-frames", "--domain", "face", "--model-kind", "mesh", "-o", str(ckpt), "--steps", "2",
+               "--size", "64", "--crop", "48", "--batch-size", "2", "--train-sequences", "2", "--cache", str(cache),
+               "--no-progress"])
+    assert rc == 0, capsys.readouterr().err
+    capsys.readouterr()
+    out_json = tmp_path / "eval.json"
+    rc = main(["evaluate-frames", "--model", str(ckpt), "--json", str(out_json), "--cache", str(cache),
+               "--test-sequences", "1", "--no-progress"])
+    assert rc == 0
+    results = json.loads(out_json.read_text())["results"]
+    gen, copy = results["generator"], results["copy-reference"]
+    assert gen["psnr"] > copy["psnr"] + 3  # the head mesh's correspondence moves the face from the start
+    assert gen["hair_colour_de"] < 3 and gen["skin_colour_de"] < 3
+    out = tmp_path / "face.mp4"
+    rc = main(["synthesize", "--motion-model", "mtvae-add-face", "--frame-model", str(ckpt),
+               str(ROOT / "demo_inputs" / "smile.npz"), "--reference", str(ROOT / "demo_inputs" / "reference_face.png"),
+               "--samples", "2", "--observed", "8", "--horizon", "8", "-o", str(out)])
+    assert rc == 0, capsys.readouterr().err
+    frames = iio.imread(out)
+    assert frames.shape[0] == 16 and frames.std() > 5

@@ -309,12 +309,13 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     if layout_domain != domain:
         raise InputError(f"the frame model makes {domain} frames but the motion model {bundle.label} predicts "
                          f"{layout_domain} motion: give a {layout_domain} frame model (frames-{layout_domain}-128)")
-    if getattr(frames_model, "kind", "analogy") == "mesh" and bundle.data_config.layout != "body3d":
+    kind = getattr(frames_model, "kind", "analogy")
+    if kind == "mesh" and domain == "body" and bundle.data_config.layout != "body3d":
         raise InputError(f"the mesh frame generator needs a 3D body motion (the motion model {bundle.label} predicts "
                          f"2D keypoints); use --frame-model frames-body-128")
     size = gen_config.image_size if config.size is None else int(config.size)
-    if size != gen_config.image_size and getattr(frames_model, "kind", "analogy") not in ("warp", "mesh"):
-        raise InputError(f"--size {size} needs a warp frame model (this {domain} generator makes "
+    if size != gen_config.image_size and (kind not in ("warp", "mesh") or domain == "face"):
+        raise InputError(f"--size {size} needs a body warp or mesh frame model (this {domain} generator makes "
                          f"{gen_config.image_size} px frames only)")
     clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps).data
     ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose,

@@ -172,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         extra["poses"] = posed.poses
     else:
         spec = default_spec(cfg.domain, "test", cfg.image_size)
-        if loaded.kind == "mesh":  # it needs the mesh correspondence of every frame
+        if loaded.kind == "mesh" or cfg.domain == "face":  # the mesh correspondence; the faces' colour regions
             spec = replace(spec, vertices=True)
         if args.test_sequences is not None:
             check_at_least("--test-sequences", args.test_sequences)
@@ -191,8 +191,13 @@ def run(args: argparse.Namespace) -> int:
         else:
             cache = Path(args.cache) if args.cache else default_cache_dir()
             seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
+        regions = None
+        if cfg.domain == "face":
+            from motion2video.frames.evaluate import face_region_masks
+
+            regions = face_region_masks(seqs)  # hair_colour_de, skin_colour_de
         evaluation = evaluate_sequences(loaded.model, seqs, max_pairs=args.pairs, baseline_models=baselines,
-                                        head_masks=heads)
+                                        head_masks=heads, region_masks=regions)
     print(json.dumps(json_payload(evaluation, extra=extra), indent=2, sort_keys=True))
     if args.json:
         write_json(evaluation, args.json, extra=extra)

@@ -91,6 +91,64 @@ def moving_region(ref: np.ndarray, target: np.ndarray, ref_mask: np.ndarray, tgt
 
 PERSON_METRICS = ("person_psnr", "person_ssim", "person_sharpness", "moving_psnr", "moving_sharpness")
 HEAD_METRICS = ("head_psnr", "head_ssim")
+COLOUR_REGIONS = ("hair", "skin")  # faces: "<region>_colour_de", the colour difference of the region's mean colour
+MIN_REGION_PIXELS = 16  # a region smaller than this in a target frame is not scored (NaN)
+
+
+def mean_colour_difference(pred: np.ndarray, target: np.ndarray, mask: np.ndarray) -> float:
+    """CIE76 colour difference (Delta E*ab, CIELAB units; about 2.3 is just noticeable) between the mean colours of
+    two (H, W, 3) uint8 frames over the pixels of ``mask`` (H, W) bool: whether a region keeps its colour (brown
+    hair that turns olive), whatever its texture. NaN when the mask has fewer than :data:`MIN_REGION_PIXELS`."""
+    from skimage.color import rgb2lab
+
+    if int(mask.sum()) < MIN_REGION_PIXELS:
+        return float("nan")
+    a = rgb2lab(pred[mask][None].astype(np.float64) / 255.0)[0].mean(axis=0)
+    b = rgb2lab(target[mask][None].astype(np.float64) / 255.0)[0].mean(axis=0)
+    return float(np.linalg.norm(a - b))
+
+
+def vertex_region_masks(uv: np.ndarray, visible: np.ndarray, masks: np.ndarray, labels: np.ndarray,
+                        regions: dict[str, int]) -> dict[str, np.ndarray]:
+    """Pixels of each region in rendered frames: every silhouette pixel takes the label of its nearest visible
+    vertex.
+
+    Args:
+        uv: (N, V, 2) vertex pixels; visible: (N, V) bool; masks: (N, H, W) bool silhouettes.
+        labels: (V,) int region code per vertex; regions: name -> code.
+    Returns:
+        name -> (N, H, W) bool.
+    """
+    from scipy.spatial import cKDTree
+
+    from motion2video.frames.mesh_flow import pixel_centres
+
+    out = {name: np.zeros(masks.shape, bool) for name in regions}
+    for i in range(len(masks)):
+        seen = np.flatnonzero(visible[i])
+        if len(seen) == 0 or not masks[i].any():
+            continue
+        _, idx = cKDTree(np.asarray(uv[i], np.float64)[seen]).query(pixel_centres(masks[i]))
+        code = labels[seen[idx]]
+        ys, xs = np.nonzero(masks[i])
+        for name, value in regions.items():
+            keep = code == value
+            out[name][i, ys[keep], xs[keep]] = True
+    return out
+
+
+def face_region_masks(seqs: FrameSequences) -> dict[str, np.ndarray]:
+    """:data:`COLOUR_REGIONS` pixels of every frame of face sequences that keep their vertices: name ->
+    (N, T, H, W) bool (the region of each vertex from Anny's colour regions on the default body)."""
+    from renderers import anny_model
+
+    labels = anny_model.region_weights().argmax(axis=1)
+    codes = {name: anny_model.REGION_NAMES.index(name) for name in COLOUR_REGIONS}
+    n, t = seqs.images.shape[:2]
+    flat = vertex_region_masks(seqs.vertex_uv.reshape(n * t, -1, 2).astype(np.float32),
+                               seqs.vertex_visible.reshape(n * t, -1), seqs.masks.reshape(n * t, *seqs.masks.shape[2:]),
+                               labels, codes)
+    return {name: m.reshape(n, t, *m.shape[1:]) for name, m in flat.items()}
 
 
 def region_ssim(ssim_map: np.ndarray, mask: np.ndarray) -> float:
@@ -99,16 +157,21 @@ def region_ssim(ssim_map: np.ndarray, mask: np.ndarray) -> float:
 
 
 def person_metrics(pred: np.ndarray, target: np.ndarray, ref: np.ndarray, ref_masks: np.ndarray,
-                   tgt_masks: np.ndarray, tgt_head_masks: np.ndarray | None = None) -> dict[str, np.ndarray]:
-    """Per-pair person metrics (:data:`PERSON_METRICS`, and :data:`HEAD_METRICS` with head masks).
+                   tgt_masks: np.ndarray, tgt_head_masks: np.ndarray | None = None,
+                   tgt_regions: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+    """Per-pair person metrics (:data:`PERSON_METRICS`, :data:`HEAD_METRICS` with head masks, and
+    ``<region>_colour_de`` for every region given).
 
     Args:
         pred, target, ref: (N, H, W, 3) uint8 frames; ref_masks, tgt_masks: (N, H, W) bool silhouettes;
-        tgt_head_masks: (N, H, W) bool visible head of the target, or None.
+        tgt_head_masks: (N, H, W) bool visible head of the target, or None;
+        tgt_regions: region name -> (N, H, W) bool its pixels in the target (:func:`face_region_masks`), or None.
     Returns:
         metric name -> (N,) float64 (NaN where a region is empty).
     """
-    keys = PERSON_METRICS + (HEAD_METRICS if tgt_head_masks is not None else ())
+    regions = tgt_regions or {}
+    keys = PERSON_METRICS + (HEAD_METRICS if tgt_head_masks is not None else ()) + \
+        tuple(f"{name}_colour_de" for name in regions)
     out = {k: np.empty(len(pred)) for k in keys}
     for i, (p, t, r, mr, mt) in enumerate(zip(pred, target, ref, ref_masks, tgt_masks)):
         _, smap = structural_similarity(t, p, channel_axis=-1, data_range=255, full=True)
@@ -121,6 +184,8 @@ def person_metrics(pred: np.ndarray, target: np.ndarray, ref: np.ndarray, ref_ma
         if tgt_head_masks is not None:
             out["head_psnr"][i] = region_psnr(p, t, tgt_head_masks[i])
             out["head_ssim"][i] = region_ssim(smap, tgt_head_masks[i])
+        for name, region in regions.items():
+            out[f"{name}_colour_de"][i] = mean_colour_difference(p, t, region[i])
     return out
 
 
@@ -142,11 +207,12 @@ class MethodScores:
     @staticmethod
     def from_frames(pred: np.ndarray, target: np.ndarray, *, ref: np.ndarray | None = None,
                     ref_masks: np.ndarray | None = None, tgt_masks: np.ndarray | None = None,
-                    tgt_head_masks: np.ndarray | None = None) -> "MethodScores":
+                    tgt_head_masks: np.ndarray | None = None,
+                    tgt_regions: dict[str, np.ndarray] | None = None) -> "MethodScores":
         psnr, ssim = frame_metrics(pred, target)
         per: dict[str, np.ndarray] = {}
         if ref is not None and ref_masks is not None and tgt_masks is not None:
-            per = person_metrics(pred, target, ref, ref_masks, tgt_masks, tgt_head_masks)
+            per = person_metrics(pred, target, ref, ref_masks, tgt_masks, tgt_head_masks, tgt_regions)
         return MethodScores.from_per_pair(psnr, ssim, per)
 
     @staticmethod
@@ -264,10 +330,11 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
 
 def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePairs, *, domain: str,
                    batch_size: int = 16, baseline_models: dict | None = None,
-                   tgt_head_masks: np.ndarray | None = None) -> FrameEvaluation:
+                   tgt_head_masks: np.ndarray | None = None,
+                   tgt_regions: dict[str, np.ndarray] | None = None) -> FrameEvaluation:
     """Score the generator (when given), every baseline and every named baseline generator
     (``baseline_models``: name -> model) on ``pairs``; ``tgt_head_masks`` (N, H, W) bool adds the head
-    metrics."""
+    metrics, ``tgt_regions`` (name -> (N, H, W) bool) the colour differences of those regions."""
     preds: dict[str, np.ndarray] = {}
     if model is not None:
         preds["generator"] = run_generator(model, pairs, batch_size=batch_size)
@@ -276,7 +343,8 @@ def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePai
     for name, other in (baseline_models or {}).items():
         preds[name] = run_generator(other, pairs, batch_size=batch_size)
     results = {name: MethodScores.from_frames(p, pairs.tgt_images, ref=pairs.ref_images, ref_masks=pairs.ref_masks,
-                                              tgt_masks=pairs.tgt_masks, tgt_head_masks=tgt_head_masks)
+                                              tgt_masks=pairs.tgt_masks, tgt_head_masks=tgt_head_masks,
+                                              tgt_regions=tgt_regions)
                for name, p in preds.items()}
     preds["reference"] = pairs.ref_images
     preds["target"] = pairs.tgt_images
@@ -287,10 +355,12 @@ def evaluate_pairs(model: FrameGenerator | WarpGenerator | None, pairs: FramePai
 def evaluate_sequences(model: FrameGenerator | WarpGenerator | None, seqs: FrameSequences, *,
                        max_pairs: int | None = None, chunk: int = 64,
                        baseline_models: dict | None = None, head_masks: np.ndarray | None = None,
+                       region_masks: dict[str, np.ndarray] | None = None,
                        pairs: str = "held-out") -> FrameEvaluation:
     """Score on the fixed evaluation pairs of ``seqs`` (:func:`evaluation_pair_index`), in chunks so the
     structure maps of every pair are never all in memory at once. ``head_masks`` (N, T, H, W) bool, the
-    visible head of every frame, adds the head metrics."""
+    visible head of every frame, adds the head metrics; ``region_masks`` (name -> (N, T, H, W) bool,
+    :func:`face_region_masks`) the colour difference of each region."""
     index = evaluation_pair_index(seqs)
     if max_pairs is not None:
         index = index[:max_pairs]
@@ -299,8 +369,12 @@ def evaluate_sequences(model: FrameGenerator | WarpGenerator | None, seqs: Frame
     def heads(rows: np.ndarray) -> np.ndarray | None:
         return None if head_masks is None else head_masks[rows[:, 0], rows[:, 2]]
 
+    def regions(rows: np.ndarray) -> dict[str, np.ndarray] | None:
+        return None if region_masks is None else {k: m[rows[:, 0], rows[:, 2]] for k, m in region_masks.items()}
+
     parts = [evaluate_pairs(model, make_pairs(seqs, index[i:i + chunk]), domain=seqs.domain,
-                            baseline_models=baseline_models, tgt_head_masks=heads(index[i:i + chunk]))
+                            baseline_models=baseline_models, tgt_head_masks=heads(index[i:i + chunk]),
+                            tgt_regions=regions(index[i:i + chunk]))
              for i in range(0, len(index), chunk)]
     preds = {k: np.concatenate([p.predictions[k] for p in parts]) for k in parts[0].predictions}
     results = {}

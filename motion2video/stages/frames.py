@@ -35,19 +35,36 @@ def is_mesh(net) -> bool:
 
 
 def mesh_setup(net, reference: Reference, structures: Structures):
-    """The :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
+    """Body: the :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
     reference person's Anny body (the reference pose file's phenotype, Anny's defaults otherwise) in the
-    reference pose and in every target pose."""
+    reference pose and in every target pose. Face: None (the face structures carry their head mesh)."""
     from motion2video.core.errors import InputError
     from motion2video.stages.mesh_frames import mesh_video
 
-    if structures.domain != "body" or structures.placement is None:
+    if net.config.domain != structures.domain:
+        raise InputError(f"the mesh frame generator makes {net.config.domain} frames, not {structures.domain} frames")
+    if structures.domain == "face":
+        if structures.face_mesh is None:
+            raise InputError("the face mesh generator needs face structures with their head mesh")
+        return None
+    if structures.placement is None:
         raise InputError("the mesh frame generator makes body frames from a body motion")
     n = structures.num_targets
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
                       output_size=structures.size, model_size=net.config.image_size,
                       person_mask=None if phenotype else reference_person_mask(reference.image))
+
+
+def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,
+                batch_size: int = 4) -> np.ndarray:
+    """(R, S, S, 3) uint8 frames of the mesh generator for target ``rows`` (0 = the first observed frame):
+    body through ``video`` (:func:`mesh_setup`), face through the structures' head mesh."""
+    from motion2video.stages.mesh_frames import generate_face_mesh_frames, generate_mesh_frames
+
+    if structures.domain == "face":
+        return generate_face_mesh_frames(net, reference.image, structures, rows, batch_size=batch_size)
+    return generate_mesh_frames(net, reference.image, video, rows, batch_size=batch_size)
 
 
 def reference_person_mask(image: np.ndarray) -> np.ndarray | None:
@@ -134,12 +151,10 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
     at the structures' size instead (the person generated at the model's size, pasted into the reference)."""
     net = getattr(model, "model", model)
     if is_mesh(net):
-        from motion2video.stages.mesh_frames import generate_mesh_frames
-
         n = structures.num_targets
         with torch_threads(threads):
             video = mesh_setup(net, reference, structures)
-            frames = generate_mesh_frames(net, reference.image, video, np.arange(n), batch_size=batch_size)
+            frames = mesh_frames(net, reference, structures, video, np.arange(n), batch_size=batch_size)
         to, k, tf = structures.observed, structures.samples, structures.horizon
         size = structures.size
         return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
@@ -184,8 +199,6 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
     warp = is_warp(net)
     mesh = is_mesh(net)
     if mesh:  # the meshes of every target row, once
-        from motion2video.stages.mesh_frames import generate_mesh_frames
-
         with torch_threads(threads):
             video = mesh_setup(net, reference, structures)
     elif warp:  # the warp generator works at any frame size: its person crop is resized to the model's size
@@ -203,7 +216,7 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
         t0 = time.perf_counter()
         with torch_threads(threads):
             if mesh:
-                frames = generate_mesh_frames(net, reference.image, video, unique - 1, batch_size=batch_size)
+                frames = mesh_frames(net, reference, structures, video, unique - 1, batch_size=batch_size)
             elif warp:
                 frames = net.decode(state, structures.points[unique], batch_size=batch_size)
             else:

@@ -300,3 +300,50 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             alpha = paste_mask(region, size)
             paste_generated(out[start:start + n], crop, (x0, y0, side), gen, alpha)
     return out
+
+
+def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarray, *,
+                              batch_size: int = 8) -> np.ndarray:
+    """Face frames of the mesh generator for target ``rows`` (0 = the first observed frame) of face
+    ``structures``: the reference image moved along the head mesh's correspondence between the reference row
+    and each target row (the whole frame: a face close-up fills it).
+
+    Args:
+        net: a face :class:`motion2video.frames.mesh_warp.MeshWarpGenerator`.
+        image: (S, S, 3) uint8 the reference at the model's size.
+        structures: face :class:`motion2video.stages.structure.Structures` with ``face_mesh``.
+        rows: (R,) target indices.
+    Returns:
+        (R, S, S, 3) uint8.
+    """
+    import torch
+
+    from motion2video.frames.data import face_structures
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
+    from motion2video.frames.mesh_warp import mesh_plate
+
+    track = structures.face_mesh
+    size = net.config.image_size
+    if image.shape != (size, size, 3) or track.masks.shape[1:] != (size, size):
+        raise ValueError(f"the face mesh generator makes {size} px frames: reference {image.shape}, "
+                         f"structures {track.masks.shape[1:]}")
+    x_ref = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)[None].float() / 255.0
+    ref_mask = torch.from_numpy(track.masks[:1, None].astype(np.float32))
+    plate = mesh_plate(x_ref, ref_mask)
+    rows = np.asarray(rows, np.int64)
+    out = np.empty((len(rows), size, size, 3), np.uint8)
+    net.eval()
+    with torch.inference_mode():
+        for start in range(0, len(rows), batch_size):
+            part = rows[start:start + batch_size] + 1  # structure rows (0 = the reference)
+            flows = [extend_flow(dense_flow(track.uv[0], track.visible[0], track.uv[r], track.visible[r],
+                                            track.masks[r]), band_width(size)) for r in part]
+            n = len(part)
+            gen = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
+                                    torch.from_numpy(np.stack([f.flow for f in flows])),
+                                    torch.from_numpy(np.stack([f.visibility for f in flows]))[:, None],
+                                    torch.from_numpy(track.masks[part][:, None].astype(np.float32)),
+                                    torch.from_numpy(face_structures(structures.images[part])),
+                                    plate=plate.expand(n, -1, -1, -1)).image
+            out[start:start + n] = (gen.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy()
+    return out

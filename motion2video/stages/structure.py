@@ -183,6 +183,9 @@ class Structures:
         images: face: (1 + To + K*Tf, S, S) uint8 grey renders in the same row order.
         observed: To. samples: K. horizon: Tf.
         placement: the body placement (body only), for the mesh video.
+        face_mesh: face: the head mesh's correspondence in the same rows
+            (:class:`motion2video.stages.mesh_frames.MeshTrack`: vertex pixels, front-surface flags, silhouettes),
+            for the mesh generator.
     """
 
     domain: str
@@ -193,6 +196,7 @@ class Structures:
     points: np.ndarray | None = None
     images: np.ndarray | None = None
     placement: BodyPlacement | None = None
+    face_mesh: object | None = None
 
     @property
     def num_targets(self) -> int:
@@ -235,12 +239,15 @@ def render_structures(forecast, *, domain: str, size: int, reference: Reference)
         points = np.concatenate([placement.reference[None], placement.observed,
                                  placement.futures.reshape(k * tf, 17, 2)]).astype(np.float32)
         return Structures("body", size, to, k, tf, points=points, placement=placement)
-    return Structures("face", size, to, k, tf, images=_render_face_structures(forecast, size, reference))
+    images, track = _render_face_structures(forecast, size, reference)
+    return Structures("face", size, to, k, tf, images=images, face_mesh=track)
 
 
-def _render_face_structures(forecast, size: int, reference: Reference) -> np.ndarray:
-    """(1 + To + K*Tf, S, S) uint8 grey structure renders: reference, observed, futures."""
+def _render_face_structures(forecast, size: int, reference: Reference):
+    """(1 + To + K*Tf, S, S) uint8 grey structure renders (reference, observed, futures) and the head mesh's
+    :class:`~motion2video.stages.mesh_frames.MeshTrack` in the same rows."""
     from motion2video.core.motion import FaceMotion
+    from motion2video.stages.mesh_frames import MeshTrack
 
     k, tf = forecast.futures.shape[:2]
     pose = reference.pose
@@ -253,8 +260,10 @@ def _render_face_structures(forecast, size: int, reference: Reference) -> np.nda
             camera = pose.camera
         else:  # the close-up camera a single-frame render of the first observed frame uses
             camera = renderer.renderer.camera_for(FaceMotion(params[1:2], forecast.fps, identity=identity))
-        grey = renderer.draw(params, forecast.fps, identity=identity, camera=camera)
-    return np.rint(grey.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # as the training data
+        out = renderer.renderer.render_with_masks(FaceMotion(params, forecast.fps, identity=identity), camera=camera,
+                                                  vertices=True)
+    grey = np.rint(out.frames.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # as the training data
+    return grey, MeshTrack(uv=out.vertex_uv, visible=out.vertex_visible, masks=out.masks)
 
 
 def structure_previews(structures: Structures, rows: slice | np.ndarray = slice(None)) -> np.ndarray:
