@@ -374,3 +374,19 @@ def test_face_mesh_model_trains_evaluates_and_synthesizes(tmp_path, capsys):
     assert rc == 0, capsys.readouterr().err
     frames = iio.imread(out)
     assert frames.shape[0] == 16 and frames.std() > 5
+
+
+def test_unsharp_keeps_flat_colour_and_steepens_edges():
+    from motion2video.frames.mesh_warp import unsharp
+
+    flat = torch.full((1, 3, 16, 16), 0.4)
+    torch.testing.assert_close(unsharp(flat, 0.5), flat)
+    step = torch.zeros(1, 1, 16, 16)
+    step[..., 8:] = 1.0
+    out = unsharp(step, 0.5)
+    assert torch.equal(unsharp(step, 0.0), step)
+    assert out[0, 0, 0, 7] < 0.0 and out[0, 0, 0, 8] > 1.0  # over- and undershoot at the edge
+    torch.testing.assert_close(out[..., :4], step[..., :4])
+    assert MeshWarpConfig(sharpen=0.2).sharpen == 0.2
+    with pytest.raises(ValueError):
+        MeshWarpConfig(sharpen=-1.0)

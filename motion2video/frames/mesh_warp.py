@@ -61,6 +61,10 @@ class MeshWarpConfig:
             0 = off (the models trained before this setting).
         fill_hidden: pixels the reference does not show well sample where their nearest well-seen pixel
             samples (:func:`frames.mesh_flow.fill_hidden`), so the inpainting starts from the colour beside them.
+        sharpen: the reference is sampled after an unsharp mask of this amount (:func:`unsharp`; 0 = off):
+            resampling at sub-pixel positions and magnification soften the person, and the network, working at
+            1 / net_scale of the resolution, cannot put the finest detail back. Bicubic sampling of the
+            sharpened reference acts as a sharper interpolation kernel.
     """
 
     domain: str = "body"
@@ -71,6 +75,7 @@ class MeshWarpConfig:
     sample_mode: str = "bicubic"
     edge_px: float = 0.0
     fill_hidden: bool = False
+    sharpen: float = 0.0
 
     def __post_init__(self) -> None:
         if self.domain not in ("body", "face"):
@@ -81,6 +86,8 @@ class MeshWarpConfig:
             raise ValueError(f"net_scale must be 1, 2 or 4, got {self.net_scale}")
         if self.edge_px < 0:
             raise ValueError(f"edge_px must be >= 0, got {self.edge_px}")
+        if not 0.0 <= self.sharpen <= 2.0:
+            raise ValueError(f"sharpen must be in [0, 2], got {self.sharpen}")
         if self.sample_mode not in SAMPLE_MODES:
             raise ValueError(f"sample_mode must be one of {SAMPLE_MODES}, got {self.sample_mode!r}")
         factor = self.net_scale * 2 ** (len(self.channels) - 1)
@@ -123,6 +130,26 @@ def mesh_plate(ref_image: torch.Tensor, ref_mask: torch.Tensor) -> torch.Tensor:
     for i in range(b):
         out[i] = cv2.inpaint(np.ascontiguousarray(images[i]), cv2.dilate(masks[i], kernel), 3, cv2.INPAINT_TELEA)
     return torch.from_numpy(out).permute(0, 3, 1, 2).to(ref_image.dtype).div(255.0)
+
+
+UNSHARP_SIGMA_PX = 0.8  # the unsharp mask's Gaussian, pixels (at any image size: it targets resampling blur)
+
+
+def unsharp(image: torch.Tensor, amount: float, sigma: float = UNSHARP_SIGMA_PX) -> torch.Tensor:
+    """``image + amount * (image - gaussian(image, sigma))``, (B, C, H, W), separable 5-tap Gaussian with
+    replicated borders; not clamped (the sampled colours are clamped by the composite's consumers)."""
+    if amount == 0:
+        return image
+    radius = 2
+    t = torch.arange(-radius, radius + 1, dtype=image.dtype, device=image.device)
+    k = torch.exp(-t ** 2 / (2.0 * sigma ** 2))
+    k = k / k.sum()
+    c = image.shape[1]
+    blur = F.conv2d(F.pad(image, (radius, radius, 0, 0), mode="replicate"), k.view(1, 1, 1, -1).expand(c, 1, 1, -1),
+                    groups=c)
+    blur = F.conv2d(F.pad(blur, (0, 0, radius, radius), mode="replicate"), k.view(1, 1, -1, 1).expand(c, 1, -1, 1),
+                    groups=c)
+    return image + amount * (image - blur)
 
 
 @dataclass
@@ -179,7 +206,8 @@ class MeshWarpGenerator(nn.Module):
         if plate is None:
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
-        prior_person = warp_image(ref_image, flow, mode)
+        sampled = unsharp(ref_image, self.config.sharpen)  # what the person's colours are sampled from
+        prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate
         net_in = torch.cat([prior * 2.0 - 1.0, plate * 2.0 - 1.0, tgt_structure.to(dtype), silhouette, visibility,
                             warp_image(ref_mask.to(dtype), flow)], dim=1)
@@ -195,7 +223,7 @@ class MeshWarpGenerator(nn.Module):
         alpha = torch.sigmoid(ALPHA_PRIOR * (2.0 * silhouette - 1.0) + out[:, 0:1])
         vis = torch.sigmoid(VISIBILITY_PRIOR * (2.0 * visibility - 1.0) + out[:, 1:2])
         final_flow = flow + out[:, 5:7].permute(0, 2, 3, 1) * (FLOW_UNIT * w)
-        warped = warp_image(ref_image, final_flow, mode)
+        warped = warp_image(sampled, final_flow, mode)
         inpainting = torch.sigmoid(out[:, 2:5] + torch.logit(warped.clamp(0.02, 0.98)))
         person = vis * warped + (1.0 - vis) * inpainting
         image = alpha * person + (1.0 - alpha) * plate
