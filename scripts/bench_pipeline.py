@@ -17,8 +17,8 @@ Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2v
 - ``generators_256``: frames/s of whole synthesized videos at 256x256 (the demo body reference, the real walk
   ``cmu_walk.npz``, K=2 futures x 48 frames after 16 observed, sampled once), through
   :func:`~motion2video.stages.frames.generate_video_frames` for the body generator and each
-  ``--mesh-frame-model`` (default: ``frames-body-mesh-128`` from --weights when it is there) side by side: the mesh
-  generator's time includes fitting, posing and rendering the body mesh of every frame.
+  ``--mesh-frame-model`` (default: the demo's body generator, ``frames-body-mesh-256``, from --weights) side by
+  side: the mesh generator's time includes fitting, posing and rendering the body mesh of every frame.
 - ``end_to_end``: K=5 futures x 48 frames after 16 observed, body and face: the wall time of
   :func:`motion2video.apps.synthesize.synthesize` (checkpoint loading included) and each stage timed alone
   (sampling, structure rendering, generation, encoding of the three outputs); ``overhead_ratio`` =
@@ -301,7 +301,7 @@ def main(argv: list[str] | None = None) -> int:
                         "default: frames-body-128-v1 from --weights when it is there)")
     parser.add_argument("--mesh-frame-model", action="append", default=None, metavar="MODEL",
                         help="a mesh body generator measured at 256x256 beside the body generator (repeatable; "
-                        "default: frames-body-mesh-128 from --weights when it is there)")
+                        "default: the demo's body generator frames-body-mesh-256 from --weights)")
     args = parser.parse_args(argv)
     files = demo.weight_files(args.weights)
     missing = [str(p) for p in [*files.values(), args.weights / f"{KEYPOINT_BODY}.safetensors"] if not p.is_file()]

@@ -5,13 +5,14 @@
 Writes, from the committed ``demo_inputs/`` (and one photo of ``../shared`` when it is there):
 
 - ``out/futures_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``cmu_walk.npz`` (a real CMU walk)
-  sampled by ``mtvae-add``, turned into frames of ``reference_body_128.png`` by ``frames-body-mesh-128`` (the
+  sampled by ``mtvae-add``, turned into 256 px frames of ``reference_body.png`` by ``frames-body-mesh-256`` (the
   reference person moved through a fitted body mesh);
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
-  ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-128``;
+  ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-mesh-128`` (moved through the head mesh);
 - ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``jump.npz`` (procedural)
-  re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person ``reference_body_128.png`` by ``frames-body-mesh-128``, side by side
+  re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person
+  ``reference_body.png`` by ``frames-body-mesh-256``, side by side
   with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
   ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
 - ``out/photo_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): a real photo as the reference (issue 23):
@@ -34,14 +35,15 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 DEMO_INPUTS = REPO / "demo_inputs"
 WEIGHTS = REPO / "motion2video" / "weights"
-BODY = dict(motion_model="mtvae-add", frame_model="frames-body-mesh-128", clip="cmu_walk.npz",
-            reference="reference_body_128.png", start=24)
-FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-128", clip="smile.npz",
+BODY = dict(motion_model="mtvae-add", frame_model="frames-body-mesh-256", clip="cmu_walk.npz",
+            reference="reference_body.png", start=24)
+FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-mesh-128", clip="smile.npz",
             reference="reference_face.png", start=0)
 MESH_SIZE = 256
 # Behaviour transfer: the procedural jump from frame 10, re-enacted from wave.npz's first (standing) posture. The
-# real CMU jump (cmu_jump.npz) was tried here: its 0.5 m flight takes the generated head out of the reference's
-# 128-pixel frame and the hands smear (issue 22 notes), so the demo keeps the jump it showed before.
+# real CMU jump (cmu_jump.npz) was tried here again with the 256 px mesh generator: the re-enactment barely leaves
+# the ground (issue 24: transfers lose most of a jump) and the head leaves the frame at the top, so the demo keeps
+# the jump it showed before.
 # A real photo as the reference (issue 23): the skier of ../shared/data/photos/skier.jpg (one person, full body, on
 # plain snow), her pose estimated (no pose file), the photo cut to a square around her (--crop-person: the
 # 640x425 photo would otherwise be padded to a square) and generated at 256 px. Two futures of the CMU walk;
@@ -52,8 +54,8 @@ MESH_SIZE = 256
 SHARED_PHOTOS = REPO.parent / "shared" / "data" / "photos"
 PHOTO = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="cmu_walk.npz", photo="skier.jpg",
              start=24, samples=2, size=256, crop_person=True)
-TRANSFER = dict(motion_model="behavior", frame_model="frames-body-mesh-128", behavior="jump.npz", behavior_start=10,
-                target="wave.npz", target_frame=0, reference="reference_body_128.png")
+TRANSFER = dict(motion_model="behavior", frame_model="frames-body-mesh-256", behavior="jump.npz", behavior_start=10,
+                target="wave.npz", target_frame=0, reference="reference_body.png")
 
 
 def weight_files(weights: Path = WEIGHTS) -> dict[str, Path]:

@@ -18,7 +18,7 @@ import torch
 from motion2video.cli import main
 from motion2video.core.errors import InputError
 from motion2video.frames.data import load_or_generate, make_pairs
-from motion2video.frames.mesh_flow import dense_flow, edge_visibility, fill_hidden, identity_flow, transform_uv
+from motion2video.frames.mesh_flow import dense_flow, identity_flow, transform_uv
 from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
 from motion2video.frames.specs import DatasetSpec
 from motion2video.frames.warp import warp_image
@@ -66,7 +66,7 @@ def test_dense_flow_of_a_shifted_grid_is_the_shift():
     ref_visible = ref_uv[:, 0] > 10  # the reference shows the right part only
     mask = np.zeros((32, 32), bool)
     mask[8:24, 8:24] = True
-    mf = dense_flow(ref_uv, ref_visible, tgt_uv, np.ones(len(tgt_uv), bool), mask)
+    mf = dense_flow(ref_uv, ref_visible, tgt_uv, np.ones(len(tgt_uv), bool), mask, complete=False)
     centres = identity_flow(32, 32)
     np.testing.assert_allclose(mf.flow[mask], (centres - shift)[mask], atol=0.02)
     np.testing.assert_allclose(mf.flow[~mask], centres[~mask])  # the background stays
@@ -94,44 +94,22 @@ def test_extend_flow_continues_the_surface_into_a_band():
     np.testing.assert_allclose(out.flow[far], centres[far])
 
 
-def test_edge_visibility_turns_down_points_at_the_reference_edge():
-    ref_mask = np.zeros((32, 32), bool)
-    ref_mask[8:24, 8:24] = True
-    flow = identity_flow(32, 32)
-    vis = np.ones((32, 32), np.float32)
-    out = edge_visibility(flow, vis, ref_mask, edge_px=2.0)
-    assert out[16, 16] == 1.0  # deep inside: untouched
-    assert out[16, 8] == pytest.approx(0.25)  # on the edge (distance 1): (1 - 0.5) / 2
-    assert out[16, 9] == pytest.approx(0.75)
-    assert out[2, 2] == 0.0  # samples outside the reference person
-    np.testing.assert_array_equal(edge_visibility(flow, vis, ref_mask, edge_px=0.0), vis)
+def test_hidden_surface_takes_the_nearest_shown_point_along_the_surface():
+    from motion2video.frames.mesh_flow import complete_reference_uv, surface_graph
 
-
-def test_fill_hidden_takes_the_flow_of_the_nearest_well_seen_pixel():
-    flow = identity_flow(16, 16)
-    flow[:, 8:] = (100.0, 100.0)  # the right half samples a point the reference hides
-    vis = np.zeros((16, 16), np.float32)
-    vis[:, :8] = 1.0
-    support = np.zeros((16, 16), bool)
-    support[4:12, 2:14] = True
-    out = fill_hidden(flow, vis, support)
-    np.testing.assert_array_equal(out[6, 9], flow[6, 7])  # hidden: the well-seen pixel beside it
-    np.testing.assert_array_equal(out[6, 13], flow[6, 7])
-    np.testing.assert_array_equal(out[0, 12], flow[0, 12])  # outside the support: untouched
-    np.testing.assert_array_equal(out[6, 3], flow[6, 3])  # well seen: untouched
-    np.testing.assert_array_equal(fill_hidden(flow, np.zeros_like(vis), support), flow)  # nothing seen: unchanged
-
-
-def test_edge_settings_change_the_inputs_only_where_the_reference_sees_badly(mesh_seqs):
-    pairs = make_pairs(mesh_seqs, np.array([[0, 0, 1], [1, 0, 2]]))
-    ref_mask, flow, vis, sil = mesh_inputs(pairs)
-    net = MeshWarpGenerator(MeshWarpConfig(image_size=64, edge_px=2.0, fill_hidden=True))
-    new_flow, new_vis = net.seen_well(flow, vis, ref_mask, sil)
-    assert new_flow.shape == flow.shape and new_vis.shape == vis.shape
-    assert (new_vis <= vis + 1e-6).all() and (new_vis < vis - 0.1).any()
-    changed = (new_flow - flow).abs().amax(dim=-1) > 0
-    assert changed.any() and (new_vis[:, 0][changed] >= 0.0).all()
-    assert (vis[:, 0][changed] * 0 + new_vis[:, 0][changed] < 0.5).all()  # only badly seen pixels move
+    graph = surface_graph()
+    n = graph.shape[0]
+    rng = np.random.default_rng(0)
+    uv = rng.uniform(0, 128, (n, 2)).astype(np.float32)
+    seen = np.ones(n, bool)
+    v = 5000
+    seen[v] = False  # one hidden vertex, all of its neighbours shown
+    out = complete_reference_uv(uv, seen)
+    neighbours = graph[v].indices
+    nearest = neighbours[np.argmin(graph[v].data)]
+    np.testing.assert_array_equal(out[v], uv[nearest])  # the closest neighbour along the surface
+    np.testing.assert_array_equal(out[seen], uv[seen])  # shown vertices keep their pixels
+    np.testing.assert_array_equal(complete_reference_uv(uv, np.zeros(n, bool)), uv)  # nothing shown: unchanged
 
 
 def test_a_128_model_runs_at_256_with_the_same_weights():
@@ -231,7 +209,9 @@ def test_mesh_model_trains_saves_loads_and_evaluates(tmp_path, capsys):
                "--test-sequences", "1", "--no-progress"])
     assert rc == 0
     payload = json.loads(out_json.read_text())
-    assert payload["model_kind"] == "mesh" and set(payload["results"]) == {"generator", "copy-reference", "limb-warp"}
+    # the keypoint warp frames-body-128 (the previous generator) runs at any size: it is scored beside it
+    assert payload["model_kind"] == "mesh" and set(payload["results"]) == {"generator", "copy-reference", "limb-warp",
+                                                                           "frames-body-128"}
     gen, limb = payload["results"]["generator"], payload["results"]["limb-warp"]
     assert gen["person_psnr"] > limb["person_psnr"]  # the mesh correspondence beats the limb warp from the start
     capsys.readouterr()
@@ -249,9 +229,6 @@ def test_mesh_settings_are_checked(tmp_path, capsys):
     rc = main(["train-frames", "--domain", "body", "--model-kind", "mesh", "--flow-correction",
                "-o", str(tmp_path / "m.safetensors")])
     assert rc == 2 and "flow residual is always on" in capsys.readouterr().err
-    rc = main(["train-frames", "--domain", "body", "--model-kind", "warp", "--fill-hidden",
-               "-o", str(tmp_path / "m.safetensors")])
-    assert rc == 2 and "settings of --model-kind mesh" in capsys.readouterr().err
     rc = main(["train-frames", "--domain", "body", "--model-kind", "mesh", "--size", "64", "--net-scale", "4",
                "--crop", "48", "-o", str(tmp_path / "m.safetensors")])
     assert rc == 2 and "multiple of 32" in capsys.readouterr().err

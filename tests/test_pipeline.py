@@ -312,7 +312,7 @@ def test_demo_names_the_missing_weight_file(tmp_path, capsys):
     demo = _demo_module()
     assert demo.main(["--out", str(tmp_path / "out"), "--weights", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "missing weight file" in err and "frames-body-mesh-128.safetensors" in err
+    assert "\n" not in err and "missing weight file" in err and f"{demo.BODY['frame_model']}.safetensors" in err
     assert not (tmp_path / "out").exists()
 
 
@@ -326,9 +326,12 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator
 
     mesh = save_frame_model(MeshWarpGenerator(MeshWarpConfig(image_size=64)), tmp_path / "mesh.safetensors", step=0)
-    names = {"mtvae-add": checkpoints["body"], "frames-body-mesh-128": mesh, "frames-body-128": checkpoints["frames_body"],
+    face_mesh = save_frame_model(MeshWarpGenerator(MeshWarpConfig(domain="face", image_size=64, structure_channels=1)),
+                                 tmp_path / "face-mesh.safetensors", step=0)
+    names = {"mtvae-add": checkpoints["body"], demo.BODY["frame_model"]: mesh,
+             "frames-body-128": checkpoints["frames_body"],
              "mtvae-add-face": train_face_motion_model(face_dir, tmp_path),
-             "frames-face-128": train_frame_model("face", tmp_path),
+             demo.FACE["frame_model"]: face_mesh,
              "behavior": train_behavior_model(checkpoints["body"].parent)}
     for name, path in names.items():
         (weights / f"{name}.safetensors").symlink_to(path)

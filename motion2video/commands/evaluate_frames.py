@@ -90,7 +90,8 @@ DEFAULT_BASELINE_BY_KIND = {("mesh", "body"): "frames-body-128", ("mesh", "face"
 def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str]]:
     """Named baseline generators: name -> model, and name -> why it was left out (the default baseline only:
     another size, or refused for its skeleton version). An explicit --baseline-model that cannot be used
-    raises InputError."""
+    raises InputError. A keypoint warp generator goes with models of any size: it generates the person in a crop
+    at its own size and pastes it into the frame, as it does in ``synthesize``."""
     from motion2video.core.errors import InputError
     from motion2video.frames.checkpoint import load_frame_model
 
@@ -102,8 +103,8 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
     baselines, left_out = {}, {}
     for name in names:
         if not explicit:  # the default baseline only goes with models of its size: look before loading it
-            config = load_frame_model(name, any_skeleton=True).config
-            if (config.domain, config.image_size) != (cfg.domain, cfg.image_size):
+            peek = load_frame_model(name, any_skeleton=True)
+            if peek.config.domain != cfg.domain or (peek.config.image_size != cfg.image_size and peek.kind != "warp"):
                 continue
         try:
             other = load_frame_model(name)
@@ -114,7 +115,7 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
             continue
         if other.path.resolve() == loaded.path.resolve():
             continue
-        if (other.config.domain, other.config.image_size) != (cfg.domain, cfg.image_size):
+        if other.config.domain != cfg.domain or (other.config.image_size != cfg.image_size and other.kind != "warp"):
             raise InputError(f"baseline model is {other.config.domain}/{other.config.image_size}, the evaluated "
                              f"model {cfg.domain}/{cfg.image_size}", other.path)
         baselines[other.path.name.removesuffix(".safetensors")] = other.model

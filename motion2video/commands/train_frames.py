@@ -75,12 +75,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--silhouette-erosion", type=int, default=0, metavar="PX",
                    help="mesh model: erode half of the target silhouettes by 1 to PX pixels (robustness to a "
                    "body fitted to a real person; default 0)")
-    p.add_argument("--edge-px", type=float, default=None, metavar="PX",
-                   help="mesh model: reference points within PX pixels (at 128 px) of the reference silhouette's edge "
-                   "count as partly unseen (surfaces seen at a grazing angle; default 0 = off)")
-    p.add_argument("--fill-hidden", action="store_true",
-                   help="mesh model: pixels the reference does not show well start from the colour of the nearest "
-                   "well-seen pixel")
     p.add_argument("--checkpoint-every", type=int, default=250, help="steps between checkpoints (default 250)")
     p.add_argument("--resume", action="store_true", help="continue from OUTPUT and its .state file")
     p.add_argument("--seed", type=int, default=0, help="seed of the data and the training (default 0)")
@@ -128,10 +122,6 @@ def run(args: argparse.Namespace) -> int:
     check_at_least("--batch-size", args.batch_size)
     if args.silhouette_erosion < 0 or (args.silhouette_erosion and args.model_kind != "mesh"):
         raise InputError("--silhouette-erosion is a setting of --model-kind mesh (0 or more pixels)")
-    if (args.edge_px is not None or args.fill_hidden) and args.model_kind != "mesh":
-        raise InputError("--edge-px and --fill-hidden are settings of --model-kind mesh")
-    if args.edge_px is not None and not args.edge_px >= 0:
-        raise InputError(f"--edge-px must be 0 or more pixels, got {args.edge_px}")
     output = Path(args.output)
     if output.suffix != ".safetensors":
         raise InputError("the checkpoint name must end in .safetensors", output)
@@ -158,8 +148,7 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--crop {crop} must be a multiple of {net_scale * 8} at --net-scale {net_scale}")
         model_config = MeshWarpConfig(domain=args.domain, image_size=args.size,
                                       structure_channels=structure_channels(args.domain),
-                                      net_scale=net_scale, sample_mode=args.sample_mode or "bicubic",
-                                      edge_px=args.edge_px or 0.0, fill_hidden=args.fill_hidden)
+                                      net_scale=net_scale, sample_mode=args.sample_mode or "bicubic")
         spec = replace(spec, vertices=True)  # the mesh correspondence of every frame
     elif warp:
         from motion2video.frames.data import structure_channels
@@ -204,7 +193,6 @@ def _run_video(args: argparse.Namespace) -> int:
              "--sample-mode": args.sample_mode is not None, "--train-sequences": args.train_sequences is not None,
              "--adversarial": args.adversarial, "--cache": args.cache is not None,
              "--silhouette-erosion": args.silhouette_erosion != 0,
-             "--edge-px": args.edge_px is not None, "--fill-hidden": args.fill_hidden,
              "--data-root": args.data_root is not None}
     ignored = [name for name, yes in given.items() if yes]
     if ignored:

@@ -21,6 +21,7 @@ integer + 0.5.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -58,8 +59,50 @@ def identity_flow(height: int, width: int) -> np.ndarray:
     return np.stack([xs + 0.5, ys + 0.5], axis=-1)
 
 
+@lru_cache(maxsize=1)
+def surface_graph():
+    """Anny's mesh as a sparse graph (13,718 vertices, edges weighted by their rest-pose length in metres): the
+    body and the face renders share its vertex index."""
+    from scipy.sparse import coo_matrix
+
+    from renderers import anny_model
+
+    faces = anny_model.triangles()
+    rest = anny_model.anny_rest().vertices
+    a = np.concatenate([faces[:, 0], faces[:, 1], faces[:, 2]])
+    b = np.concatenate([faces[:, 1], faces[:, 2], faces[:, 0]])
+    w = np.linalg.norm(rest[a] - rest[b], axis=1) + 1e-6
+    n = len(rest)
+    return coo_matrix((np.concatenate([w, w]), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n)).tocsr()
+
+
+def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray) -> np.ndarray:
+    """(V, 2) reference pixels where every vertex the reference does not show takes the pixel of the nearest
+    shown vertex *along the body's surface* (Dijkstra over :func:`surface_graph`): the hidden side of a thigh
+    starts from the colour of its front, not from whatever covers its own pixel in the reference (a hand) or lies
+    beside it in the image.
+
+    Args:
+        ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
+    """
+    from scipy.sparse.csgraph import dijkstra
+
+    uv = np.array(ref_uv, np.float32, copy=True)
+    graph = surface_graph()
+    if len(uv) != graph.shape[0]:
+        raise ValueError(f"the completion follows Anny's surface ({graph.shape[0]} vertices), got {len(uv)} vertices")
+    sources = np.flatnonzero(seen)
+    if len(sources) == 0 or len(sources) == len(seen):
+        return uv
+    _, _, nearest = dijkstra(graph, directed=False, indices=sources, min_only=True,
+                             return_predecessors=True)
+    hidden = ~np.asarray(seen, bool) & (nearest >= 0)
+    uv[hidden] = uv[nearest[hidden]]
+    return uv
+
+
 def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray,
-               silhouette: np.ndarray, *, neighbours: int = NEIGHBOURS) -> MeshFlow:
+               silhouette: np.ndarray, *, neighbours: int = NEIGHBOURS, complete: bool = True) -> MeshFlow:
     """The backward flow target -> reference of one pair.
 
     Args:
@@ -67,6 +110,9 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
         ref_visible, tgt_visible: (V,) bool, front surface in each frame (:func:`renderers.mesh.vertex_visibility`).
         silhouette: (H, W) bool, the target render's mask (the pixels to fill).
         neighbours: target vertices interpolated per pixel.
+        complete: surface points the reference does not show sample the reference where the nearest shown
+            point along the surface is (:func:`complete_reference_uv`; their visibility stays 0). Off, they
+            sample their own (occluded) reference pixel, as the models before 2026-11-25 evening were trained.
     Returns:
         The :class:`MeshFlow`; with no visible target vertex, the identity flow and zero visibility.
     """
@@ -76,6 +122,8 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
     flow = identity_flow(h, w)
     visibility = np.zeros((h, w), np.float32)
     silhouette = np.asarray(silhouette, bool)
+    if complete:
+        ref_uv = complete_reference_uv(ref_uv, ref_visible)
     seen = np.flatnonzero(tgt_visible)
     if len(seen) == 0 or not silhouette.any():
         return MeshFlow(flow, visibility, silhouette)
@@ -137,66 +185,3 @@ def extend_flow(mesh: MeshFlow, band: int) -> MeshFlow:
 def band_width(size: int) -> int:
     """The band :func:`extend_flow` adds at an image side of ``size`` pixels (4 at 128)."""
     return max(1, round(BAND_PX * size / 128))
-
-
-
-
-# --- what the reference shows badly -----------------------------------------------------------------------
-#
-# A surface the reference sees at a grazing angle (the side of a leg that turns towards the camera in the
-# target) lands in the last pixel or two inside the reference silhouette, where the colour is half background.
-# Sampled there, a turned limb shows streaks of the background. Two pure functions let the generator treat such
-# points as unseen and start their colour from the nearest well-seen surface instead.
-
-def edge_visibility(flow: np.ndarray, visibility: np.ndarray, ref_mask: np.ndarray, edge_px: float) -> np.ndarray:
-    """The visibility map with the points that the reference shows within ``edge_px`` pixels of its silhouette's
-    edge turned down: each pixel's visibility is multiplied by ``clip((d - 0.5) / edge_px, 0, 1)``, where ``d``
-    is the distance (pixels) from the reference point it samples to the nearest pixel outside the reference
-    silhouette (1 for a pixel on the edge).
-
-    Args:
-        flow: (H, W, 2) reference pixel coordinates (x, y; centres at integer + 0.5).
-        visibility: (H, W) in [0, 1].
-        ref_mask: (H, W) the reference silhouette (> 0.5 = person).
-        edge_px: width of the turned-down band, pixels; <= 0 returns ``visibility`` unchanged.
-    Returns:
-        (H, W) float32.
-    """
-    import cv2
-    from scipy.ndimage import distance_transform_edt
-
-    visibility = np.asarray(visibility, np.float32)
-    if edge_px <= 0:
-        return visibility
-    inside = np.asarray(ref_mask) > 0.5
-    depth = distance_transform_edt(inside).astype(np.float32)
-    flow = np.asarray(flow, np.float32)
-    sampled = cv2.remap(depth, flow[..., 0] - 0.5, flow[..., 1] - 0.5, cv2.INTER_LINEAR,
-                        borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-    return visibility * np.clip((sampled - 0.5) / float(edge_px), 0.0, 1.0)
-
-
-def fill_hidden(flow: np.ndarray, visibility: np.ndarray, support: np.ndarray, threshold: float = 0.5) -> np.ndarray:
-    """The flow with every pixel of ``support`` whose visibility is below ``threshold`` sampling where its nearest
-    well-seen pixel (visibility >= threshold) samples: the colour a hidden surface starts from is that of the
-    visible surface beside it, not of whatever lies at its own (unseen or grazing) reference point.
-
-    Args:
-        flow: (H, W, 2) reference pixel coordinates.
-        visibility: (H, W) in [0, 1].
-        support: (H, W) bool, the pixels that may be filled (the target silhouette and its band).
-        threshold: what counts as well seen.
-    Returns:
-        (H, W, 2) float32; ``flow`` unchanged when no pixel is well seen.
-    """
-    from scipy.ndimage import distance_transform_edt
-
-    flow = np.array(flow, np.float32, copy=True)
-    good = (np.asarray(visibility) >= threshold) & np.asarray(support, bool)
-    bad = np.asarray(support, bool) & ~good
-    if not good.any() or not bad.any():
-        return flow
-    _, (iy, ix) = distance_transform_edt(~good, return_indices=True)
-    ys, xs = np.nonzero(bad)
-    flow[ys, xs] = flow[iy[ys, xs], ix[ys, xs]]
-    return flow

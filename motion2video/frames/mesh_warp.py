@@ -56,11 +56,6 @@ class MeshWarpConfig:
             composite are at full resolution. A 128 px model at net_scale 2 and a 256 px model at net_scale 4
             have the same weights: the network sees the body at the same scale.
         sample_mode: how the reference is sampled along the flow, ``"bilinear"`` or ``"bicubic"``.
-        edge_px: reference points within this many pixels (at 128 px; scaled with the image size) of the
-            reference silhouette's edge count as partly unseen (:func:`frames.mesh_flow.edge_visibility`);
-            0 = off (the models trained before this setting).
-        fill_hidden: pixels the reference does not show well sample where their nearest well-seen pixel
-            samples (:func:`frames.mesh_flow.fill_hidden`), so the inpainting starts from the colour beside them.
         sharpen: the reference is sampled after an unsharp mask of this amount (:func:`unsharp`; 0 = off):
             resampling at sub-pixel positions and magnification soften the person, and the network, working at
             1 / net_scale of the resolution, cannot put the finest detail back. Bicubic sampling of the
@@ -73,8 +68,6 @@ class MeshWarpConfig:
     channels: tuple[int, ...] = (16, 32, 64, 96)
     net_scale: int = 2
     sample_mode: str = "bicubic"
-    edge_px: float = 0.0
-    fill_hidden: bool = False
     sharpen: float = 0.0
 
     def __post_init__(self) -> None:
@@ -84,8 +77,6 @@ class MeshWarpConfig:
             raise ValueError("channels needs at least two levels")
         if self.net_scale not in (1, 2, 4):
             raise ValueError(f"net_scale must be 1, 2 or 4, got {self.net_scale}")
-        if self.edge_px < 0:
-            raise ValueError(f"edge_px must be >= 0, got {self.edge_px}")
         if not 0.0 <= self.sharpen <= 2.0:
             raise ValueError(f"sharpen must be in [0, 2], got {self.sharpen}")
         if self.sample_mode not in SAMPLE_MODES:
@@ -201,8 +192,6 @@ class MeshWarpGenerator(nn.Module):
         b, _, h, w = ref_image.shape
         dtype = ref_image.dtype
         flow, visibility, silhouette = flow.to(dtype), visibility.to(dtype), silhouette.to(dtype)
-        if self.config.edge_px > 0 or self.config.fill_hidden:
-            flow, visibility = self.seen_well(flow, visibility, ref_mask, silhouette)
         if plate is None:
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
@@ -229,32 +218,6 @@ class MeshWarpGenerator(nn.Module):
         image = alpha * person + (1.0 - alpha) * plate
         return MeshWarpOutput(image=image, warped=warped, inpainting=inpainting, visibility=vis, alpha=alpha,
                               flow=final_flow, plate=plate)
-
-    def seen_well(self, flow: torch.Tensor, visibility: torch.Tensor, ref_mask: torch.Tensor,
-                  silhouette: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """The input flow and visibility after :func:`frames.mesh_flow.edge_visibility` and
-        :func:`frames.mesh_flow.fill_hidden` (as the config asks; inputs, no gradient).
-
-        Args:
-            flow: (B, H, W, 2); visibility, ref_mask, silhouette: (B, 1, H, W) (ref_mask may be (B, H, W)).
-        """
-        from scipy.ndimage import binary_dilation
-
-        from motion2video.frames.mesh_flow import band_width, edge_visibility, fill_hidden
-
-        b, h, w, _ = flow.shape
-        edge = self.config.edge_px * w / 128.0
-        flows = flow.detach().cpu().numpy().copy()
-        vis = visibility.detach().reshape(b, h, w).cpu().numpy().copy()
-        refs = ref_mask.detach().reshape(b, h, w).cpu().numpy()
-        sils = silhouette.detach().reshape(b, h, w).cpu().numpy() > 0.5
-        square = np.ones((3, 3), bool)
-        for i in range(b):
-            vis[i] = edge_visibility(flows[i], vis[i], refs[i], edge)
-            if self.config.fill_hidden and sils[i].any():
-                support = binary_dilation(sils[i], structure=square, iterations=band_width(w))
-                flows[i] = fill_hidden(flows[i], vis[i], support)
-        return (torch.from_numpy(flows).to(flow.dtype), torch.from_numpy(vis)[:, None].to(visibility.dtype))
 
     def forward(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor, visibility: torch.Tensor,
                 silhouette: torch.Tensor, tgt_structure: torch.Tensor) -> torch.Tensor:
