@@ -367,3 +367,13 @@ def test_unsharp_keeps_flat_colour_and_steepens_edges():
     assert MeshWarpConfig(sharpen=0.2).sharpen == 0.2
     with pytest.raises(ValueError):
         MeshWarpConfig(sharpen=-1.0)
+
+
+def test_only_fitted_vertices_that_land_on_the_person_count_as_shown():
+    from motion2video.stages.mesh_frames import on_person
+
+    person = np.zeros((128, 128), bool)
+    person[40:90, 50:80] = True
+    uv = np.array([[60.5, 60.5], [50.5, 60.5], [45.5, 60.5], [79.5, 89.5], [200.0, 5.0], [-3.0, 60.0]], np.float32)
+    # inside; on the person's edge (its anti-aliased pixels); off the person; the far corner pixel; out of the image
+    np.testing.assert_array_equal(on_person(uv, person), [True, False, False, False, False, False])

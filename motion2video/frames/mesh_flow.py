@@ -47,6 +47,21 @@ class MeshFlow:
     silhouette: np.ndarray
 
 
+@dataclass
+class MeshTrack:
+    """A body or head mesh seen over frames, in the pixels of one image.
+
+    Attributes:
+        uv: (N, V, 2) float32 vertex pixel positions.
+        visible: (N, V) bool front-surface flags.
+        masks: (N, h, w) bool silhouettes.
+    """
+
+    uv: np.ndarray
+    visible: np.ndarray
+    masks: np.ndarray
+
+
 def pixel_centres(mask: np.ndarray) -> np.ndarray:
     """(M, 2) float (x + 0.5, y + 0.5) of the True pixels of an (H, W) mask, row-major order."""
     ys, xs = np.nonzero(mask)

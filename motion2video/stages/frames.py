@@ -36,8 +36,9 @@ def is_mesh(net) -> bool:
 
 def mesh_setup(net, reference: Reference, structures: Structures):
     """Body: the :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
-    reference person's Anny body (the reference pose file's phenotype, Anny's defaults otherwise) in the
-    reference pose and in every target pose. Face: None (the face structures carry their head mesh)."""
+    reference person's Anny body (the reference pose file's phenotype; without one, Anny's weight fitted to the
+    person BlazePose segments) in the reference pose and in every target pose; only the reference vertices that land
+    on that segmented person count as shown. Face: None (the face structures carry their head mesh)."""
     from motion2video.core.errors import InputError
     from motion2video.stages.mesh_frames import mesh_video
 
@@ -53,7 +54,7 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
                       output_size=structures.size, model_size=net.config.image_size,
-                      person_mask=None if phenotype else reference_person_mask(reference.image))
+                      person_mask=reference_person_mask(reference.image), fit_to_mask=not phenotype)
 
 
 def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,

@@ -28,26 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion2video.core.errors import InputError
+from motion2video.frames.mesh_flow import MeshTrack  # noqa: F401  (the tracks this stage makes)
 
 MASK_GREY = (200, 200, 200)  # the colour the correspondence renders use (only depth and silhouette are read)
 # Anny "weight" values tried when fitting the body's width to the reference person's silhouette (fit_width).
 WEIGHT_GRID = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
 WIDTH_FIT_MARGIN = 0.01  # IoU another weight must gain over the given phenotype's to replace it
-
-
-@dataclass
-class MeshTrack:
-    """A body mesh seen over frames, in the pixels of one image.
-
-    Attributes:
-        uv: (N, V, 2) float32 vertex pixel positions.
-        visible: (N, V) bool front-surface flags.
-        masks: (N, h, w) bool silhouettes.
-    """
-
-    uv: np.ndarray
-    visible: np.ndarray
-    masks: np.ndarray
 
 
 def lift_reference(points: np.ndarray, guide: np.ndarray, camera, scale: float, shift: np.ndarray) -> np.ndarray:
@@ -148,7 +134,8 @@ class MeshVideo:
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
-               output_size: int, model_size: int, person_mask: np.ndarray | None = None) -> MeshVideo:
+               output_size: int, model_size: int, person_mask: np.ndarray | None = None,
+               fit_to_mask: bool = True) -> MeshVideo:
     """The meshes of a placed body video.
 
     Args:
@@ -157,8 +144,9 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         target_rows: (N, 17, 2) the target joints in output pixels (to place the crop).
         phenotype: the reference person's Anny phenotype.
         output_size: the output frames' side; model_size: the generator's.
-        person_mask: (output_size, output_size) bool the reference person's pixels, or None: Anny's weight is
-            fitted to it (:func:`fit_width`).
+        person_mask: (output_size, output_size) bool the reference person's pixels, or None. Anny's weight is
+            fitted to it (:func:`fit_width`, when ``fit_to_mask``), and a vertex the reference mesh shows counts as
+            shown only where it lands on the person (:func:`on_person`).
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -174,20 +162,47 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift)
+    small = None
     if person_mask is not None:
         import cv2
 
         small = cv2.warpAffine(np.asarray(person_mask, np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
                                (model_size, model_size), flags=cv2.INTER_LINEAR) > 0.5
-        phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
-                                 person_mask=small, phenotype=phenotype)
+        if fit_to_mask:
+            phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
+                                     person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
                              transform=to_crop, size=model_size)
-    ref = MeshTrack(both.uv[:1], both.visible[:1], both.masks[:1])
+    ref_visible = both.visible[:1]
+    if small is not None and small.any():
+        ref_visible = ref_visible & on_person(both.uv[0], small)[None]
+    ref = MeshTrack(both.uv[:1], ref_visible, both.masks[:1])
     tgt = MeshTrack(both.uv[1:], both.visible[1:], both.masks[1:])
     ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
     tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
     return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32))
+
+
+PERSON_EDGE_PX = 1  # on_person: the person's mask is eroded by this many pixels at 128 (its edge mixes background)
+
+
+def on_person(uv: np.ndarray, person_mask: np.ndarray) -> np.ndarray:
+    """(V,) bool: which of the (V, 2) vertex pixels of a body *fitted* to a picture land on the pictured person
+    (``person_mask`` (S, S) bool, eroded by :data:`PERSON_EDGE_PX` scaled to S). A fitted body is a little off
+    the person in places; a vertex it shows outside the person, or on the person's anti-aliased edge, would lend
+    the background's colour to every target pixel that samples it (white streaks on a turned leg), so it is
+    treated as not shown: the surface completion then takes the nearest vertex that lands on the person."""
+    from scipy.ndimage import binary_erosion
+
+    size = person_mask.shape[1]
+    inner = binary_erosion(person_mask, iterations=max(1, round(PERSON_EDGE_PX * size / 128)))
+    h, w = inner.shape
+    x = np.floor(uv[:, 0]).astype(np.int64)
+    y = np.floor(uv[:, 1]).astype(np.int64)
+    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+    out = np.zeros(len(uv), bool)
+    out[inside] = inner[y[inside], x[inside]]
+    return out
 
 
 def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,

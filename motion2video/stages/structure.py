@@ -184,7 +184,7 @@ class Structures:
         observed: To. samples: K. horizon: Tf.
         placement: the body placement (body only), for the mesh video.
         face_mesh: face: the head mesh's correspondence in the same rows
-            (:class:`motion2video.stages.mesh_frames.MeshTrack`: vertex pixels, front-surface flags, silhouettes),
+            (:class:`motion2video.frames.mesh_flow.MeshTrack`: vertex pixels, front-surface flags, silhouettes),
             for the mesh generator.
     """
 
@@ -245,9 +245,9 @@ def render_structures(forecast, *, domain: str, size: int, reference: Reference)
 
 def _render_face_structures(forecast, size: int, reference: Reference):
     """(1 + To + K*Tf, S, S) uint8 grey structure renders (reference, observed, futures) and the head mesh's
-    :class:`~motion2video.stages.mesh_frames.MeshTrack` in the same rows."""
+    :class:`~motion2video.frames.mesh_flow.MeshTrack` in the same rows."""
     from motion2video.core.motion import FaceMotion
-    from motion2video.stages.mesh_frames import MeshTrack
+    from motion2video.frames.mesh_flow import MeshTrack
 
     k, tf = forecast.futures.shape[:2]
     pose = reference.pose
