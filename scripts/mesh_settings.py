@@ -2,7 +2,7 @@
 
 The mesh generator's configuration (:class:`motion2video.frames.mesh_warp.MeshWarpConfig`) holds settings that
 have no weights: the image size and ``net_scale`` (a 128 px model at net_scale 2 and a 256 px model at net_scale 4
-see the body at the same scale), ``sharpen`` and ``pad_px``. This writes a copy of a checkpoint
+see the body at the same scale) and ``sharpen``. This writes a copy of a checkpoint
 with some of them changed, and its training summary, plus a note of what was changed::
 
     python scripts/mesh_settings.py runs/mesh256.safetensors --sharpen 0.2 \\
@@ -26,8 +26,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("-o", "--output", required=True, help="where to write the copy (.safetensors)")
     parser.add_argument("--size", type=int, default=None, help="image size (the network's scale follows: size/64)")
     parser.add_argument("--sharpen", type=float, default=None, help="unsharp-mask amount of the sampled reference")
-    parser.add_argument("--pad-px", type=float, default=None, help="pad the reference person past its silhouette, "
-                        "px at 128")
     args = parser.parse_args(argv)
 
     from motion2video.core.errors import InputError
@@ -43,8 +41,6 @@ def main(argv: list[str] | None = None) -> int:
             changes.update(image_size=args.size, net_scale=max(1, args.size // 64))
         if args.sharpen is not None:
             changes["sharpen"] = args.sharpen
-        if args.pad_px is not None:
-            changes["pad_px"] = args.pad_px
         try:
             config = replace(loaded.model.config, **changes)
         except ValueError as err:

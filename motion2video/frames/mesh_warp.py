@@ -60,10 +60,6 @@ class MeshWarpConfig:
             resampling at sub-pixel positions and magnification soften the person, and the network, working at
             1 / net_scale of the resolution, cannot put the finest detail back. Bicubic sampling of the
             sharpened reference acts as a sharper interpolation kernel.
-        pad_px: before sampling, the background within this many pixels (at 128 px, scaled with the image) of the
-            reference silhouette takes the colour of the nearest person pixel (:func:`pad_person`), so that a
-            surface the reference shows at a grazing angle, sampled at the silhouette's edge, does not pick up the
-            background (white streaks on a turned leg); 0 = off.
     """
 
     domain: str = "body"
@@ -73,7 +69,6 @@ class MeshWarpConfig:
     net_scale: int = 2
     sample_mode: str = "bicubic"
     sharpen: float = 0.0
-    pad_px: float = 0.0
 
     def __post_init__(self) -> None:
         if self.domain not in ("body", "face"):
@@ -84,8 +79,6 @@ class MeshWarpConfig:
             raise ValueError(f"net_scale must be 1, 2 or 4, got {self.net_scale}")
         if not 0.0 <= self.sharpen <= 2.0:
             raise ValueError(f"sharpen must be in [0, 2], got {self.sharpen}")
-        if self.pad_px < 0:
-            raise ValueError(f"pad_px must be >= 0, got {self.pad_px}")
         if self.sample_mode not in SAMPLE_MODES:
             raise ValueError(f"sample_mode must be one of {SAMPLE_MODES}, got {self.sample_mode!r}")
         factor = self.net_scale * 2 ** (len(self.channels) - 1)
@@ -150,27 +143,6 @@ def unsharp(image: torch.Tensor, amount: float, sigma: float = UNSHARP_SIGMA_PX)
     return image + amount * (image - blur)
 
 
-def pad_person(image: torch.Tensor, mask: torch.Tensor, pad_px: float) -> torch.Tensor:
-    """(B, 3, H, W) ``image`` where every pixel outside the (B, 1, H, W) or (B, H, W) person ``mask`` but within
-    ``pad_px`` pixels of it takes the colour of the nearest person pixel (the padding texture atlases get, so that
-    sampling at the person's edge never mixes in the background). No gradient flows through the copied pixels'
-    positions."""
-    from scipy.ndimage import distance_transform_edt
-
-    if pad_px <= 0:
-        return image
-    b, _, h, w = image.shape
-    inside = (mask.detach().reshape(b, h, w) > 0.5).cpu().numpy()
-    out = image.clone()
-    for i in range(b):
-        if not inside[i].any():
-            continue
-        dist, (iy, ix) = distance_transform_edt(~inside[i], return_indices=True)
-        ys, xs = np.nonzero((dist > 0) & (dist <= pad_px))
-        out[i, :, ys, xs] = image[i, :, iy[ys, xs], ix[ys, xs]]
-    return out
-
-
 @dataclass
 class MeshWarpOutput:
     """What :meth:`MeshWarpGenerator.forward_parts` computes (all (B, ., H, W) unless said).
@@ -223,8 +195,7 @@ class MeshWarpGenerator(nn.Module):
         if plate is None:
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
-        # what the person's colours are sampled from: the reference padded past its silhouette, then sharpened
-        sampled = unsharp(pad_person(ref_image, ref_mask, self.config.pad_px * w / 128.0), self.config.sharpen)
+        sampled = unsharp(ref_image, self.config.sharpen)  # what the person's colours are sampled from
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate
         net_in = torch.cat([prior * 2.0 - 1.0, plate * 2.0 - 1.0, tgt_structure.to(dtype), silhouette, visibility,
