@@ -163,7 +163,7 @@ def test_warp_model_keeps_a_full_resolution_background(ckpt, mocap_dir, tmp_path
     # An analogy generator cannot make another size.
     out2 = tmp_path / "a.mp4"
     err = _fails(args[:4] + [str(ckpt["frames_body"])] + args[5:-1] + [str(out2), "--size", "128"], capsys, out2)
-    assert "needs a warp frame model" in err
+    assert "needs a body warp or mesh frame model" in err
 
 
 @pytest.mark.parametrize("points, message", [
