@@ -87,6 +87,12 @@ DEFAULT_BASELINE = {"body": "frames-body-128-v1"}
 DEFAULT_BASELINE_BY_KIND = {("mesh", "body"): "frames-body-128", ("mesh", "face"): "frames-face-128"}
 
 
+def fits_as_baseline(kind: str, config, evaluated) -> bool:
+    """Whether a generator (its kind and config) can be scored beside the ``evaluated`` model's config: the same
+    domain, and the same size unless it is a keypoint warp generator (which works at any frame size)."""
+    return config.domain == evaluated.domain and (config.image_size == evaluated.image_size or kind == "warp")
+
+
 def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str]]:
     """Named baseline generators: name -> model, and name -> why it was left out (the default baseline only:
     another size, or refused for its skeleton version). An explicit --baseline-model that cannot be used
@@ -104,7 +110,7 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
     for name in names:
         if not explicit:  # the default baseline only goes with models of its size: look before loading it
             peek = load_frame_model(name, any_skeleton=True)
-            if peek.config.domain != cfg.domain or (peek.config.image_size != cfg.image_size and peek.kind != "warp"):
+            if not fits_as_baseline(peek.kind, peek.config, cfg):
                 continue
         try:
             other = load_frame_model(name)
@@ -115,7 +121,7 @@ def load_baselines(names: list[str] | None, loaded) -> tuple[dict, dict[str, str
             continue
         if other.path.resolve() == loaded.path.resolve():
             continue
-        if other.config.domain != cfg.domain or (other.config.image_size != cfg.image_size and other.kind != "warp"):
+        if not fits_as_baseline(other.kind, other.config, cfg):
             raise InputError(f"baseline model is {other.config.domain}/{other.config.image_size}, the evaluated "
                              f"model {cfg.domain}/{cfg.image_size}", other.path)
         baselines[other.path.name.removesuffix(".safetensors")] = other.model

@@ -178,15 +178,13 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     BlazePose's person masks)."""
     from dataclasses import replace
 
-    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
     from motion2video.stages.mesh_frames import video_mesh_track
 
     track = video_mesh_track(frames.joints3d, frames.points, size=frames.images.shape[1], person_mask=frames.masks[0])
-    band = band_width(frames.images.shape[1])
-    flows = [extend_flow(dense_flow(track.uv[0], track.visible[0], track.uv[t], track.visible[t], track.masks[t]),
-                         band) for t in range(1, len(track.uv))]
-    return replace(pairs, mesh_flow=np.stack([f.flow for f in flows]),
-                   mesh_visibility=np.stack([f.visibility for f in flows]),
+    ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
+    flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)))
+    return replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
                    mesh_ref_masks=np.repeat(track.masks[:1], len(flows), axis=0),
                    mesh_tgt_masks=track.masks[1:])
 

@@ -200,3 +200,21 @@ def extend_flow(mesh: MeshFlow, band: int) -> MeshFlow:
 def band_width(size: int) -> int:
     """The band :func:`extend_flow` adds at an image side of ``size`` pixels (4 at 128)."""
     return max(1, round(BAND_PX * size / 128))
+
+
+def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshTrack, rows
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The correspondence from one reference to many target frames: :func:`dense_flow` carried into the band
+    (:func:`extend_flow`) for each of ``rows``.
+
+    Args:
+        ref_uv: (V, 2) the reference vertices' pixels, already completed (:func:`complete_reference_uv`: done once
+            per reference, not once per target); ref_visible: (V,) bool.
+        targets: the target frames; rows: indices into them.
+    Returns:
+        flow (R, H, W, 2) float32, visibility (R, H, W) float32.
+    """
+    band = band_width(targets.masks.shape[2])
+    flows = [extend_flow(dense_flow(ref_uv, ref_visible, targets.uv[r], targets.visible[r], targets.masks[r],
+                                    complete=False), band) for r in rows]
+    return np.stack([f.flow for f in flows]), np.stack([f.visibility for f in flows])

@@ -276,7 +276,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     import torch
 
     from motion2video.frames.data import body_structures
-    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
     from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
@@ -292,23 +292,18 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
+    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
     net.eval()
     rows = np.asarray(rows, np.int64)
     with torch.inference_mode():
         for start in range(0, len(rows), batch_size):
             part = rows[start:start + batch_size]
-            flows, vis = [], []
-            for r in part:
-                mf = dense_flow(video.reference.uv[0], video.reference.visible[0], video.targets.uv[r],
-                                video.targets.visible[r], video.targets.masks[r])
-                mf = extend_flow(mf, band_width(size))
-                flows.append(mf.flow)
-                vis.append(mf.visibility)
+            flows, vis = flows_to_targets(ref_uv, video.reference.visible[0], video.targets, part)
             n = len(part)
             sil = torch.from_numpy(video.targets.masks[part][:, None].astype(np.float32))
             structure = torch.from_numpy(body_structures(video.tgt_points[part], size))
             parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
-                                      torch.from_numpy(np.stack(flows)), torch.from_numpy(np.stack(vis))[:, None],
+                                      torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                       sil, structure, plate=plate.expand(n, -1, -1, -1))
             gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
             region = np.maximum(parts.alpha[:, 0].numpy(), video.reference.masks[0][None].astype(np.float32))
@@ -334,7 +329,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     import torch
 
     from motion2video.frames.data import face_structures
-    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
     from motion2video.frames.mesh_warp import mesh_plate
 
     track = structures.face_mesh
@@ -347,16 +342,15 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     plate = mesh_plate(x_ref, ref_mask)
     rows = np.asarray(rows, np.int64)
     out = np.empty((len(rows), size, size, 3), np.uint8)
+    ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
     net.eval()
     with torch.inference_mode():
         for start in range(0, len(rows), batch_size):
             part = rows[start:start + batch_size] + 1  # structure rows (0 = the reference)
-            flows = [extend_flow(dense_flow(track.uv[0], track.visible[0], track.uv[r], track.visible[r],
-                                            track.masks[r]), band_width(size)) for r in part]
+            flows, vis = flows_to_targets(ref_uv, track.visible[0], track, part)
             n = len(part)
             gen = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
-                                    torch.from_numpy(np.stack([f.flow for f in flows])),
-                                    torch.from_numpy(np.stack([f.visibility for f in flows]))[:, None],
+                                    torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                     torch.from_numpy(track.masks[part][:, None].astype(np.float32)),
                                     torch.from_numpy(face_structures(structures.images[part])),
                                     plate=plate.expand(n, -1, -1, -1)).image

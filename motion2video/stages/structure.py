@@ -18,7 +18,7 @@ The frame generator's structures (:func:`render_structures`) follow its training
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterator
+from typing import TYPE_CHECKING, Iterator
 
 import numpy as np
 
@@ -26,6 +26,9 @@ from motion2video.core.errors import InputError
 from motion2video.core.rotations import heading_of
 from motion2video.stages.reference import Reference
 from renderers.registry import PIXELS, renderer_for
+
+if TYPE_CHECKING:  # annotations only: the mesh code is imported where it is used
+    from motion2video.frames.mesh_flow import MeshTrack
 
 # Two clearly different Anny identities: the source keeps the renderer's default look, the target gets
 # another phenotype and other clothes, so the video shows the behaviour moving to another person.
@@ -196,7 +199,7 @@ class Structures:
     points: np.ndarray | None = None
     images: np.ndarray | None = None
     placement: BodyPlacement | None = None
-    face_mesh: object | None = None
+    face_mesh: "MeshTrack | None" = None
 
     @property
     def num_targets(self) -> int:
