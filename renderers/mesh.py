@@ -442,3 +442,44 @@ def vertex_visibility(uvz: np.ndarray, depth: np.ndarray, *, tolerance: float = 
     d = depth[y[inside], x[inside]]
     seen[inside] = (d > 0) & (uvz[inside, 2] <= d + tolerance)
     return seen
+
+
+# A vertex that passes the depth test is still covered when another part of the body lies in front of it this much
+# (metres) within OCCLUDER_RADIUS_PX of its pixel, and that part is at least OCCLUDER_APART_M from it on the body at
+# rest (not the vertex's own, curving surface): a hand resting on a thigh is within the depth tolerance of the thigh,
+# and the thigh under it is not seen.
+OCCLUDER_GAP_M = 0.008
+OCCLUDER_APART_M = 0.08
+OCCLUDER_RADIUS_PX = 1.0
+
+
+def uncovered(uvz: np.ndarray, visible: np.ndarray, rest: np.ndarray, *, radius_px: float = OCCLUDER_RADIUS_PX,
+              gap: float = OCCLUDER_GAP_M, apart: float = OCCLUDER_APART_M) -> np.ndarray:
+    """The front-surface flags of :func:`vertex_visibility` without the vertices another body part covers.
+
+    The depth test alone keeps a surface that another one touches (a hand on a thigh: the thigh's depth is within
+    the tolerance of the hand's); here a visible vertex is dropped when a visible vertex within ``radius_px`` pixels
+    lies more than ``gap`` metres nearer the camera and more than ``apart`` metres away on the body at rest.
+
+    Args:
+        uvz: (V, 3) projected vertices (pixel x, pixel y, depth in metres).
+        visible: (V,) bool from :func:`vertex_visibility`.
+        rest: (V, 3) the same vertices at rest (metres): which vertices belong to one surface.
+    Returns:
+        (V,) bool, a subset of ``visible``.
+    """
+    from scipy.spatial import cKDTree
+
+    shown = np.flatnonzero(visible)
+    out = np.asarray(visible, bool).copy()
+    if len(shown) < 2:
+        return out
+    pairs = cKDTree(np.asarray(uvz, np.float64)[shown, :2]).query_pairs(radius_px, output_type="ndarray")
+    if len(pairs) == 0:
+        return out
+    a, b = shown[pairs[:, 0]], shown[pairs[:, 1]]
+    far = np.linalg.norm(np.asarray(rest)[a] - np.asarray(rest)[b], axis=1) > apart
+    dz = np.asarray(uvz)[a, 2] - np.asarray(uvz)[b, 2]  # > 0: b is nearer the camera than a
+    out[a[far & (dz > gap)]] = False
+    out[b[far & (dz < -gap)]] = False
+    return out

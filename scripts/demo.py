@@ -10,9 +10,9 @@ Writes, from the committed ``demo_inputs/`` (and one photo of ``../shared`` when
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
   ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-mesh-128`` (moved through the head mesh);
-- ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``jump.npz`` (procedural)
+- ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``cmu_jump.npz`` (a real CMU jump)
   re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person
-  ``reference_body.png`` by ``frames-body-mesh-256``, side by side
+  ``reference_body.png`` (re-framed to keep the jump in view) by ``frames-body-mesh-256``, side by side
   with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
   ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
 - ``out/photo_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): a real photo as the reference (issue 23):
@@ -40,10 +40,9 @@ BODY = dict(motion_model="mtvae-add", frame_model="frames-body-mesh-256", clip="
 FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-mesh-128", clip="smile.npz",
             reference="reference_face.png", start=0)
 MESH_SIZE = 256
-# Behaviour transfer: the procedural jump from frame 10, re-enacted from wave.npz's first (standing) posture. The
-# real CMU jump (cmu_jump.npz) was tried here again with the 256 px mesh generator: the re-enactment barely leaves
-# the ground (issue 24: transfers lose most of a jump) and the head leaves the frame at the top, so the demo keeps
-# the jump it showed before.
+# Behaviour transfer: the real CMU jump (cmu_jump.npz, CMU 16_02) re-enacted from wave.npz's first (standing)
+# posture. The person jumps higher than the reference picture has room for above the head, so the picture is
+# re-framed to keep the whole jump in view (transfer --fit-view).
 # A real photo as the reference (issue 23): the skier of ../shared/data/photos/skier.jpg (one person, full body, on
 # plain snow), her pose estimated (no pose file), the photo cut to a square around her (--crop-person: the
 # 640x425 photo would otherwise be padded to a square) and generated at 256 px. Two futures of the CMU walk;
@@ -54,8 +53,8 @@ MESH_SIZE = 256
 SHARED_PHOTOS = REPO.parent / "shared" / "data" / "photos"
 PHOTO = dict(motion_model="mtvae-add", frame_model="frames-body-128", clip="cmu_walk.npz", photo="skier.jpg",
              start=24, samples=2, size=256, crop_person=True)
-TRANSFER = dict(motion_model="behavior", frame_model="frames-body-mesh-256", behavior="jump.npz", behavior_start=10,
-                target="wave.npz", target_frame=0, reference="reference_body.png")
+TRANSFER = dict(motion_model="behavior", frame_model="frames-body-mesh-256", behavior="cmu_jump.npz",
+                behavior_start=0, target="wave.npz", target_frame=0, reference="reference_body.png", fit_view=True)
 
 
 def weight_files(weights: Path = WEIGHTS) -> dict[str, Path]:
@@ -139,12 +138,13 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     side with the source (as ``motion2video transfer --style frames --reference ... --npz ...``)."""
     import numpy as np
 
-    from motion2video.apps.transfer import iter_transfer, transfer_behavior
+    from motion2video.apps.transfer import iter_transfer, transfer_behavior, transfer_forecast
     from motion2video.models.checkpoint import load_model
     from motion2video.core.atomic import save_npz
     from motion2video.frames.checkpoint import load_frame_model
     from motion2video.stages.reference import load_reference
     from motion2video.stages.clips import load_clip
+    from motion2video.stages.structure import reference_in_view
     from motion2video.formats.video import VideoWriter, write_image
 
     t0 = time.perf_counter()
@@ -156,6 +156,8 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     target = load_clip(bundle, DEMO_INPUTS / spec["target"])
     result = transfer_behavior(bundle, source, target, source_start=spec["behavior_start"],
                                target_frame=spec["target_frame"])
+    reference = reference_in_view(transfer_forecast(result), reference, size=frame_model.config.image_size,
+                                  fit_view=spec["fit_view"])
     video = out / "transfer_body.mp4"
     kept = []
     z = result.source[:, 0, 2]  # the source's pelvis height: the sheet shows start, crouch, top, landing

@@ -52,7 +52,9 @@ from motion2video.core.errors import InputError
 from motion2video.stages.reference import load_reference
 from motion2video.stages.frames import GeneratedFrames, default_generator_threads, iter_generated
 from motion2video.stages.sampling import sample_forecast
-from motion2video.stages.structure import DOMAIN_OF_LAYOUT, Structures, render_structures, structure_previews
+from motion2video.stages.structure import (
+    DOMAIN_OF_LAYOUT, Structures, reference_in_view, render_structures, structure_previews,
+)
 from renderers.registry import renderer_for
 
 STRUCTURE_SUFFIX = "-structure"
@@ -192,6 +194,9 @@ class SynthesisConfig:
         input_fps: the input's true frame rate when the file states none (joint arrays) or a wrong one.
         crop_person: cut the reference photo to a square around its person first
             (:func:`motion2video.stages.reference.crop_to_person`).
+        fit_view: body: when a placed body leaves the reference picture (a jump's head above the top), zoom the
+            picture out so that every frame shows the whole person
+            (:func:`motion2video.stages.structure.reference_in_view`); without it, a note says so.
     """
 
     samples: int = 5
@@ -209,6 +214,7 @@ class SynthesisConfig:
     character: str | None = None
     input_fps: float | None = None
     crop_person: bool = False
+    fit_view: bool = False
 
 
 @dataclass
@@ -329,6 +335,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     timings["sampling"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
+    ref = reference_in_view(fc, ref, size=size, fit_view=config.fit_view)
     structures = render_structures(fc, domain=domain, size=size, reference=ref)
     timings["structures"] = time.perf_counter() - t0
 

@@ -274,8 +274,19 @@ def iter_transfer(result: TransferResult, *, style: str = "mesh", size: int = 25
     for k, frames in enumerate(drawn):
         text = (f"{_short(result.target_name)} @{result.target_frame} re-enacts" if result.source is not None
                 else f"flow behaviour {k + 1}")
-        cells.append(iter_mark_segments(iter_chunks(frames), [(1, GREEN, text), (n - 1, RED, text)]))
+        # A reference picture's person fills its frame: a jump's head reaches the top, where the label would hide it.
+        corner = "bottom-left" if style == "frames" else "top-left"
+        cells.append(iter_mark_segments(iter_chunks(frames), [(1, GREEN, text), (n - 1, RED, text)], corner=corner))
     return iter_grid(cells, None, 2 if result.source is not None else None)
+
+
+def transfer_forecast(result: TransferResult):
+    """The re-enactments as a :class:`motion2video.stages.sampling.Forecast`: the target's start posture is the one
+    observed frame, each re-enactment a future (what the frame generator's structures are placed from)."""
+    from motion2video.stages.sampling import Forecast
+
+    return Forecast(observed=result.reenacted[0, :1], futures=result.reenacted[:, 1:], fps=result.fps,
+                    layout=result.layout, model="behavior", seed=0)
 
 
 def render_with_frame_model(result: TransferResult, frame_model, *, size: int, reference=None) -> list[np.ndarray]:
@@ -296,7 +307,6 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
     import cv2
 
     from motion2video.stages.frames import generate_video_frames
-    from motion2video.stages.sampling import Forecast
     from motion2video.stages.structure import DOMAIN_OF_LAYOUT, render_structures
 
     if frame_model is None:
@@ -306,8 +316,7 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
         raise InputError(f"the frame model makes {cfg.domain} frames, but the behaviour model moves a "
                          f"{DOMAIN_OF_LAYOUT[result.layout]}", getattr(frame_model, "path", None))
     s = cfg.image_size
-    fc = Forecast(observed=result.reenacted[0, :1], futures=result.reenacted[:, 1:], fps=result.fps,
-                  layout=result.layout, model="behavior", seed=0)
+    fc = transfer_forecast(result)
     if reference is None:
         if result.layout != "body3d":
             raise InputError("--style frames needs --reference for this model (only 3D body models can render "

@@ -10,6 +10,8 @@ from motion2video.core.errors import InputError
 
 RIGID_BONES_HELP = ("keep the observed bone lengths in every future frame (3D body models: the models' own futures "
                     "stretch and shrink limbs by several per cent; rigid ones are about 3%% further from the truth)")
+FIT_VIEW_HELP = ("body frames: when the motion leaves the reference picture (a jump's head above the top), zoom the "
+                 "picture out (its border replicated) so that every frame shows the whole person")
 THREADS_HELP = ("torch CPU threads (default 1: the small recurrent models and the frame generator ran 3-40x faster "
                 "single-threaded on 2 shared cores)")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.commands.common import RIGID_BONES_HELP, add_command, add_motion_input_arguments, check_at_least
+from motion2video.commands.common import FIT_VIEW_HELP, RIGID_BONES_HELP, add_command, add_motion_input_arguments, check_at_least
 from motion2video.core.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"
@@ -52,6 +52,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "the pose is estimated)")
     p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
                    "in a large photo fills the generator's frame")
+    p.add_argument("--fit-view", action="store_true", help=FIT_VIEW_HELP)
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("-o", "--output", required=True, help="output video OUT.mp4 (also OUT-structure.mp4, OUT-sheet.png)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
@@ -84,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
                              size=args.size, rigid_bones=args.rigid_bones, character=args.character,
-                             input_fps=args.input_fps, crop_person=args.crop_person)
+                             input_fps=args.input_fps, crop_person=args.crop_person, fit_view=args.fit_view)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

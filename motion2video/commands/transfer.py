@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from motion2video.core.atomic import save_npz
-from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
+from motion2video.commands.common import (FIT_VIEW_HELP, add_bvh_argument, add_command, add_motion_input_arguments,
                                           add_video_output_arguments, check_bvh_output, check_video_and_npz,
                                           set_threads)
 from motion2video.core.errors import InputError
@@ -59,6 +59,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "the pose is estimated)")
     p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
                    "in a large photo fills the generator's frame")
+    p.add_argument("--fit-view", action="store_true", help=FIT_VIEW_HELP)
     p.add_argument("--frame-model", default=None,
                    help="frame-generator checkpoint or shipped name for --style frames (default frames-body-128, "
                    "or frames-face-128 for face models)")
@@ -73,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.models.checkpoint import load_model
     from motion2video.models.baselines import BASELINES
     from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
-                                            style_for, transfer_behavior)
+                                            style_for, transfer_behavior, transfer_forecast)
     from motion2video.stages.clips import load_clip
     from motion2video.stages.latents import behavior_model
     from motion2video.stages.video import check_cell_size
@@ -94,8 +95,9 @@ def run(args: argparse.Namespace) -> int:
         frame_model, reference = frame_style_inputs(bundle, frame_model=args.frame_model, reference=args.reference,
                                                     reference_pose=args.reference_pose,
                                                     crop_person=args.crop_person)
-    elif args.reference_pose or args.frame_model or args.crop_person:
-        raise InputError("--frame-model, --reference-pose and --crop-person are only used with --style frames")
+    elif args.reference_pose or args.frame_model or args.crop_person or args.fit_view:
+        raise InputError("--frame-model, --reference-pose, --crop-person and --fit-view are only used with --style "
+                         "frames")
     target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
     if args.behavior is not None:
         source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
@@ -104,6 +106,11 @@ def run(args: argparse.Namespace) -> int:
     else:
         result = sample_behaviors(bundle, target, num_samples=args.sample, target_frame=args.target_frame,
                                   horizon=args.horizon, seed=args.seed)
+    if reference is not None:
+        from motion2video.stages.structure import reference_in_view
+
+        reference = reference_in_view(transfer_forecast(result), reference, size=frame_model.model.config.image_size,
+                                      fit_view=args.fit_view)
     chunks = iter_transfer(result, style=style, size=args.size, frame_model=frame_model, reference=reference)
     for note in (reference.notes if reference is not None else ()):
         print(f"motion2video transfer: note: {note}", file=sys.stderr)

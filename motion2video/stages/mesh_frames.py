@@ -66,8 +66,30 @@ def affine_matrix(a: float, b: np.ndarray) -> np.ndarray:
     return np.array([[a, 0.0, off[0]], [0.0, a, off[1]]])
 
 
+def camera_covering(camera, scales: np.ndarray, shifts: np.ndarray, size: int):
+    """The camera widened (same centre and focal length, ``pad`` more pixels on every side) so that its image
+    covers the whole track square of every frame: a body that leaves the camera's frame (a jump's head above
+    the observed frames' framing) is still rendered where the track shows it.
+
+    Args:
+        camera: the PinholeCamera; scales (N,), shifts (N, 2): its pixels map to the track's by ``x * a + b``.
+        size: the track's side.
+    Returns:
+        (camera, pad): its pixels are the given camera's + ``pad``.
+    """
+    lo = -shifts / scales[:, None]  # the track square's corners in the camera's pixels
+    hi = (size - shifts) / scales[:, None]
+    need = max(0.0, float(-lo.min()), float((hi - [camera.width, camera.height]).max()))
+    pad = int(np.ceil(min(need, max(camera.width, camera.height))))  # at most doubles the render's side
+    if pad == 0:
+        return camera, 0
+    height = camera.height + 2 * pad
+    yfov = 2.0 * np.arctan(0.5 * height / camera.focal)
+    return type(camera)(camera.position, camera.target, float(yfov), camera.width + 2 * pad, height), pad
+
+
 def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
-                      size: int, progress=None) -> MeshTrack:
+                      size: int, progress=None, cover_first: bool = False) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
     Args:
@@ -78,6 +100,9 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
             (2,), or per frame: ``a`` (N,) and ``b`` (N, 2).
         size: the track's image side (square).
         progress: called with the number of frames done.
+        cover_first: the first frame is a body fitted to a picture (the reference): its vertices that another body
+            part covers are not shown (:func:`renderers.mesh.uncovered`; a fitted hand resting on a thigh is a
+            pixel or two off the pictured hand, so the thigh under it would take the hand's skin).
     Returns:
         The :class:`MeshTrack`.
     """
@@ -86,11 +111,14 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     from motion2video.core.camera import project
     from renderers import anny_model
     from renderers.body import pose_anny_from_joints, posed_vertices
-    from renderers.mesh import MeshRenderer, vertex_visibility
+    from renderers.mesh import MeshRenderer, uncovered, vertex_visibility
 
     n = len(joints)
+    rest = anny_model.anny_rest(phenotype).vertices
     scales = np.broadcast_to(np.asarray(transform[0], np.float64), (n,))
     shifts = np.broadcast_to(np.asarray(transform[1], np.float64), (n, 2))
+    camera, pad = camera_covering(camera, scales, shifts, size)
+    shifts = shifts - scales[:, None] * pad  # the widened camera's pixels are the given camera's + pad
     pose = pose_anny_from_joints(np.asarray(joints, np.float64), phenotype=phenotype)
     faces = anny_model.triangles()
     renderer = MeshRenderer(camera.width, camera.height)
@@ -105,6 +133,8 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                 out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
                 uvz = project(v, camera)
                 visible[i] = vertex_visibility(uvz, out.depth)
+                if cover_first and i == 0:
+                    visible[i] = uncovered(uvz, visible[i], rest)
                 uv[i] = uvz[:, :2] * scales[i] + shifts[i]
                 m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
                                    flags=cv2.INTER_LINEAR)
@@ -172,7 +202,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
             phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
                                      person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
-                             transform=to_crop, size=model_size)
+                             transform=to_crop, size=model_size, cover_first=True)
     ref_visible = both.visible[:1]
     if small is not None and small.any():
         ref_visible = ref_visible & on_person(both.uv[0], small)[None]
@@ -257,7 +287,7 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         phenotype, _ = fit_width(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
                                  person_mask=person_mask, phenotype=phenotype)
     return render_mesh_track(joints3d, phenotype=phenotype or {}, camera=camera, transform=(scales, shifts),
-                             size=size)
+                             size=size, cover_first=True)
 
 
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
@@ -276,7 +306,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     import torch
 
     from motion2video.frames.data import body_structures
-    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
+    from motion2video.frames.mesh_flow import FITTED_SOURCE_RINGS, complete_reference_uv, flows_to_targets
     from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
@@ -292,7 +322,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
-    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
+    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], rings=FITTED_SOURCE_RINGS)
     net.eval()
     rows = np.asarray(rows, np.int64)
     with torch.inference_mode():
@@ -329,7 +359,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     import torch
 
     from motion2video.frames.data import face_structures
-    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
+    from motion2video.frames.mesh_flow import FITTED_SOURCE_RINGS, complete_reference_uv, flows_to_targets
     from motion2video.frames.mesh_warp import mesh_plate
 
     track = structures.face_mesh

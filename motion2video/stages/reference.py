@@ -257,6 +257,28 @@ def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PE
     return crop, moved, (left, top, side)
 
 
+def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "Reference":
+    """A body reference re-framed to the square ``view`` (x0, y0, side) of its pixels, resized back to its size: a
+    view larger than the picture zooms out, one beside it pans; outside the picture its border is replicated.
+
+    Used to keep a motion that leaves the picture (a jump's head above the top) in view
+    (:func:`motion2video.stages.structure.view_to_fit`). The pose moves with the picture; a note says what changed.
+    """
+    size = reference.image.shape[0]
+    x0, y0, side = (float(v) for v in view)
+    k = size / side
+    matrix = np.array([[k, 0.0, -x0 * k + 0.5 * k - 0.5], [0.0, k, -y0 * k + 0.5 * k - 0.5]])
+    image = cv2.warpAffine(reference.image, matrix, (size, size), flags=cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR,
+                           borderMode=cv2.BORDER_REPLICATE)
+    pose = reference.pose
+    if pose is not None:
+        pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
+        pose = ReferencePose("body", size, size, points=pts, identity=dict(pose.identity))
+    note = (f"the motion leaves the reference picture: it is shown zoomed out to {k:.2f}x (a {side:.0f} px square at "
+            f"({x0:.0f}, {y0:.0f}) of its {size} px, the border replicated) so the person stays in view")
+    return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path)
+
+
 def load_reference(path: str | Path, *, size: int, domain: str,
                    pose_path: str | Path | None = None, crop_person: bool = False) -> Reference:
     """The reference image at ``size`` x ``size`` and its pose (see the module docstring).

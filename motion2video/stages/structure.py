@@ -172,6 +172,66 @@ def place_body(observed: np.ndarray, futures: np.ndarray, *, size: int,
         scale=float(scale), shift=np.asarray(shift, np.float64).reshape(2))
 
 
+# view_to_fit: room around the joints for what is not a joint, as fractions of the reference body's height
+VIEW_HEAD_ROOM = 0.18  # above the head joint: the top of the head (about 0.1) and room for a video cell's border
+VIEW_FOOT_ROOM = 0.06  # below the lowest ankle (the feet) and beside the outermost joint (hands, shoulders)
+
+
+def view_to_fit(points: np.ndarray, size: int) -> tuple[float, float, float] | None:
+    """The square of the generator's pixels (x0, y0, side) that keeps every placed body in view, or None when the
+    picture already does.
+
+    Args:
+        points: (N, 17, 2) joints in the square picture's pixels, row 0 the reference pose
+            (:attr:`Structures.points`).
+        size: the picture's side.
+    Returns:
+        The smallest square (at least the picture) holding every joint with room for the head, feet and hands,
+        nearest the picture; None when nothing leaves the picture.
+    """
+    pts = np.asarray(points, np.float64)
+    ref = pts[0]
+    tall = max(float(ref[:, 1].max() - ref[:, 1].min()), 1.0)
+    lo = pts.reshape(-1, 2).min(axis=0) - (VIEW_FOOT_ROOM * tall, VIEW_HEAD_ROOM * tall)
+    hi = pts.reshape(-1, 2).max(axis=0) + VIEW_FOOT_ROOM * tall
+    if lo.min() >= -0.5 and hi.max() <= size + 0.5:  # within half a pixel
+        return None
+    side = max(float(size), float((hi - lo).max()))
+    corner = np.minimum(np.maximum(0.0, hi - side), lo)  # holds [lo, hi], as near (0, 0) as it can
+    return float(corner[0]), float(corner[1]), side
+
+
+def reference_in_view(forecast, reference: Reference, *, size: int, fit_view: bool) -> Reference:
+    """The reference, re-framed so that every observed and future body of ``forecast`` stays in the picture when
+    ``fit_view`` (:func:`view_to_fit`, :func:`motion2video.stages.reference.zoom_to_view`); without ``fit_view``, the
+    same reference with a note when a body leaves the picture. Face references are returned as they are.
+
+    Args:
+        forecast: a :class:`motion2video.stages.sampling.Forecast` (observed (To, 17, D), futures (K, Tf, 17, D)).
+        reference: from :func:`motion2video.stages.reference.load_reference`, at ``size``.
+        size: the generator's image size.
+    """
+    from dataclasses import replace
+
+    from motion2video.stages.reference import ReferencePose, zoom_to_view
+
+    if DOMAIN_OF_LAYOUT[forecast.layout] != "body":
+        return reference
+    ref_points = None if reference.pose is None else reference.pose.points
+    placement = place_body(forecast.observed, forecast.futures, size=size, reference_points=ref_points)
+    rows = np.concatenate([placement.reference[None], placement.observed, placement.futures.reshape(-1, 17, 2)])
+    view = view_to_fit(rows, size)
+    if view is None:
+        return reference
+    if not fit_view:
+        return replace(reference, notes=reference.notes + (
+            "the motion leaves the reference picture (a head above the top, a foot below the bottom): --fit-view "
+            "zooms out so the person stays in view",))
+    if reference.pose is None:  # the placement's own framing becomes the pose that is zoomed
+        reference = replace(reference, pose=ReferencePose("body", size, size, points=placement.reference))
+    return zoom_to_view(reference, view)
+
+
 @dataclass(frozen=True)
 class Structures:
     """What the generator is conditioned on, for the reference, the observed frames and every future.

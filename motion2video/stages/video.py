@@ -35,9 +35,10 @@ def mark_segments(frames: np.ndarray, segments: list[tuple[int, tuple[int, int, 
 
 
 def iter_mark_segments(chunks: Iterable[np.ndarray], segments: list[tuple[int, tuple[int, int, int], str]], *,
-                       border: int = 4) -> Iterator[np.ndarray]:
+                       border: int = 4, corner: str = "top-left") -> Iterator[np.ndarray]:
     """:func:`mark_segments` on a stream of (t, H, W, 3) chunks; yields the marked chunks (split at the
-    segment boundaries). Raises ValueError when the stream is longer than the segments."""
+    segment boundaries), the text in ``corner`` (:func:`motion2video.formats.video.label`). Raises ValueError when
+    the stream is longer than the segments."""
     bounds = np.cumsum([n for n, _, _ in segments])
     done = 0
     for chunk in chunks:
@@ -47,5 +48,5 @@ def iter_mark_segments(chunks: Iterable[np.ndarray], segments: list[tuple[int, t
                 raise ValueError(f"segments cover {int(bounds[-1])} frames, the clip has more")
             take = min(len(chunk), int(bounds[k]) - done)
             _, colour, text = segments[k]
-            yield label(add_border(chunk[:take], colour, border), text, inset=border)
+            yield label(add_border(chunk[:take], colour, border), text, inset=border, corner=corner)
             chunk, done = chunk[take:], done + take

@@ -1,0 +1,140 @@
+"""Turned limbs and jumps through the mesh generator's path (issue 22): the flow across a fold, a body that touches
+itself, a body that leaves the observed framing, and a reference picture re-framed to keep a jump in view.
+
+Real parts: the demo's real CMU jump and reference picture, Anny rendered with pyrender/OSMesa.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motion2video.core.camera import PinholeCamera, project
+from motion2video.frames.mesh_flow import dense_flow
+from motion2video.stages.reference import load_reference
+from motion2video.stages.sampling import Forecast
+from motion2video.stages.structure import place_body, reference_in_view, view_to_fit
+from renderers.mesh import uncovered
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "demo_inputs"
+
+
+def test_flow_across_a_fold_never_lands_between_the_two_surfaces():
+    """A turned shin: neighbouring target vertices come from two places of the reference 30 px apart (its front and
+    its side, completed from the front's other edge). Averaging them would sample the background between."""
+    xs = np.arange(4, 28, dtype=np.float64)
+    tgt_uv = np.array([[x, y] for y in range(8, 25) for x in xs] + [[28.0, y] for y in range(8, 25)])  # pixel corners
+    ref_x = np.where((tgt_uv[:, 0].astype(int) + tgt_uv[:, 1].astype(int)) % 2 == 0, 10.0, 40.0)  # interleaved
+    ref_uv = np.stack([ref_x, tgt_uv[:, 1]], axis=1)
+    mask = np.zeros((32, 32), bool)
+    mask[8:24, 4:28] = True
+    flow = dense_flow(ref_uv, np.ones(len(ref_uv), bool), tgt_uv, np.ones(len(tgt_uv), bool), mask,
+                      complete=False).flow
+    x = flow[mask][:, 0]
+    assert np.all((np.abs(x - 10) < 1.0) | (np.abs(x - 40) < 1.0)), np.unique(np.round(x))
+    # Neighbours that agree are still averaged: a smooth surface keeps a sub-pixel flow.
+    smooth = dense_flow(tgt_uv + [3.3, 0.0], np.ones(len(tgt_uv), bool), tgt_uv, np.ones(len(tgt_uv), bool), mask,
+                        complete=False).flow
+    np.testing.assert_allclose(smooth[mask][:, 0] - (np.nonzero(mask)[1] + 0.5), 3.3, atol=1e-6)
+
+
+def test_a_hand_resting_on_a_thigh_covers_it():
+    """The depth test keeps a thigh 2 cm behind a hand (within its tolerance); the thigh is not seen there."""
+    rest = np.array([[0.0, 0.0, 0.5],  # thigh, under the hand
+                     [0.0, 0.01, 0.52],  # thigh, its neighbour on the same surface
+                     [0.3, 0.0, 0.8],  # the hand (far from the thigh on the body at rest)
+                     [0.0, 0.0, 0.3]])  # thigh, away from the hand
+    uvz = np.array([[10.2, 10.2, 2.02],
+                    [10.6, 10.4, 2.015],
+                    [10.5, 10.5, 2.0],
+                    [30.5, 30.5, 2.02]])
+    visible = np.ones(4, bool)
+    assert uncovered(uvz, visible, rest).tolist() == [False, False, True, True]
+    # The same surface curving away within a pixel is not a cover.
+    assert uncovered(uvz[[0, 1, 3]], visible[:3], rest[[0, 1, 3]]).tolist() == [True, True, True]
+
+
+def test_the_render_camera_widens_to_cover_a_body_above_the_framing():
+    from motion2video.stages.mesh_frames import camera_covering
+
+    camera = PinholeCamera((0.0, -5.0, 1.0), (0.0, 0.0, 1.0), 0.6, 256, 256)
+    points = np.random.default_rng(0).normal([0, 0, 1], 0.3, (20, 3))
+    wide, pad = camera_covering(camera, np.array([1.0, 1.0]), np.array([[0.0, 20.0], [10.0, 10.0]]), 256)
+    assert pad == 20 and (wide.width, wide.height) == (296, 296)
+    np.testing.assert_allclose(project(points, wide)[:, :2], project(points, camera)[:, :2] + pad, atol=1e-9)
+    same, none = camera_covering(camera, np.array([1.0]), np.array([[0.0, 0.0]]), 256)
+    assert none == 0 and same == camera
+
+
+def jump_forecast() -> Forecast:
+    """The demo's real CMU jump (CMU 16_02): its first frame observed, the rest one future."""
+    data = np.load(DEMO / "cmu_jump.npz")
+    joints = np.asarray(data["joints"], np.float64)
+    return Forecast(observed=joints[:1], futures=joints[None, 1:], fps=25.0, layout="body3d", model="test", seed=0)
+
+
+def test_view_to_fit_keeps_every_placed_body_with_room_for_the_head():
+    forecast = jump_forecast()
+    ref = load_reference(DEMO / "reference_body.png", size=256, domain="body")
+    placement = place_body(forecast.observed, forecast.futures, size=256, reference_points=ref.pose.points)
+    rows = np.concatenate([placement.reference[None], placement.observed, placement.futures.reshape(-1, 17, 2)])
+    assert rows[:, 10, 1].min() < 20  # the head joint rises near the top: the top of the head leaves the picture
+    x0, y0, side = view_to_fit(rows, 256)
+    tall = np.ptp(rows[0, :, 1])
+    assert y0 < 0 and side >= 256
+    assert y0 <= rows[:, 10, 1].min() - 0.18 * tall + 1e-6 and y0 + side >= rows[..., 1].max()
+    assert view_to_fit(rows[:1], 256) is None  # the reference pose alone fits
+
+
+def test_reference_in_view_zooms_out_with_a_note_and_only_when_asked():
+    forecast = jump_forecast()
+    ref = load_reference(DEMO / "reference_body.png", size=256, domain="body")
+    kept = reference_in_view(forecast, ref, size=256, fit_view=False)
+    assert kept.image is ref.image and "--fit-view" in kept.notes[-1]
+    framed = reference_in_view(forecast, ref, size=256, fit_view=True)
+    assert framed.image.shape == (256, 256, 3) and "zoomed out" in framed.notes[-1]
+    placement = place_body(forecast.observed, forecast.futures, size=256, reference_points=framed.pose.points)
+    rows = np.concatenate([placement.reference[None], placement.futures.reshape(-1, 17, 2)])
+    assert view_to_fit(rows, 256) is None  # now every frame is in view
+    # The picture moved with its pose: the pixels at the head joint are still the head (not the white background).
+    x, y = np.round(framed.pose.points[10]).astype(int)
+    assert framed.image[y, x].astype(int).sum() < 3 * 240
+    # A motion that stays in the picture leaves the reference as it is, with no note.
+    still = Forecast(observed=forecast.observed, futures=np.repeat(forecast.observed[None], 3, axis=1), fps=25.0,
+                     layout="body3d", model="test", seed=0)
+    assert reference_in_view(still, ref, size=256, fit_view=True) is ref
+
+
+@pytest.mark.slow
+def test_transfer_of_a_real_jump_keeps_the_head_in_view(tmp_path, capsys):
+    """The demo's transfer: the real CMU jump re-enacted as the reference person through the mesh generator. With
+    --fit-view the head is drawn in every frame (skin and hair in the top part of the person)."""
+    from motion2video.cli import main
+    from motion2video.formats.video import read_video
+
+    out = tmp_path / "jump.mp4"
+    npz = tmp_path / "jump.npz"
+    rc = main(["transfer", "--model", "behavior", "--behavior", str(DEMO / "cmu_jump.npz"), "--target",
+               str(DEMO / "wave.npz"), "--reference", str(DEMO / "reference_body.png"), "--frame-model",
+               "frames-body-mesh-256", "--fit-view", "--horizon", "48", "-o", str(out), "--npz", str(npz)])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    assert "zoomed out" in err
+    frames, _ = read_video(out)
+    cell = frames[:, 4:-4, 258 + 4:-4].astype(int)  # the re-enactment (right of a 2 px gap), inside its 4 px border
+    person = cell.sum(axis=3) < 3 * 215  # not the white background
+    tops = np.array([np.nonzero(p.any(axis=1))[0].min() for p in person])
+    assert tops.min() > 2  # the top of the head never touches the frame's edge
+    reenacted = np.load(npz)["reenacted"][0]
+    rise = reenacted[:, 0, 2].max() - reenacted[0, 0, 2]
+    assert rise > 0.3  # it jumps
+    top = int(np.argmax(reenacted[1:, 0, 2])) + 1
+    head = cell[top][tops[top]:tops[top] + 20]
+    skin_or_hair = (head[..., 0] > head[..., 2] + 20)  # skin and brown hair are redder than the blue shirt
+    assert skin_or_hair.sum() > 40
