@@ -178,11 +178,11 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     BlazePose's person masks)."""
     from dataclasses import replace
 
-    from motion2video.frames.mesh_flow import FITTED_SOURCE_RINGS, complete_reference_uv, flows_to_targets
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
     from motion2video.stages.mesh_frames import video_mesh_track
 
     track = video_mesh_track(frames.joints3d, frames.points, size=frames.images.shape[1], person_mask=frames.masks[0])
-    ref_uv = complete_reference_uv(track.uv[0], track.visible[0], rings=FITTED_SOURCE_RINGS)
+    ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
     flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)))
     return replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
                    mesh_ref_masks=np.repeat(track.masks[:1], len(flows), axis=0),

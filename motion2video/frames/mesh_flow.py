@@ -11,8 +11,8 @@ Per frame we keep each vertex's projected pixel position and whether it is the f
 against the rendered depth map, :func:`renderers.mesh.vertex_visibility`). For a pair, every target silhouette pixel takes
 the inverse-squared-distance-weighted reference positions of its ``k`` nearest *visible* target vertices
 (:func:`dense_flow`, a KD-tree from SciPy), leaving out those whose reference position disagrees with the nearest
-one's (a fold: averaging would land between the two surfaces); the weights of the same vertices' reference visibility give the
-visibility map. At 128 px a body shows about one visible vertex per pixel, so the interpolation error is below
+one's (a fold: averaging would land between the two surfaces); the weights of the same vertices' reference
+visibility give the visibility map. At 128 px a body shows about one visible vertex per pixel, so the interpolation error is below
 a pixel away from occlusion edges.
 
 Pixel coordinates follow :func:`motion2video.core.camera.project`: x right, y down, pixel centres at
@@ -36,12 +36,6 @@ WEIGHT_EPS_PX = 0.1  # Shepard's inverse-distance weights 1 / (d^2 + eps^2): a v
 # along turned shins.
 AGREE_PX = 2.0
 AGREE_STRETCH = 3.0
-# complete_reference_uv for a body *fitted* to a picture copies colours only from shown vertices this many edges
-# inside the shown region: a vertex on its edge (a silhouette, a hand's outline) is where a fitted body is most often
-# a pixel off the pictured surface, and one such vertex would lend its colour (the hand's skin) to a whole hidden
-# side of a thigh. Renders of the mesh itself (training pairs, evaluation) keep every shown vertex as a source: there
-# the edge is exact, and eroding it cost 0.7-1.3 dB of person PSNR on held-out real-mocap pairs.
-FITTED_SOURCE_RINGS = 2
 
 
 @dataclass
@@ -105,7 +99,7 @@ def surface_graph():
     return coo_matrix((np.concatenate([w, w]), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n)).tocsr()
 
 
-def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, rings: int = 0) -> np.ndarray:
+def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray) -> np.ndarray:
     """(V, 2) reference pixels where every vertex the reference does not show takes the pixel of the nearest
     shown vertex *along the body's surface* (Dijkstra over :func:`surface_graph`): the hidden side of a thigh
     starts from the colour of its front, not from whatever covers its own pixel in the reference (a hand) or lies
@@ -113,8 +107,6 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, rings: int = 
 
     Args:
         ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
-        rings: only shown vertices this many edges inside the shown region are sources
-            (:data:`FITTED_SOURCE_RINGS` for a body fitted to a picture; 0: every shown vertex).
     """
     from scipy.sparse.csgraph import dijkstra
 
@@ -122,16 +114,12 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, rings: int = 
     graph = surface_graph()
     if len(uv) != graph.shape[0]:
         raise ValueError(f"the completion follows Anny's surface ({graph.shape[0]} vertices), got {len(uv)} vertices")
-    seen = np.asarray(seen, bool)
-    if not seen.any() or seen.all():
+    sources = np.flatnonzero(seen)
+    if len(sources) == 0 or len(sources) == len(seen):
         return uv
-    inner = seen.copy()
-    for _ in range(rings):  # off the shown region's edge: no source at a silhouette or beside an occluder
-        inner &= ~((graph @ (~inner).astype(np.float64)) > 0)
-    sources = np.flatnonzero(inner if inner.any() else seen)
     _, _, nearest = dijkstra(graph, directed=False, indices=sources, min_only=True,
                              return_predecessors=True)
-    hidden = ~seen & (nearest >= 0)
+    hidden = ~np.asarray(seen, bool) & (nearest >= 0)
     uv[hidden] = uv[nearest[hidden]]
     return uv
 

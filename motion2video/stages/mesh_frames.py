@@ -89,7 +89,7 @@ def camera_covering(camera, scales: np.ndarray, shifts: np.ndarray, size: int):
 
 
 def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
-                      size: int, progress=None, cover_first: bool = False) -> MeshTrack:
+                      size: int, progress=None) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
     Args:
@@ -100,9 +100,6 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
             (2,), or per frame: ``a`` (N,) and ``b`` (N, 2).
         size: the track's image side (square).
         progress: called with the number of frames done.
-        cover_first: the first frame is a body fitted to a picture (the reference): its vertices that another body
-            part covers are not shown (:func:`renderers.mesh.uncovered`; a fitted hand resting on a thigh is a
-            pixel or two off the pictured hand, so the thigh under it would take the hand's skin).
     Returns:
         The :class:`MeshTrack`.
     """
@@ -111,10 +108,9 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     from motion2video.core.camera import project
     from renderers import anny_model
     from renderers.body import pose_anny_from_joints, posed_vertices
-    from renderers.mesh import MeshRenderer, uncovered, vertex_visibility
+    from renderers.mesh import MeshRenderer, vertex_visibility
 
     n = len(joints)
-    rest = anny_model.anny_rest(phenotype).vertices
     scales = np.broadcast_to(np.asarray(transform[0], np.float64), (n,))
     shifts = np.broadcast_to(np.asarray(transform[1], np.float64), (n, 2))
     camera, pad = camera_covering(camera, scales, shifts, size)
@@ -133,8 +129,6 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                 out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
                 uvz = project(v, camera)
                 visible[i] = vertex_visibility(uvz, out.depth)
-                if cover_first and i == 0:
-                    visible[i] = uncovered(uvz, visible[i], rest)
                 uv[i] = uvz[:, :2] * scales[i] + shifts[i]
                 m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
                                    flags=cv2.INTER_LINEAR)
@@ -202,7 +196,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
             phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
                                      person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
-                             transform=to_crop, size=model_size, cover_first=True)
+                             transform=to_crop, size=model_size)
     ref_visible = both.visible[:1]
     if small is not None and small.any():
         ref_visible = ref_visible & on_person(both.uv[0], small)[None]
@@ -213,19 +207,23 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32))
 
 
-PERSON_EDGE_PX = 1  # on_person: the person's mask is eroded by this many pixels at 128 (its edge mixes background)
+# on_person: the person's mask is eroded by this many pixels at 128. 0: a 1-2 px erosion hid 40% of the shown
+# vertices (a limb's sides crowd into its silhouette's edge) and cost 1.6 dB of person PSNR on pictures of Anny
+# people fitted as synthesize fits them (docs/results.md, "Turned legs, touching hands and jumps").
+PERSON_EDGE_PX = 0
 
 
 def on_person(uv: np.ndarray, person_mask: np.ndarray) -> np.ndarray:
     """(V,) bool: which of the (V, 2) vertex pixels of a body *fitted* to a picture land on the pictured person
     (``person_mask`` (S, S) bool, eroded by :data:`PERSON_EDGE_PX` scaled to S). A fitted body is a little off
-    the person in places; a vertex it shows outside the person, or on the person's anti-aliased edge, would lend
+    the person in places; a vertex it shows outside the person would lend
     the background's colour to every target pixel that samples it (white streaks on a turned leg), so it is
     treated as not shown: the surface completion then takes the nearest vertex that lands on the person."""
     from scipy.ndimage import binary_erosion
 
     size = person_mask.shape[1]
-    inner = binary_erosion(person_mask, iterations=max(1, round(PERSON_EDGE_PX * size / 128)))
+    rings = round(PERSON_EDGE_PX * size / 128)
+    inner = binary_erosion(person_mask, iterations=rings) if rings > 0 else np.asarray(person_mask, bool)
     h, w = inner.shape
     x = np.floor(uv[:, 0]).astype(np.int64)
     y = np.floor(uv[:, 1]).astype(np.int64)
@@ -287,7 +285,7 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         phenotype, _ = fit_width(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
                                  person_mask=person_mask, phenotype=phenotype)
     return render_mesh_track(joints3d, phenotype=phenotype or {}, camera=camera, transform=(scales, shifts),
-                             size=size, cover_first=True)
+                             size=size)
 
 
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
@@ -306,7 +304,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     import torch
 
     from motion2video.frames.data import body_structures
-    from motion2video.frames.mesh_flow import FITTED_SOURCE_RINGS, complete_reference_uv, flows_to_targets
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
     from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
@@ -322,7 +320,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
-    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], rings=FITTED_SOURCE_RINGS)
+    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
     net.eval()
     rows = np.asarray(rows, np.int64)
     with torch.inference_mode():
@@ -359,7 +357,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     import torch
 
     from motion2video.frames.data import face_structures
-    from motion2video.frames.mesh_flow import FITTED_SOURCE_RINGS, complete_reference_uv, flows_to_targets
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
     from motion2video.frames.mesh_warp import mesh_plate
 
     track = structures.face_mesh

@@ -274,8 +274,8 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     if pose is not None:
         pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
         pose = ReferencePose("body", size, size, points=pts, identity=dict(pose.identity))
-    note = (f"the motion leaves the reference picture: it is shown zoomed out to {k:.2f}x (a {side:.0f} px square at "
-            f"({x0:.0f}, {y0:.0f}) of its {size} px, the border replicated) so the person stays in view")
+    note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
+            f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path)
 
 

@@ -1,0 +1,114 @@
+"""How the mesh generator does when the reference picture's body is *fitted*, as ``synthesize`` fits it.
+
+    python scripts/measure_fitted_reference.py [--model frames-body-mesh-256] [--clips 08_01,13_42,05_14]
+        [--json out/fitted_reference.json]
+
+``evaluate-frames --poses`` poses the held-out identities by real CMU clips and gives the generator each reference
+frame's exact mesh. ``synthesize`` never has it: it lifts the picture's 2D joints at the depths of the first
+observed pose, poses Anny's default body on them by IK, and keeps as shown only the vertices that land on the
+segmented person (:func:`motion2video.stages.mesh_frames.on_person`). This script scores the same pairs with the
+reference's mesh replaced by such a fit:
+
+- the joints are lifted at the depths of the window's last pose;
+- the body has Anny's default phenotype;
+- the exact person mask of the render stands in for BlazePose's segmentation.
+
+It scores three rules for which fitted vertices lend their colour: the depth test alone, ``on_person`` with the mask
+eroded by 2 px at 256 (shipped until 2026-11-26), and ``on_person`` with the mask as it is (shipped now).
+
+The fit is put in by wrapping ``BodyRenderer.render_with_masks`` for the length of the run: it is the one place that
+knows each window's camera. About 1.5 minutes per clip and rule on one thread.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+RULES = {
+    "depth test alone": None,
+    "on_person, mask eroded (shipped until 2026-11-26)": 1,
+    "on_person, mask as it is (shipped)": 0,
+}
+
+
+def fitted_renders(rule: int | None):
+    """A wrapper of ``BodyRenderer.render_with_masks`` whose first frame's vertices are those of a fitted body."""
+    import renderers.body as body
+    from motion2video.core.camera import project
+    from motion2video.stages import mesh_frames
+
+    plain = body.BodyRenderer.render_with_masks
+
+    def render(self, motion, **kwargs):
+        out = plain(self, motion, **kwargs)
+        if out.vertex_uv is None:
+            return out
+        camera = out.camera
+        points = project(motion.joints[0], camera)[:, :2]
+        lifted = mesh_frames.lift_reference(points, motion.joints[-1], camera, 1.0, np.zeros(2))
+        track = mesh_frames.render_mesh_track(lifted[None], phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
+                                              size=camera.width)
+        shown = track.visible[0]
+        if rule is not None:
+            keep = mesh_frames.PERSON_EDGE_PX
+            mesh_frames.PERSON_EDGE_PX = rule
+            try:
+                shown = shown & mesh_frames.on_person(track.uv[0], out.masks[0])
+            finally:
+                mesh_frames.PERSON_EDGE_PX = keep
+        out.vertex_uv[0] = track.uv[0]
+        out.vertex_visible[0] = shown
+        return out
+
+    return plain, render
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--model", default="frames-body-mesh-256")
+    parser.add_argument("--clips", default="08_01,13_42,05_14", help="CMU clips (held out from the frame training)")
+    parser.add_argument("--mocap", default=str(REPO.parent / "shared" / "data" / "mocap"))
+    parser.add_argument("--json", default=None)
+    args = parser.parse_args(argv)
+
+    import torch
+
+    import renderers.body as body
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.frames.evaluate import evaluate_sequences
+    from motion2video.frames.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
+
+    torch.set_num_threads(1)
+    model = load_frame_model(args.model).model
+    results: dict[str, dict[str, dict[str, float]]] = {}
+    for clip in args.clips.split(","):
+        clips = load_body_clips(str(Path(args.mocap) / "cmu" / f"{clip}.bvh"))
+        for name, rule in RULES.items():
+            plain, render = fitted_renders(rule)
+            body.BodyRenderer.render_with_masks = render
+            try:
+                posed = render_posed_sequences(clips, PoseEvalSpec.for_size(model.config.image_size,
+                                                                            windows_per_clip=4))
+            finally:
+                body.BodyRenderer.render_with_masks = plain
+            scores = evaluate_sequences(model, posed.sequences, head_masks=posed.head_masks).results["generator"]
+            row = {k: round(float(v), 3) for k, v in scores.to_dict().items()
+                   if k in ("person_psnr", "head_psnr", "person_sharpness", "psnr")}
+            results.setdefault(clip, {})[name] = row
+            print(f"{clip} | {name} | {row}", flush=True)
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps({"model": args.model, "results": results}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
