@@ -16,6 +16,8 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import sys
+
+import numpy as np
 from pathlib import Path
 
 from motion2video.data.face_dynamics import generate_face
@@ -120,8 +122,9 @@ def readme_text() -> str:
         "face renderer) come from",
         "`scripts/make_demo_inputs.py --reference`; they need the Anny model cache and take a while, so the",
         "plain command above does not make them. Beside each image, `<image>.pose.npz` holds the pose it shows",
-        "(body: `points` (17, 2) joints in its pixels; face: `face` (58,) params, `identity` and the camera that",
-        "rendered it), which `motion2video synthesize` uses as the reference structure.",
+        "(body: `points` (17, 2) joints in its pixels and `camera_joints` (17, 3), the same joints in 3D in the",
+        "camera's axes; face: `face` (58,) params, `identity` and the camera that rendered it), which",
+        "`motion2video synthesize` uses as the reference structure.",
         "",
         "- `jobs.jsonl`: three batch jobs over these files (the README's `motion2video batch demo_inputs/jobs.jsonl` "
         "example; input paths are relative to the repository root, where the command runs).",
@@ -216,7 +219,8 @@ def write_references(out: Path) -> list[Path]:
 
 def write_reference_poses(out: Path) -> list[Path]:
     """Write ``<image>.pose.npz`` beside each reference image: the pose it shows, in its pixels (body
-    joints) or with the camera that rendered it (face), so ``synthesize`` knows the reference structure
+    joints, and the 3D joints in the camera's axes) or with the camera that rendered it (face), so ``synthesize``
+    knows the reference structure
     exactly (:mod:`motion2video.apps.synthesize`). Needs the Anny renderers; renders one frame per body size."""
     from motion2video.stages.reference import ReferencePose, reference_pose_path, save_reference_pose
     from renderers.body import BodyRenderer, BodyStyle
@@ -229,7 +233,9 @@ def write_reference_poses(out: Path) -> list[Path]:
         with BodyRenderer(BodyStyle(size=(size, size))) as renderer:
             camera = renderer.render_with_masks(walk).camera
         image = out / ("reference_body.png" if size == REFERENCE_SIZES[0] else f"reference_body_{size}.png")
-        pose = ReferencePose("body", size, size, points=project(walk.joints[0], camera)[:, :2])
+        joints = np.asarray(walk.joints[0], np.float64)
+        pose = ReferencePose("body", size, size, points=project(joints, camera)[:, :2],
+                             camera_joints=(joints - np.asarray(camera.position)) @ camera.axes().T)
         written.append(save_reference_pose(reference_pose_path(image), pose))
     face = generate_face(list(FACE_DEMOS["smile.npz"][0]), fps=FPS, seed=SEED).slice(0, 1)
     size = REFERENCE_SIZES[0]

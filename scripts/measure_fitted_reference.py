@@ -4,20 +4,25 @@
         [--json out/fitted_reference.json]
 
 ``evaluate-frames --poses`` poses the held-out identities by real CMU clips and gives the generator each reference
-frame's exact mesh. ``synthesize`` never has it: it lifts the picture's 2D joints at the depths of the first
-observed pose, poses Anny's default body on them by IK, and keeps as shown only the vertices that land on the
-segmented person (:func:`motion2video.stages.mesh_frames.on_person`). This script scores the same pairs with the
-reference's mesh replaced by such a fit:
+frame's exact mesh. ``synthesize`` never has it. It lifts the picture's 2D joints to 3D
+(:func:`motion2video.stages.mesh_frames.lift_reference`) and poses Anny's default body on them by IK. It keeps as
+shown only the vertices that land on the segmented person (:func:`motion2video.stages.mesh_frames.on_person`).
 
-- the joints are lifted at the depths of the window's last pose;
+This script scores the same pairs with the reference's mesh replaced by such a fit:
+
 - the body has Anny's default phenotype;
-- the exact person mask of the render stands in for BlazePose's segmentation.
+- the exact person mask of the render stands in for BlazePose's segmentation;
+- the joints are lifted in one of two ways:
+  - "guide": at the depths of another person's pose (the first frame of ``demo_inputs/cmu_walk.npz``, CMU subject
+    7, turned and moved onto the reference's hips), as for a pose file with 2D joints only;
+  - "pictured": with the pictured pose's own 3D joints in the camera's axes, as for a pose file that carries them
+    (``camera_joints``: BlazePose's world landmarks, or a render's known pose).
 
-It scores three rules for which fitted vertices lend their colour: the depth test alone, ``on_person`` with the mask
+Three rules decide which fitted vertices lend their colour: the depth test alone, ``on_person`` with the mask
 eroded by 2 px at 256 (shipped until 2026-11-26), and ``on_person`` with the mask as it is (shipped now).
 
-The fit is put in by wrapping ``BodyRenderer.render_with_masks`` for the length of the run: it is the one place that
-knows each window's camera. About 1.5 minutes per clip and rule on one thread.
+The fit is put in by wrapping ``BodyRenderer.render_with_masks`` for the length of a run: it is the one place that
+knows each window's camera. About 1.5 minutes per clip and variant on one thread.
 """
 
 from __future__ import annotations
@@ -37,9 +42,26 @@ RULES = {
     "on_person, mask eroded (shipped until 2026-11-26)": 1,
     "on_person, mask as it is (shipped)": 0,
 }
+LIFTS = ("guide", "pictured")
 
 
-def fitted_renders(rule: int | None):
+def other_person(reference: np.ndarray) -> np.ndarray:
+    """(17, 3) CMU subject 7's first walking pose, turned and moved so its hips lie along the reference's."""
+    from motion2video.formats.io import load_motion
+
+    other = load_motion(REPO / "demo_inputs" / "cmu_walk.npz").joints[0].astype(np.float64)
+
+    def heading(joints):
+        across = joints[4] - joints[1]  # right hip -> left hip
+        return np.arctan2(across[1], across[0])
+
+    turn = heading(reference) - heading(other)
+    c, s = np.cos(turn), np.sin(turn)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return (other - other[0]) @ rot.T + reference[0]
+
+
+def fitted_renders(rule: int | None, lift: str):
     """A wrapper of ``BodyRenderer.render_with_masks`` whose first frame's vertices are those of a fitted body."""
     import renderers.body as body
     from motion2video.core.camera import project
@@ -53,7 +75,10 @@ def fitted_renders(rule: int | None):
             return out
         camera = out.camera
         points = project(motion.joints[0], camera)[:, :2]
-        lifted = mesh_frames.lift_reference(points, motion.joints[-1], camera, 1.0, np.zeros(2))
+        reference = np.asarray(motion.joints[0], np.float64)
+        pictured = (reference - np.asarray(camera.position)) @ camera.axes().T if lift == "pictured" else None
+        lifted = mesh_frames.lift_reference(points, other_person(reference), camera, 1.0, np.zeros(2),
+                                            pictured=pictured)
         track = mesh_frames.render_mesh_track(lifted[None], phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
                                               size=camera.width)
         shown = track.visible[0]
@@ -91,8 +116,9 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, dict[str, dict[str, float]]] = {}
     for clip in args.clips.split(","):
         clips = load_body_clips(str(Path(args.mocap) / "cmu" / f"{clip}.bvh"))
-        for name, rule in RULES.items():
-            plain, render = fitted_renders(rule)
+        for lift, (rule_name, rule) in [(lift, item) for lift in LIFTS for item in RULES.items()]:
+            name = f"{lift} | {rule_name}"
+            plain, render = fitted_renders(rule, lift)
             body.BodyRenderer.render_with_masks = render
             try:
                 posed = render_posed_sequences(clips, PoseEvalSpec.for_size(model.config.image_size,

@@ -247,13 +247,27 @@ def test_lifted_reference_projects_onto_the_reference_pose():
     from motion2video.formats.io import load_motion
     from motion2video.stages.mesh_frames import lift_reference
 
-    joints = load_motion(ROOT / "demo_inputs" / "cmu_walk.npz").joints[:2].astype(np.float64)
-    camera = fit_camera(joints, 128, 128)
+    from motion2video.core.skeletons import H36M_17
+
+    joints = load_motion(ROOT / "demo_inputs" / "cmu_walk.npz").joints.astype(np.float64)
+    camera = fit_camera(joints[:2], 128, 128)
     scale, shift = 1.3, np.array([-10.0, 4.0])
-    points = project(joints[1], camera)[:, :2] * scale + shift  # another pose than the guide's
+    points = project(joints[60], camera)[:, :2] * scale + shift  # 2.4 s later: 1.5 m further, another stride
+    # A 2D-only pose file: every joint at the guide's depth.
     lifted = lift_reference(points, joints[0], camera, scale, shift)
     np.testing.assert_allclose(project(lifted, camera)[:, :2] * scale + shift, points, atol=1e-6)
     np.testing.assert_allclose(project(lifted, camera)[:, 2], project(joints[0], camera)[:, 2], atol=1e-9)
+    # A pose file with the pictured 3D pose (camera axes, any origin): its bone lengths and depth directions.
+    pictured = (joints[60] - camera.position) @ camera.axes().T + [0.3, -0.2, 5.0]
+    lifted = lift_reference(points, joints[0], camera, scale, shift, pictured=pictured)
+    np.testing.assert_allclose(project(lifted, camera)[:, :2] * scale + shift, points, atol=1e-6)
+
+    def bones(x):
+        return np.array([np.linalg.norm(x[j] - x[p]) for j, p in enumerate(H36M_17.parents) if p >= 0])
+
+    np.testing.assert_allclose(bones(lifted), bones(joints[60]), atol=1e-6)
+    pose_error = np.linalg.norm((lifted - lifted[0]) - (joints[60] - joints[60, 0]), axis=1).mean()
+    assert pose_error < 0.1  # the pictured pose about its pelvis (the guide's depths: 0.83 m off)
 
 
 def test_width_fit_finds_a_stocky_body():

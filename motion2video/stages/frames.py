@@ -54,7 +54,8 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
                       output_size=structures.size, model_size=net.config.image_size,
-                      person_mask=reference_person_mask(reference.image), fit_to_mask=not phenotype)
+                      person_mask=reference_person_mask(reference.image), fit_to_mask=not phenotype,
+                      pictured=None if reference.pose is None else reference.pose.camera_joints)
 
 
 def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,

@@ -175,9 +175,10 @@ def photo_pose(path: str | Path, *, person: str | int = "largest") -> PhotoPose:
 
 def reference_pose_of(pose: PersonPose):
     """The body :class:`~motion2video.stages.reference.ReferencePose` of an estimated photo pose."""
-    from motion2video.stages.reference import ReferencePose
+    from motion2video.stages.reference import ReferencePose, person_camera_joints
 
-    return ReferencePose("body", pose.width, pose.height, points=pose.points2d.astype(np.float64))
+    return ReferencePose("body", pose.width, pose.height, points=pose.points2d.astype(np.float64),
+                         camera_joints=person_camera_joints(pose))
 
 
 # --- overlays ------------------------------------------------------------------------------------------------

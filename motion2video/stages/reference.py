@@ -52,6 +52,10 @@ class ReferencePose:
         face: face: (58,) face parameters of the picture; body: None.
         identity: face: Anny phenotype values of the pictured face ({} = Anny's defaults).
         camera: face: the camera that rendered the picture (its size = width x height); body: None.
+        camera_joints: body, optional: (17, 3) the pictured pose in 3D, in the picture camera's axes (metres; x
+            right, y up, z away from the camera; any origin): BlazePose's world landmarks for a photo, the known
+            pose for a render. The mesh generator's body fit takes its bone lengths and depth from it
+            (:func:`motion2video.stages.mesh_frames.lift_reference`).
     """
 
     kind: str
@@ -61,12 +65,16 @@ class ReferencePose:
     face: np.ndarray | None = None
     identity: dict = field(default_factory=dict)
     camera: object | None = None  # motion2video.core.camera.PinholeCamera
+    camera_joints: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in ("body", "face"):
             raise ValueError(f"kind must be 'body' or 'face', got {self.kind!r}")
         if self.kind == "body" and (self.points is None or np.asarray(self.points).shape != (17, 2)):
             raise ValueError("a body reference pose needs points of shape (17, 2)")
+        if self.camera_joints is not None and (np.asarray(self.camera_joints).shape != (17, 3)
+                                               or not np.all(np.isfinite(self.camera_joints))):
+            raise ValueError("a body reference pose's camera_joints must be finite, of shape (17, 3)")
         if self.kind == "face" and (self.face is None or np.asarray(self.face).shape != (58,)
                                     or self.camera is None):
             raise ValueError("a face reference pose needs face params of shape (58,) and a camera")
@@ -79,6 +87,8 @@ def save_reference_pose(path: str | Path, pose: ReferencePose) -> Path:
                                      "height": np.int64(pose.height)}
     if pose.kind == "body":
         arrays["points"] = np.asarray(pose.points, np.float32)
+        if pose.camera_joints is not None:
+            arrays["camera_joints"] = np.asarray(pose.camera_joints, np.float32)
     else:
         cam = pose.camera
         arrays.update(face=np.asarray(pose.face, np.float32), identity=np.str_(json.dumps(pose.identity)),
@@ -100,7 +110,8 @@ def load_reference_pose(path: str | Path) -> ReferencePose:
         kind = str(data["kind"])
         width, height = int(data["width"]), int(data["height"])
         if kind == "body":
-            return ReferencePose(kind, width, height, points=data["points"].astype(np.float64))
+            joints = data["camera_joints"].astype(np.float64) if "camera_joints" in data else None
+            return ReferencePose(kind, width, height, points=data["points"].astype(np.float64), camera_joints=joints)
         if kind == "face":
             camera = PinholeCamera(tuple(float(v) for v in data["camera_position"]),
                                    tuple(float(v) for v in data["camera_target"]), float(data["camera_yfov"]),
@@ -208,7 +219,8 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
     h, w = image_shape
     if pose.kind == "body":
         pts = np.asarray(pose.points, np.float64) * (w / pose.width, h / pose.height)  # stored size -> image
-        return ReferencePose("body", size, size, points=pts * fit.scale + np.asarray(fit.offset))
+        return ReferencePose("body", size, size, points=pts * fit.scale + np.asarray(fit.offset),
+                             camera_joints=pose.camera_joints)
     # The padding is centred, so the principal point stays centred: only the vertical field of view of
     # the square changes when the width was the longer side.
     from motion2video.core.camera import PinholeCamera
@@ -228,7 +240,18 @@ def estimate_reference_pose(image: np.ndarray, path: str | Path) -> ReferencePos
         person = estimate_image(image, source=path)
     except InputError:
         return None
-    return ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d)
+    return ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d,
+                         camera_joints=person_camera_joints(person))
+
+
+def person_camera_joints(person) -> np.ndarray:
+    """(17, 3) an estimated person's canonical joints in the camera's axes (x right, y up, z away from the camera;
+    hip-centred metres), from BlazePose's world landmarks."""
+    from motion2video.pose.h36m import blazepose_to_h36m, world_to_project
+
+    world = person.landmarks.world[:33]
+    project_axes, _ = blazepose_to_h36m(world_to_project(world[None]))  # (1, 17, 3): x right, y away, z up
+    return project_axes[0][:, [0, 2, 1]].astype(np.float64)
 
 
 def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PERSON_CROP_MARGIN
@@ -253,7 +276,7 @@ def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PE
     pad = max(0, -left, -top, left + side - w, top + side - h)
     padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_REPLICATE) if pad else image
     crop = np.ascontiguousarray(padded[top + pad:top + pad + side, left + pad:left + pad + side])
-    moved = ReferencePose("body", side, side, points=pts - (left, top))
+    moved = ReferencePose("body", side, side, points=pts - (left, top), camera_joints=pose.camera_joints)
     return crop, moved, (left, top, side)
 
 
@@ -273,7 +296,8 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     pose = reference.pose
     if pose is not None:
         pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
-        pose = ReferencePose("body", size, size, points=pts, identity=dict(pose.identity))
+        pose = ReferencePose("body", size, size, points=pts, identity=dict(pose.identity),
+                             camera_joints=pose.camera_joints)
     note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
             f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path)
