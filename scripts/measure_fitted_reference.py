@@ -11,15 +11,16 @@ shown only the vertices that land on the segmented person (:func:`motion2video.s
 This script scores the same pairs with the reference's mesh replaced by such a fit:
 
 - the body has Anny's default phenotype;
-- the exact person mask of the render stands in for BlazePose's segmentation;
+- the person mask for ``on_person`` is BlazePose's segmentation of the rendered reference, as ``synthesize``
+  segments a picture (``--mask exact``: the render's silhouette);
 - the joints are lifted in one of two ways:
   - "guide": at the depths of another person's pose (the first frame of ``demo_inputs/cmu_walk.npz``, CMU subject
     7, turned and moved onto the reference's hips), as for a pose file with 2D joints only;
   - "pictured": with the pictured pose's own 3D joints in the camera's axes, as for a pose file that carries them
     (``camera_joints``: BlazePose's world landmarks, or a render's known pose).
 
-Three rules decide which fitted vertices lend their colour: the depth test alone, ``on_person`` with the mask
-eroded by 2 px at 256 (shipped until 2026-11-26), and ``on_person`` with the mask as it is (shipped now).
+Four rules decide which fitted vertices lend their colour: the depth test alone, and ``on_person`` with the mask
+eroded by 2 px, by 1 px (both at 256) or as it is.
 
 The fit is put in by wrapping ``BodyRenderer.render_with_masks`` for the length of a run: it is the one place that
 knows each window's camera. About 1.5 minutes per clip and variant on one thread.
@@ -39,8 +40,9 @@ sys.path.insert(0, str(REPO))
 
 RULES = {
     "depth test alone": None,
-    "on_person, mask eroded (shipped until 2026-11-26)": 1,
-    "on_person, mask as it is (shipped)": 0,
+    "on_person, mask eroded 2 px at 256 (shipped until 2026-11-26)": 1,
+    "on_person, mask eroded 1 px at 256": 0.5,
+    "on_person, mask as it is": 0,
 }
 LIFTS = ("guide", "pictured")
 
@@ -61,7 +63,18 @@ def other_person(reference: np.ndarray) -> np.ndarray:
     return (other - other[0]) @ rot.T + reference[0]
 
 
-def fitted_renders(rule: int | None, lift: str):
+def person_mask(out, source: str) -> np.ndarray:
+    """The reference frame's person: the render's exact silhouette, or BlazePose's segmentation of the render (as
+    synthesize segments a picture); the exact one when BlazePose finds nobody."""
+    if source == "exact":
+        return out.masks[0]
+    from motion2video.stages.frames import reference_person_mask
+
+    found = reference_person_mask(out.frames[0])
+    return out.masks[0] if found is None else found
+
+
+def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose"):
     """A wrapper of ``BodyRenderer.render_with_masks`` whose first frame's vertices are those of a fitted body."""
     import renderers.body as body
     from motion2video.core.camera import project
@@ -86,7 +99,7 @@ def fitted_renders(rule: int | None, lift: str):
             keep = mesh_frames.PERSON_EDGE_PX
             mesh_frames.PERSON_EDGE_PX = rule
             try:
-                shown = shown & mesh_frames.on_person(track.uv[0], out.masks[0])
+                shown = shown & mesh_frames.on_person(track.uv[0], person_mask(out, mask))
             finally:
                 mesh_frames.PERSON_EDGE_PX = keep
         out.vertex_uv[0] = track.uv[0]
@@ -102,6 +115,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--clips", default="08_01,13_42,05_14", help="CMU clips (held out from the frame training)")
     parser.add_argument("--mocap", default=str(REPO.parent / "shared" / "data" / "mocap"))
     parser.add_argument("--json", default=None)
+    parser.add_argument("--mask", choices=("blazepose", "exact"), default="blazepose",
+                        help="the reference person for on_person: BlazePose's segmentation (as synthesize) or the "
+                        "render's exact silhouette")
+    parser.add_argument("--lifts", default=",".join(LIFTS), help="guide, pictured or both")
     args = parser.parse_args(argv)
 
     import torch
@@ -116,9 +133,9 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, dict[str, dict[str, float]]] = {}
     for clip in args.clips.split(","):
         clips = load_body_clips(str(Path(args.mocap) / "cmu" / f"{clip}.bvh"))
-        for lift, (rule_name, rule) in [(lift, item) for lift in LIFTS for item in RULES.items()]:
+        for lift, (rule_name, rule) in [(lift, item) for lift in args.lifts.split(",") for item in RULES.items()]:
             name = f"{lift} | {rule_name}"
-            plain, render = fitted_renders(rule, lift)
+            plain, render = fitted_renders(rule, lift, args.mask)
             body.BodyRenderer.render_with_masks = render
             try:
                 posed = render_posed_sequences(clips, PoseEvalSpec.for_size(model.config.image_size,
