@@ -121,3 +121,18 @@ def test_transfer_of_a_real_jump_keeps_the_head_in_view(tmp_path, capsys):
     head = cell[top][tops[top]:tops[top] + 20]
     skin_or_hair = (head[..., 0] > head[..., 2] + 20)  # skin and brown hair are redder than the blue shirt
     assert skin_or_hair.sum() > 40
+
+
+def test_reference_pose_files_keep_the_pictured_3d_pose(tmp_path):
+    """The demo reference's pose file carries its known 3D pose; it round-trips, and a wrong one is one line."""
+    from motion2video.core.errors import InputError
+    from motion2video.stages.reference import ReferencePose, load_reference_pose, save_reference_pose
+
+    pose = load_reference_pose(DEMO / "reference_body.pose.npz")
+    assert pose.camera_joints.shape == (17, 3) and np.all(pose.camera_joints[:, 2] > 1.0)  # in front of the camera
+    again = load_reference_pose(save_reference_pose(tmp_path / "p.pose.npz", pose))
+    np.testing.assert_allclose(again.camera_joints, pose.camera_joints, atol=1e-6)
+    bad = tmp_path / "bad.pose.npz"
+    np.savez(bad, kind="body", width=256, height=256, points=pose.points, camera_joints=np.zeros((16, 3)))
+    with pytest.raises(InputError, match="camera_joints"):
+        load_reference_pose(bad)

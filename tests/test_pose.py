@@ -267,6 +267,12 @@ def test_pose_command_on_a_photo_writes_the_reference_pose_file(photos_dir, tmp_
     assert main(["pose", str(photos_dir / "skier.jpg"), "-o", str(out), "--overlay", str(overlay)]) == 0
     ref = load_reference_pose(out)
     assert ref.kind == "body" and (ref.width, ref.height) == (640, 425) and ref.points.shape == (17, 2)
+    # The pictured 3D pose in the camera's axes (x right, y up, z away), which the mesh generator's body fit lifts
+    # the joints with: the skier stands, so her head is about a body height above her ankles.
+    joints = ref.camera_joints
+    assert joints.shape == (17, 3)
+    assert 1.0 < joints[10, 1] - joints[[3, 6], 1].mean() < 2.0
+    assert abs(joints[10, 0] - joints[0, 0]) < 0.4  # upright: the head above the pelvis
     drawn = cv2.imread(str(overlay))
     assert drawn.shape == (425, 640, 3)
     original = cv2.imread(str(photos_dir / "skier.jpg"))
