@@ -16,9 +16,9 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import sys
+from pathlib import Path
 
 import numpy as np
-from pathlib import Path
 
 from motion2video.data.face_dynamics import generate_face
 from motion2video.data.procedural import ModeSpec, generate

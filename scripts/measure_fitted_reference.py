@@ -96,12 +96,7 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose"):
                                               size=camera.width)
         shown = track.visible[0]
         if rule is not None:
-            keep = mesh_frames.PERSON_EDGE_PX
-            mesh_frames.PERSON_EDGE_PX = rule
-            try:
-                shown = shown & mesh_frames.on_person(track.uv[0], person_mask(out, mask))
-            finally:
-                mesh_frames.PERSON_EDGE_PX = keep
+            shown = shown & mesh_frames.on_person(track.uv[0], person_mask(out, mask), edge_px=rule)
         out.vertex_uv[0] = track.uv[0]
         out.vertex_visible[0] = shown
         return out

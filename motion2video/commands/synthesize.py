@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.commands.common import FIT_VIEW_HELP, RIGID_BONES_HELP, add_command, add_motion_input_arguments, check_at_least
+from motion2video.commands.common import (FIT_VIEW_HELP, RIGID_BONES_HELP, add_command, add_motion_input_arguments,
+                                          check_at_least)
 from motion2video.core.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"

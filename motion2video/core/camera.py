@@ -58,6 +58,13 @@ class PinholeCamera:
         return PinholeCamera(self.position, self.target, self.yfov, int(width), int(height))
 
 
+def affine_matrix(a: float, b: np.ndarray) -> np.ndarray:
+    """(2, 3) OpenCV matrix of ``x' = a x + b`` in this project's pixel convention (centres at integer + 0.5)
+    for ``cv2.warpAffine``, which works on pixel indices."""
+    off = a * 0.5 + np.asarray(b, np.float64) - 0.5
+    return np.array([[a, 0.0, off[0]], [0.0, a, off[1]]])
+
+
 def camera_axes(position: np.ndarray, target: np.ndarray, up=(0.0, 0.0, 1.0)) -> np.ndarray:
     """Right, up and forward unit vectors (rows of a (3, 3) array) of a camera at ``position`` looking
     at ``target`` with the world's ``up`` direction."""

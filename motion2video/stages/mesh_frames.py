@@ -27,8 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motion2video.core.camera import affine_matrix
 from motion2video.core.errors import InputError
-from motion2video.frames.mesh_flow import MeshTrack  # noqa: F401  (the tracks this stage makes)
+from motion2video.frames.mesh_flow import MeshTrack
 
 MASK_GREY = (200, 200, 200)  # the colour the correspondence renders use (only depth and silhouette are read)
 # Anny "weight" values tried when fitting the body's width to the reference person's silhouette (fit_width).
@@ -95,13 +96,6 @@ def lift_by_bones(rays: np.ndarray, pictured: np.ndarray, focal: float, pixels: 
             t = roots[np.argmin(np.abs(roots - joints[p, 2] - step))]
         joints[j] = t * rays[j]
     return joints
-
-
-def affine_matrix(a: float, b: np.ndarray) -> np.ndarray:
-    """(2, 3) OpenCV matrix of ``x' = a x + b`` in this project's pixel convention (centres at integer + 0.5)
-    for ``cv2.warpAffine``, which works on pixel indices."""
-    off = a * 0.5 + np.asarray(b, np.float64) - 0.5
-    return np.array([[a, 0.0, off[0]], [0.0, a, off[1]]])
 
 
 def camera_covering(camera, scales: np.ndarray, shifts: np.ndarray, size: int):
@@ -253,16 +247,16 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
 PERSON_EDGE_PX = 0
 
 
-def on_person(uv: np.ndarray, person_mask: np.ndarray) -> np.ndarray:
+def on_person(uv: np.ndarray, person_mask: np.ndarray, *, edge_px: float = PERSON_EDGE_PX) -> np.ndarray:
     """(V,) bool: which of the (V, 2) vertex pixels of a body *fitted* to a picture land on the pictured person
-    (``person_mask`` (S, S) bool, eroded by :data:`PERSON_EDGE_PX` scaled to S). A fitted body is a little off
-    the person in places; a vertex it shows outside the person would lend
-    the background's colour to every target pixel that samples it (white streaks on a turned leg), so it is
-    treated as not shown: the surface completion then takes the nearest vertex that lands on the person."""
+    (``person_mask`` (S, S) bool, eroded by ``edge_px`` pixels at 128, scaled to S). A fitted body is a little off
+    the person in places; a vertex it shows outside the person would lend the background's colour to every target
+    pixel that samples it (white streaks on a turned leg), so it is treated as not shown: the surface completion
+    then takes the nearest vertex that lands on the person."""
     from scipy.ndimage import binary_erosion
 
     size = person_mask.shape[1]
-    rings = round(PERSON_EDGE_PX * size / 128)
+    rings = round(edge_px * size / 128)
     inner = binary_erosion(person_mask, iterations=rings) if rings > 0 else np.asarray(person_mask, bool)
     h, w = inner.shape
     x = np.floor(uv[:, 0]).astype(np.int64)

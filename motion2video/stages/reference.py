@@ -20,13 +20,14 @@ reference picture; with the assumption, it does when the assumption holds.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from motion2video.core.atomic import save_npz
+from motion2video.core.camera import affine_matrix
 from motion2video.core.errors import InputError
 
 REFERENCE_POSE_SUFFIX = ".pose.npz"
@@ -219,8 +220,7 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
     h, w = image_shape
     if pose.kind == "body":
         pts = np.asarray(pose.points, np.float64) * (w / pose.width, h / pose.height)  # stored size -> image
-        return ReferencePose("body", size, size, points=pts * fit.scale + np.asarray(fit.offset),
-                             camera_joints=pose.camera_joints)
+        return replace(pose, width=size, height=size, points=pts * fit.scale + np.asarray(fit.offset))
     # The padding is centred, so the principal point stays centred: only the vertical field of view of
     # the square changes when the width was the longer side.
     from motion2video.core.camera import PinholeCamera
@@ -247,9 +247,10 @@ def estimate_reference_pose(image: np.ndarray, path: str | Path) -> ReferencePos
 def person_camera_joints(person) -> np.ndarray:
     """(17, 3) an estimated person's canonical joints in the camera's axes (x right, y up, z away from the camera;
     hip-centred metres), from BlazePose's world landmarks."""
+    from motion2video.pose.blazepose import NUM_BODY_LANDMARKS
     from motion2video.pose.h36m import blazepose_to_h36m, world_to_project
 
-    world = person.landmarks.world[:33]
+    world = person.landmarks.world[:NUM_BODY_LANDMARKS]
     project_axes, _ = blazepose_to_h36m(world_to_project(world[None]))  # (1, 17, 3): x right, y away, z up
     return project_axes[0][:, [0, 2, 1]].astype(np.float64)
 
@@ -276,7 +277,7 @@ def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PE
     pad = max(0, -left, -top, left + side - w, top + side - h)
     padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_REPLICATE) if pad else image
     crop = np.ascontiguousarray(padded[top + pad:top + pad + side, left + pad:left + pad + side])
-    moved = ReferencePose("body", side, side, points=pts - (left, top), camera_joints=pose.camera_joints)
+    moved = replace(pose, width=side, height=side, points=pts - (left, top))
     return crop, moved, (left, top, side)
 
 
@@ -290,14 +291,12 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     size = reference.image.shape[0]
     x0, y0, side = (float(v) for v in view)
     k = size / side
-    matrix = np.array([[k, 0.0, -x0 * k + 0.5 * k - 0.5], [0.0, k, -y0 * k + 0.5 * k - 0.5]])
-    image = cv2.warpAffine(reference.image, matrix, (size, size), flags=cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR,
-                           borderMode=cv2.BORDER_REPLICATE)
+    image = cv2.warpAffine(reference.image, affine_matrix(k, -np.array([x0, y0]) * k), (size, size),
+                           flags=cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     pose = reference.pose
     if pose is not None:
         pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
-        pose = ReferencePose("body", size, size, points=pts, identity=dict(pose.identity),
-                             camera_joints=pose.camera_joints)
+        pose = replace(pose, width=size, height=size, points=pts)
     note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
             f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path)
