@@ -1,6 +1,6 @@
 """Issue 22 evidence: the body frame generator driven by real mocap it never trained on, with the head measured.
 
-    python scripts/make_results_frames_real.py [--model frames-body-128] [--mocap ../shared/data/mocap]
+    python scripts/make_results_frames_real.py [--model frames-body-mesh-256] [--mocap ../shared/data/mocap]
 
 For each clip of :data:`CLIPS` (real CMU captures held out of the frame training data:
 ``motion2video.frames.specs.is_test_clip``), runs what ``motion2video evaluate-frames --model MODEL --poses
@@ -214,7 +214,8 @@ def main(argv: list[str] | None = None) -> int:
     from motion2video.frames.evaluate import contact_sheet
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--model", default="frames-body-128", help="the body generator (default frames-body-128)")
+    parser.add_argument("--model", default="frames-body-mesh-256",
+                        help="the body generator (default frames-body-mesh-256, make demo's)")
     parser.add_argument("--mocap", default=str(ROOT.parent / "shared" / "data" / "mocap"),
                         help="the mocap folder holding cmu/ (default ../shared/data/mocap)")
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))

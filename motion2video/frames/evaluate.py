@@ -31,7 +31,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 from motion2video.frames.baselines import BASELINES, run_baseline
 from motion2video.frames.data import FramePairs, evaluation_pair_index, make_pairs
 from motion2video.frames.specs import FrameSequences
-from motion2video.frames.mesh_warp import MeshWarpGenerator, mesh_inputs
+from motion2video.frames.mesh_warp import MeshWarpGenerator, mesh_inputs, mesh_source_mask
 from motion2video.frames.model import FrameGenerator, generate, images_to_tensor
 from motion2video.frames.warp import WarpGenerator, warp_generate
 
@@ -323,7 +323,8 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
     out = []
     for i in range(0, len(pairs), batch_size):
         part = pairs.subset(slice(i, i + batch_size))
-        x = model(images_to_tensor(part.ref_images), *mesh_inputs(part), torch.from_numpy(part.tgt_structures))
+        x = model(images_to_tensor(part.ref_images), *mesh_inputs(part), torch.from_numpy(part.tgt_structures),
+                  source_mask=mesh_source_mask(part))
         out.append((x.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy())
     return np.concatenate(out)
 

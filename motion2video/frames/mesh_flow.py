@@ -99,11 +99,54 @@ def surface_graph():
     return coo_matrix((np.concatenate([w, w]), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n)).tocsr()
 
 
+# Completion sources (:func:`touching_other_part`): a shown vertex within DOUBT_RADIUS_PX pixels of a shown vertex
+# more than DOUBT_APART_M metres from it on the body at rest is not one.
+DOUBT_RADIUS_PX = 1.0
+DOUBT_APART_M = 0.10
+
+
+def touching_other_part(uv: np.ndarray, seen: np.ndarray, *, radius_px: float | None = None,
+                        apart: float | None = None) -> np.ndarray:
+    """Shown vertices that touch another body part in the picture: within ``radius_px`` pixels of a shown vertex
+    more than ``apart`` metres away from it on Anny's body at rest.
+
+    Where a hand rests beside a thigh, the thigh's vertices at the hand's pixels pass the depth test (the hand is
+    within its tolerance) and show the hand. Which of the two is in front, the 2D test does not say, so both are
+    left out as sources of :func:`complete_reference_uv`: on the demo's reference, the hidden trousers vertices
+    that took a skin pixel went from 61 to 18 (``tests/test_mesh_sampling_edges.py``).
+
+    Args:
+        uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
+    Returns:
+        (V,) bool, a subset of ``seen``.
+    """
+    from scipy.spatial import cKDTree
+
+    from renderers import anny_model
+
+    radius_px = DOUBT_RADIUS_PX if radius_px is None else radius_px
+    apart = DOUBT_APART_M if apart is None else apart
+    out = np.zeros(len(uv), bool)
+    shown = np.flatnonzero(seen)
+    if len(shown) < 2 or apart <= 0:
+        return out
+    pairs = cKDTree(np.asarray(uv, np.float64)[shown]).query_pairs(radius_px, output_type="ndarray")
+    if len(pairs) == 0:
+        return out
+    rest = anny_model.anny_rest().vertices
+    a, b = shown[pairs[:, 0]], shown[pairs[:, 1]]
+    far = np.linalg.norm(rest[a] - rest[b], axis=1) > apart
+    out[a[far]] = True
+    out[b[far]] = True
+    return out
+
+
 def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray) -> np.ndarray:
     """(V, 2) reference pixels where every vertex the reference does not show takes the pixel of the nearest
     shown vertex *along the body's surface* (Dijkstra over :func:`surface_graph`): the hidden side of a thigh
     starts from the colour of its front, not from whatever covers its own pixel in the reference (a hand) or lies
-    beside it in the image.
+    beside it in the image. Shown vertices that touch another body part in the picture are not sources
+    (:func:`touching_other_part`).
 
     Args:
         ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
@@ -117,6 +160,9 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray) -> np.ndarray:
     sources = np.flatnonzero(seen)
     if len(sources) == 0 or len(sources) == len(seen):
         return uv
+    doubtful = touching_other_part(uv, seen)
+    if (~doubtful[sources]).any():
+        sources = sources[~doubtful[sources]]
     _, _, nearest = dijkstra(graph, directed=False, indices=sources, min_only=True,
                              return_predecessors=True)
     hidden = ~np.asarray(seen, bool) & (nearest >= 0)

@@ -9,7 +9,9 @@ the reference pose and in the target pose (:mod:`motion2video.frames.mesh_flow`)
 1. *Background.* The reference person's silhouette (grown by :data:`PLATE_GROW_PX`) is removed from the
    reference and filled by OpenCV's Telea inpainting: the plate every target frame is composited over.
 2. *Prior.* Inside the target silhouette the reference is sampled along the mesh flow; the mesh's visibility
-   map says where the reference shows that surface point.
+   map says where the reference shows that surface point. The reference person is sampled with the background
+   outside it given the nearest person colour (:func:`fill_outside_person`, :func:`person_edge_refined`), so a
+   sample near the person's outline never takes the background's colour.
 3. *Network.* A small U-Net sees the prior frame, the plate, the target's joint heatmaps, silhouette and
    visibility, and the reference's encoder features warped along the flow at every scale. It predicts
    corrections (all zero at initialisation, so the untrained model is the prior): the person's alpha (hair
@@ -123,6 +125,69 @@ def mesh_plate(ref_image: torch.Tensor, ref_mask: torch.Tensor) -> torch.Tensor:
     return torch.from_numpy(out).permute(0, 3, 1, 2).to(ref_image.dtype).div(255.0)
 
 
+def fill_outside_person(image: torch.Tensor, person: torch.Tensor) -> torch.Tensor:
+    """The image with every pixel outside the person given the colour of the nearest person pixel (SciPy's
+    Euclidean distance transform): what the person's colours are sampled from.
+
+    The flow of a surface point the reference shows only at a grazing angle, or not at all (the completed
+    hidden side of a limb, :func:`motion2video.frames.mesh_flow.complete_reference_uv`), lands on the person's
+    outline, where bicubic sampling reached the background: white specks along turned legs and around a hand
+    that passes a thigh, which the network's inpainting (a change to the sampled colour) kept. With the outside
+    filled, a sample near the outline takes the person's colour. Measured alone on the real-mocap pairs of
+    ``evaluate-frames --poses`` (exact meshes, frames-body-mesh-256): person PSNR +0.005 / +0.04 / +0.02 dB on
+    cmu/08_01, 13_42, 05_14, sharpness -0.01 (docs/results.md, "What the generator samples").
+
+    Args:
+        image: (B, 3, H, W); person: (B, 1, H, W) or (B, H, W) in [0, 1] (> 0.5 is the person).
+    Returns:
+        (B, 3, H, W), unchanged on the person (and for an image with no person pixel or no other pixel).
+    """
+    from scipy.ndimage import distance_transform_edt
+
+    b, _, h, w = image.shape
+    masks = (person.detach().reshape(b, h, w) > 0.5).cpu().numpy()
+    out = image.clone()
+    for i in range(b):
+        if i > 0 and np.array_equal(masks[i], masks[0]) and torch.equal(image[i], image[0]):
+            out[i] = out[0]  # one reference expanded over a batch of targets
+            continue
+        if not masks[i].any() or masks[i].all():
+            continue
+        _, (iy, ix) = distance_transform_edt(~masks[i], return_indices=True)
+        out[i] = image[i][:, torch.from_numpy(iy), torch.from_numpy(ix)]
+    return out
+
+
+# The person whose colours are sampled (:func:`person_edge_refined`): pixels of the mask's outer ring this wide (at
+# 128 px) whose colour is within EDGE_TEST_DIFF (any channel, [0, 1]) of the background plate are background.
+EDGE_TEST_PX = 1
+EDGE_TEST_DIFF = 0.1
+
+
+def person_edge_refined(image: torch.Tensor, person: torch.Tensor, plate: torch.Tensor, ring_px: float = EDGE_TEST_PX,
+                        diff: float = EDGE_TEST_DIFF) -> torch.Tensor:
+    """The person mask without the pixels of its outer ring whose colour is the background's.
+
+    A fitted body's silhouette reaches a pixel or so past the pictured person (22% of the outline pixels of the
+    demo's reference are its white background), and bicubic sampling there mixes the background in: white patches
+    at the back of a turned head and along a hand. Only the ring is tested: a white shirt print inside the person
+    stays person.
+
+    Args:
+        image: (B, 3, H, W) the reference in [0, 1]; person: (B, 1, H, W) or (B, H, W) in [0, 1]; plate: (B, 3, H, W)
+            the background (:func:`mesh_plate`); ring_px: the ring's width at 128 px (scaled with W); diff: the
+            largest channel difference to the plate that counts as background.
+    Returns:
+        (B, 1, H, W) float mask in {0, 1}.
+    """
+    b, _, h, w = image.shape
+    m = (person.reshape(b, 1, h, w) > 0.5).to(image.dtype)
+    r = max(1, round(ring_px * w / 128))
+    inner = -F.max_pool2d(-m, 2 * r + 1, stride=1, padding=r)  # erosion by r
+    like_background = ((image - plate).abs().amax(dim=1, keepdim=True) < diff).to(image.dtype)
+    return m * (1.0 - (m - inner) * like_background)
+
+
 UNSHARP_SIGMA_PX = 0.8  # the unsharp mask's Gaussian, pixels (at any image size: it targets resampling blur)
 
 
@@ -170,7 +235,8 @@ class MeshWarpGenerator(nn.Module):
     """Reference frame + mesh correspondence -> target frame.
 
     forward(ref_image (B, 3, H, W) in [0, 1], ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility
-    (B, 1, H, W), silhouette (B, 1, H, W), tgt_structure (B, S, H, W)) -> (B, 3, H, W) about [0, 1].
+    (B, 1, H, W), silhouette (B, 1, H, W), tgt_structure (B, S, H, W), source_mask=None) -> (B, 3, H, W) about
+    [0, 1]; ``source_mask`` as in :meth:`forward_parts`.
     """
 
     kind = "mesh"
@@ -188,14 +254,25 @@ class MeshWarpGenerator(nn.Module):
 
     def forward_parts(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor,
                       visibility: torch.Tensor, silhouette: torch.Tensor, tgt_structure: torch.Tensor,
-                      plate: torch.Tensor | None = None) -> MeshWarpOutput:
+                      plate: torch.Tensor | None = None, source_mask: torch.Tensor | None = None
+                      ) -> MeshWarpOutput:
+        """The output and its parts.
+
+        Args: as :meth:`forward`, and plate: (B, 3, H, W) the background (:func:`mesh_plate` of the reference
+            when None); source_mask: (B, 1, H, W) the reference pixels that are the person, whose colours are
+            sampled (:func:`fill_outside_person`; ``ref_mask`` when None). For a fitted body, the mesh's
+            silhouette joined with the segmented person: clothes and hair reach past the mesh.
+        """
         b, _, h, w = ref_image.shape
         dtype = ref_image.dtype
         flow, visibility, silhouette = flow.to(dtype), visibility.to(dtype), silhouette.to(dtype)
         if plate is None:
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
-        sampled = unsharp(ref_image, self.config.sharpen)  # what the person's colours are sampled from
+        # what the person's colours are sampled from
+        person = person_edge_refined(ref_image, ref_mask if source_mask is None else source_mask, plate)
+        source = fill_outside_person(ref_image, person)
+        sampled = unsharp(source, self.config.sharpen)
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate
         net_in = torch.cat([prior * 2.0 - 1.0, plate * 2.0 - 1.0, tgt_structure.to(dtype), silhouette, visibility,
@@ -220,8 +297,20 @@ class MeshWarpGenerator(nn.Module):
                               flow=final_flow, plate=plate)
 
     def forward(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor, visibility: torch.Tensor,
-                silhouette: torch.Tensor, tgt_structure: torch.Tensor) -> torch.Tensor:
-        return self.forward_parts(ref_image, ref_mask, flow, visibility, silhouette, tgt_structure).image
+                silhouette: torch.Tensor, tgt_structure: torch.Tensor, source_mask: torch.Tensor | None = None
+                ) -> torch.Tensor:
+        return self.forward_parts(ref_image, ref_mask, flow, visibility, silhouette, tgt_structure,
+                                  source_mask=source_mask).image
+
+
+def mesh_source_mask(pairs) -> torch.Tensor | None:
+    """(B, 1, H, W) the reference person whose colours the mesh generator samples, for pairs with fitted meshes:
+    the fitted mesh's silhouette joined with the segmented person; None for pairs whose mesh is exact (the
+    generator then uses the reference's silhouette)."""
+    if pairs.mesh_ref_masks is None:
+        return None
+    both = np.asarray(pairs.mesh_ref_masks, bool) | np.asarray(pairs.ref_masks, bool)
+    return torch.from_numpy(both)[:, None].float()
 
 
 def mesh_inputs(pairs) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:

@@ -24,7 +24,7 @@ from motion2video.frames.specs import FrameSequences
 from motion2video.frames.data import make_pairs, sample_pair_index, structure_channels
 from motion2video.frames.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
                                        images_to_tensor, reconstruction_loss)
-from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
+from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs, mesh_source_mask
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
 
 
@@ -290,7 +290,7 @@ def train_frames(
         if isinstance(model, MeshWarpGenerator):
             if config.silhouette_erosion:
                 pairs.mesh_tgt_masks = eroded_silhouettes(pairs.tgt_masks, rng, config.silhouette_erosion)
-            pred = model(x_ref, *mesh_inputs(pairs), p_tgt)
+            pred = model(x_ref, *mesh_inputs(pairs), p_tgt, source_mask=mesh_source_mask(pairs))
         elif isinstance(model, WarpGenerator):
             pred = model(x_ref, torch.from_numpy(pairs.ref_points), torch.from_numpy(pairs.tgt_points), p_tgt)
         else:

@@ -180,6 +180,7 @@ class MeshVideo:
         crop: (x0, y0, side) of the square crop in output pixels.
         reference: the reference mesh (1 frame); targets: the target meshes (N frames).
         ref_points, tgt_points: (17, 2) / (N, 17, 2) joints in crop pixels (for the structure maps).
+        person: (S, S) bool the person segmented in the reference crop, or None when not segmented.
     """
 
     crop: tuple[int, int, int]
@@ -187,6 +188,7 @@ class MeshVideo:
     targets: MeshTrack
     ref_points: np.ndarray
     tgt_points: np.ndarray
+    person: np.ndarray | None = None
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
@@ -238,7 +240,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     tgt = MeshTrack(both.uv[1:], both.visible[1:], both.masks[1:])
     ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
     tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
-    return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32))
+    return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32), person=small)
 
 
 # on_person: the person's mask is eroded by this many pixels at 128. 0: a 1-2 px erosion hid 40% of the shown
@@ -354,6 +356,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
+    source = ref_mask if video.person is None else torch.maximum(
+        ref_mask, torch.from_numpy(video.person[None, None].astype(np.float32)))
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
     net.eval()
     rows = np.asarray(rows, np.int64)
@@ -366,7 +370,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             structure = torch.from_numpy(body_structures(video.tgt_points[part], size))
             parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
                                       torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
-                                      sil, structure, plate=plate.expand(n, -1, -1, -1))
+                                      sil, structure, plate=plate.expand(n, -1, -1, -1),
+                                      source_mask=source.expand(n, -1, -1, -1))
             gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
             region = np.maximum(parts.alpha[:, 0].numpy(), video.reference.masks[0][None].astype(np.float32))
             alpha = paste_mask(region, size)
