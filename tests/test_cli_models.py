@@ -97,6 +97,25 @@ def test_evaluate_rigid_bones_scores_futures_with_the_observed_bone_lengths(trai
     np.testing.assert_allclose(bone_lengths(joints)[..., 1:], np.broadcast_to(want[:, None, None, 1:], (2, 3, 4, 16)))
 
 
+def test_evaluate_scores_futures_that_continue_the_observed_motion_unless_raw(trained, small_data, tmp_path):
+    """By default a learned model's first future frame is the last observed frame plus its last step: the same
+    error as the last-step baseline's first frame. --raw-futures scores the network's own futures; the baselines are
+    the same either way."""
+    runs = {}
+    for name, extra in (("continued", []), ("raw", ["--raw-futures"])):
+        out = tmp_path / f"{name}.json"
+        assert main(["evaluate", "--model", str(trained), "--data", str(small_data), "--samples", "3",
+                     "--stride", "32", "--json", str(out)] + extra) == 0
+        runs[name] = json.loads(out.read_text())
+    assert runs["continued"]["protocol"]["continue_motion"] is True
+    assert runs["raw"]["protocol"]["continue_motion"] is False
+    first = {name: r["ade_per_frame"] for name, r in runs.items()}
+    assert first["continued"]["cvae"][0] == pytest.approx(first["continued"]["last-step"][0], rel=1e-4)
+    assert first["raw"]["cvae"][0] != pytest.approx(first["raw"]["last-step"][0], rel=1e-2)
+    for baseline in ("zero-velocity", "last-step", "sequence-motion"):
+        assert runs["raw"]["results"][baseline] == runs["continued"]["results"][baseline]
+
+
 def test_sample_writes_video_and_npz_deterministically(trained, mocap_dir, tmp_path):
     clip = mocap_dir / "cmu" / "131_02.bvh"
     args = ["sample", "--model", str(trained), str(clip), "--samples", "3", "--horizon", "10", "--seed", "4",

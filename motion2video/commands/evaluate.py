@@ -57,6 +57,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rigid-bones", action="store_true",
                    help="score 3D body futures with the last observed frame's bone lengths, as sample --rigid-bones "
                    "draws them")
+    p.add_argument("--raw-futures", action="store_true",
+                   help="score the networks' futures as they come out, without carrying the observed motion into "
+                   "their first frames (what sample and synthesize draw)")
     p.add_argument("--extended", action="store_true",
                    help="also report S-MSE, R-MSE and the Parzen conditional log-likelihood (MT-VAE metrics)")
     add_threads_argument(p)
@@ -97,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
                          f"{longest}", args.data)
     bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in BASELINES]
     protocol = EvalProtocol(samples=args.samples, stride=args.stride, split=args.split, seed=args.seed,
-                            rigid_bones=args.rigid_bones)
+                            rigid_bones=args.rigid_bones, continue_motion=not args.raw_futures)
     val = dataset.windows("val", stride=args.stride) if args.extended else None
     result = evaluate_bundles(bundles, windows, protocol=protocol, extended=args.extended, val_windows=val)
     result.protocol["checkpoint"] = str(bundle.path)

@@ -42,6 +42,8 @@ class EvalProtocol:
         batch_size: windows per model call.
         rigid_bones: 3D body models: score the futures with the last observed frame's bone lengths, as
             ``sample --rigid-bones`` draws them (:func:`rigid_vectors`).
+        continue_motion: learned models' futures continue the observed motion, as every command samples them
+            (:func:`motion2video.stages.sampling.continue_observed`); False scores the networks' raw futures.
     """
 
     samples: int = 50
@@ -51,6 +53,7 @@ class EvalProtocol:
     mm_threshold: float | None = None
     batch_size: int = 32
     rigid_bones: bool = False
+    continue_motion: bool = True
 
     def threshold(self, layout: FeatureLayout) -> float:
         return MM_THRESHOLDS[layout.kind] if self.mm_threshold is None else float(self.mm_threshold)
@@ -224,7 +227,8 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
             return x if same else own.normalize(stats.denormalize(x))
 
         samples = sample_futures(bundle.model, renorm(windows.obs), num_samples=protocol.samples,
-                                 horizon=horizon, seed=protocol.seed, batch_size=protocol.batch_size)
+                                 horizon=horizon, seed=protocol.seed, batch_size=protocol.batch_size,
+                                 continue_motion=protocol.continue_motion)
         pred = to_metric(samples)
         if protocol.rigid_bones and layout.kind == "body3d":
             pred = rigid_vectors(pred, last)
@@ -239,7 +243,8 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
             if val_windows is not None and len(val_windows) > 0:
                 val_pred = to_metric(sample_futures(bundle.model, renorm(val_windows.obs), num_samples=protocol.samples,
                                                     horizon=horizon, seed=protocol.seed + 1,
-                                                    batch_size=protocol.batch_size))
+                                                    batch_size=protocol.batch_size,
+                                                    continue_motion=protocol.continue_motion))
                 val_gt = metric_vectors(val_windows.raw[:, obs_len:], layout)
                 bandwidth = M.select_parzen_bandwidth(val_pred, val_gt)
                 per_window["cll"] = M.parzen_log_likelihood(pred, gt, bandwidth=bandwidth)

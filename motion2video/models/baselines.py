@@ -36,6 +36,8 @@ def extrapolate(obs: torch.Tensor, velocity: torch.Tensor, horizon: int) -> torc
 class _Baseline(DeterministicSampler, nn.Module):
     """Shared plumbing: ``predict`` is the only thing a baseline defines."""
 
+    is_baseline = True  # its futures are its rule's (stages.sampling.sample_futures adjusts learned models only)
+
     def __init__(self, config: BaselineConfig) -> None:
         super().__init__()
         self.config = config
