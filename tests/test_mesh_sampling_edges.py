@@ -127,6 +127,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
                                                             EDGE_TEST_DIFF))
     hidden_trousers = ~seen & (anny_model.vertex_regions() == anny_model.TROUSERS)
     assert hidden_trousers.sum() > 300
+    assert video.margin == 0  # an Anny render: BlazePose's fringe is not clothes past the body
 
     def counts(completed, colours):
         px = np.clip(np.floor(completed).astype(int), 0, 255)
@@ -143,3 +144,22 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     assert skin_before >= 30 and white_before >= 50  # what the rules are for (61 and 114 on 2026-11-26)
     assert skin <= skin_before / 2  # 18
     assert white <= 5  # 0
+
+
+def test_clothes_margin_measures_how_far_a_person_reaches_past_the_fitted_body():
+    from motion2video.frames.mesh_flow import grow_masks
+    from motion2video.stages.mesh_frames import clothes_margin
+
+    silhouette = np.zeros((128, 128), bool)
+    silhouette[30:100, 50:70] = True
+    loose = grow_masks(silhouette, 4)  # a loose suit, 4 px all round
+    assert clothes_margin(loose, silhouette) == 4
+    assert grow_masks(silhouette, 4).shape == (128, 128) and grow_masks(silhouette, 0) is not None
+    np.testing.assert_array_equal(grow_masks(silhouette[None, None], 4)[0, 0], loose)
+    fringe = grow_masks(silhouette, 1)  # a segmentation's 1 px fringe is not clothes
+    assert clothes_margin(fringe, silhouette) == 0
+    assert clothes_margin(silhouette, silhouette) == 0  # nothing outside
+    assert clothes_margin(np.zeros_like(silhouette), silhouette) == 0
+    # At 256 px the smallest margin that counts is 4 px; the same suit measures twice as wide.
+    big = np.kron(silhouette, np.ones((2, 2), bool))
+    assert clothes_margin(grow_masks(big, 3), big) == 0 and clothes_margin(grow_masks(big, 8), big) == 8

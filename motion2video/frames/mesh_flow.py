@@ -254,13 +254,24 @@ def extend_flow(mesh: MeshFlow, band: int) -> MeshFlow:
     return MeshFlow(flow, visibility, sil)
 
 
+def grow_masks(masks: np.ndarray, pixels: int) -> np.ndarray:
+    """(..., H, W) bool masks dilated by ``pixels`` (a 3x3 cross per step, SciPy); the masks as they are for 0."""
+    from scipy.ndimage import binary_dilation
+
+    masks = np.asarray(masks, bool)
+    if pixels <= 0:
+        return masks
+    flat = masks.reshape((-1,) + masks.shape[-2:])
+    return np.stack([binary_dilation(m, iterations=int(pixels)) for m in flat]).reshape(masks.shape)
+
+
 def band_width(size: int) -> int:
     """The band :func:`extend_flow` adds at an image side of ``size`` pixels (4 at 128)."""
     return max(1, round(BAND_PX * size / 128))
 
 
-def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshTrack, rows
-                     ) -> tuple[np.ndarray, np.ndarray]:
+def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshTrack, rows, *,
+                     band: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The correspondence from one reference to many target frames: :func:`dense_flow` carried into the band
     (:func:`extend_flow`) for each of ``rows``.
 
@@ -268,10 +279,11 @@ def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshT
         ref_uv: (V, 2) the reference vertices' pixels, already completed (:func:`complete_reference_uv`: done once
             per reference, not once per target); ref_visible: (V,) bool.
         targets: the target frames; rows: indices into them.
+        band: pixels the flow is carried past the silhouette (:func:`band_width` of the image when None).
     Returns:
         flow (R, H, W, 2) float32, visibility (R, H, W) float32.
     """
-    band = band_width(targets.masks.shape[2])
+    band = band_width(targets.masks.shape[2]) if band is None else int(band)
     flows = [extend_flow(dense_flow(ref_uv, ref_visible, targets.uv[r], targets.visible[r], targets.masks[r],
                                     complete=False), band) for r in rows]
     return np.stack([f.flow for f in flows]), np.stack([f.visibility for f in flows])
