@@ -10,7 +10,7 @@ Each is retrained here with what its checkpoint records: the model name and conf
 batch 64, seed 0). The joints are version 2 and the code is today's: config fields added since take their defaults
 (each is off unless a card says otherwise), and the normalisation statistics are computed on the training windows.
 Writes ``OUT/NAME.safetensors`` (with a ``.json`` of the run), for ``scripts/make_results_per_action.py --model``.
-About 6-10 minutes per model on one thread.
+About 3-5 minutes per model on one thread (2026-11-26).
 """
 
 from __future__ import annotations
@@ -18,35 +18,25 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-OLD_REV = "805c753"  # the last commit whose motion2video/weights held the 72-clip models
-NAMES = ("mtvae-add", "lcpvae", "behavior")
-
-
-def old_checkpoint(rev: str, name: str, folder: Path) -> Path:
-    """The checkpoint file ``motion2video/weights/NAME.safetensors`` of git ``rev``, written into ``folder``."""
-    out = folder / f"{name}.safetensors"
-    blob = subprocess.run(["git", "show", f"{rev}:motion2video/weights/{name}.safetensors"], cwd=REPO,
-                          capture_output=True, check=True).stdout
-    out.write_bytes(blob)
-    return out
+from make_results_per_action import OLD, OLD_REV, resolve  # noqa: E402  (scripts/ is on sys.path when run)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(REPO / "out" / "five_minute"))
-    parser.add_argument("--models", default=",".join(NAMES))
+    parser.add_argument("--models", default=",".join(OLD))
     parser.add_argument("--mocap", default=str(REPO.parent / "shared" / "data" / "mocap"))
     parser.add_argument("--rev", default=OLD_REV)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--cache", default="/tmp/motion2video-git-weights",
+                        help="where the old checkpoints are written (as make_results_per_action.py --cache)")
     args = parser.parse_args(argv)
 
     import torch
@@ -58,22 +48,22 @@ def main(argv: list[str] | None = None) -> int:
     torch.set_num_threads(args.threads)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        for name in args.models.split(","):
-            meta = checkpoint.read_meta(old_checkpoint(args.rev, name, Path(tmp)))
-            dataset = build_dataset(args.mocap, meta.data_config, split=meta.split, recorded_only=True)
-            known = {f.name for f in dataclasses.fields(TrainConfig)}
-            train = TrainConfig(**{k: v for k, v in meta.training["config"].items() if k in known})
-            model_config = {k: v for k, v in meta.config.items() if k != "feature_dim"}
-            t0 = time.perf_counter()
-            result = train_model(model_name=meta.model, model_config=model_config, dataset=dataset, config=train,
-                                 out=out / f"{name}.safetensors", progress=False)
-            record = {"rev": args.rev, "model": meta.model, "config": model_config, "train": dataclasses.asdict(train),
-                      "clips": dataset.summary["per_split"], "wall_time_s": round(time.perf_counter() - t0, 1),
-                      "val_loss": result.val_loss, "train_loss": result.train_loss}
-            (out / f"{name}.json").write_text(json.dumps(record, indent=1))
-            print(f"{name}: {result.steps} steps in {record['wall_time_s']:.0f} s, clips {record['clips']}, "
-                  f"wrote {result.path}", flush=True)
+    for name in args.models.split(","):
+        old = resolve(f"git:{args.rev}:motion2video/weights/{name}.safetensors", Path(args.cache))
+        meta = checkpoint.read_meta(old)
+        dataset = build_dataset(args.mocap, meta.data_config, split=meta.split, recorded_only=True)
+        known = {f.name for f in dataclasses.fields(TrainConfig)}
+        train = TrainConfig(**{k: v for k, v in meta.training["config"].items() if k in known})
+        model_config = {k: v for k, v in meta.config.items() if k != "feature_dim"}
+        t0 = time.perf_counter()
+        result = train_model(model_name=meta.model, model_config=model_config, dataset=dataset, config=train,
+                             out=out / f"{name}.safetensors", progress=False)
+        record = {"rev": args.rev, "model": meta.model, "config": model_config, "train": dataclasses.asdict(train),
+                  "clips": dataset.summary["per_split"], "wall_time_s": round(time.perf_counter() - t0, 1),
+                  "val_loss": result.val_loss, "train_loss": result.train_loss}
+        (out / f"{name}.json").write_text(json.dumps(record, indent=1))
+        print(f"{name}: {result.steps} steps in {record['wall_time_s']:.0f} s, clips {record['clips']}, "
+              f"wrote {result.path}", flush=True)
     return 0
 
 

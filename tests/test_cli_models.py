@@ -75,18 +75,24 @@ def test_evaluate_writes_the_json_table(trained, small_data, tmp_path, capsys):
     assert "zero-velocity" in capsys.readouterr().out
 
 
+def evaluate_variants(trained, small_data, tmp_path, variants: dict[str, list[str]]) -> dict[str, dict]:
+    """``motion2video evaluate`` of ``trained`` once per variant (its extra options): name -> the JSON result."""
+    runs = {}
+    for name, extra in variants.items():
+        out = tmp_path / f"{name}.json"
+        assert main(["evaluate", "--model", str(trained), "--data", str(small_data), "--samples", "3",
+                     "--stride", "32", "--json", str(out)] + extra) == 0
+        runs[name] = json.loads(out.read_text())
+    return runs
+
+
 def test_evaluate_rigid_bones_scores_futures_with_the_observed_bone_lengths(trained, small_data, tmp_path):
     """--rigid-bones changes the learned model's scores, not the baselines' (zero-velocity repeats the last
     observed frame, whose bones already have those lengths), and the projection keeps the observed lengths."""
     from motion2video.core.skeletons import bone_lengths
     from motion2video.evaluation.forecasting import rigid_vectors
 
-    runs = {}
-    for name, extra in (("raw", []), ("rigid", ["--rigid-bones"])):
-        out = tmp_path / f"{name}.json"
-        assert main(["evaluate", "--model", str(trained), "--data", str(small_data), "--samples", "3",
-                     "--stride", "32", "--json", str(out)] + extra) == 0
-        runs[name] = json.loads(out.read_text())
+    runs = evaluate_variants(trained, small_data, tmp_path, {"raw": [], "rigid": ["--rigid-bones"]})
     assert runs["rigid"]["protocol"]["rigid_bones"] is True
     assert runs["rigid"]["results"]["cvae"]["ade"] != runs["raw"]["results"]["cvae"]["ade"]
     assert runs["rigid"]["results"]["zero-velocity"]["ade"] == pytest.approx(runs["raw"]["results"]["zero-velocity"]["ade"])
@@ -101,12 +107,7 @@ def test_evaluate_scores_futures_that_continue_the_observed_motion_unless_raw(tr
     """By default a learned model's first future frame is the last observed frame plus its last step: the same
     error as the last-step baseline's first frame. --raw-futures scores the network's own futures; the baselines are
     the same either way."""
-    runs = {}
-    for name, extra in (("continued", []), ("raw", ["--raw-futures"])):
-        out = tmp_path / f"{name}.json"
-        assert main(["evaluate", "--model", str(trained), "--data", str(small_data), "--samples", "3",
-                     "--stride", "32", "--json", str(out)] + extra) == 0
-        runs[name] = json.loads(out.read_text())
+    runs = evaluate_variants(trained, small_data, tmp_path, {"continued": [], "raw": ["--raw-futures"]})
     assert runs["continued"]["protocol"]["continue_motion"] is True
     assert runs["raw"]["protocol"]["continue_motion"] is False
     first = {name: r["ade_per_frame"] for name, r in runs.items()}

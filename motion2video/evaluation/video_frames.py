@@ -179,15 +179,14 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     person masks)."""
     from dataclasses import replace
 
-    from motion2video.frames.mesh_flow import band_width, complete_reference_uv, flows_to_targets, grow_masks
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
     from motion2video.stages.mesh_frames import clothes_margin, video_mesh_track
 
     size = frames.images.shape[1]
     track = video_mesh_track(frames.joints3d, frames.points, size=size, person_mask=frames.masks[0])
     margin = clothes_margin(frames.masks[0], track.masks[0])
     ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
-    flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)),
-                                         band=max(band_width(size), margin + band_width(size) // 2))
+    flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)), margin=margin)
     return replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
                    mesh_ref_masks=np.repeat(grow_masks(track.masks[:1], margin), len(flows), axis=0),
                    mesh_tgt_masks=grow_masks(track.masks[1:], margin))

@@ -8,12 +8,12 @@ limb faces the camera, which 2D keypoints do not.
 
 Both frames are renders of one mesh topology (Anny's 13,718 vertices), so a vertex index is a surface point.
 Per frame we keep each vertex's projected pixel position and whether it is the front surface there (its depth
-against the rendered depth map, :func:`renderers.mesh.vertex_visibility`). For a pair, every target silhouette pixel takes
-the inverse-squared-distance-weighted reference positions of its ``k`` nearest *visible* target vertices
+against the rendered depth map, :func:`renderers.mesh.vertex_visibility`). For a pair, every target silhouette pixel
+takes the inverse-squared-distance-weighted reference positions of its ``k`` nearest *visible* target vertices
 (:func:`dense_flow`, a KD-tree from SciPy), leaving out those whose reference position disagrees with the nearest
 one's (a fold: averaging would land between the two surfaces); the weights of the same vertices' reference
-visibility give the visibility map. At 128 px a body shows about one visible vertex per pixel, so the interpolation error is below
-a pixel away from occlusion edges.
+visibility give the visibility map. At 128 px a body shows about one visible vertex per pixel, so the interpolation
+error is below a pixel away from occlusion edges.
 
 Pixel coordinates follow :func:`motion2video.core.camera.project`: x right, y down, pixel centres at
 integer + 0.5.
@@ -271,7 +271,7 @@ def band_width(size: int) -> int:
 
 
 def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshTrack, rows, *,
-                     band: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+                     margin: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The correspondence from one reference to many target frames: :func:`dense_flow` carried into the band
     (:func:`extend_flow`) for each of ``rows``.
 
@@ -279,11 +279,13 @@ def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshT
         ref_uv: (V, 2) the reference vertices' pixels, already completed (:func:`complete_reference_uv`: done once
             per reference, not once per target); ref_visible: (V,) bool.
         targets: the target frames; rows: indices into them.
-        band: pixels the flow is carried past the silhouette (:func:`band_width` of the image when None).
+        margin: pixels the person's silhouettes are grown by (:func:`motion2video.stages.mesh_frames.clothes_margin`):
+            the flow is carried :func:`band_width` past the silhouette, or half that past the margin when further.
     Returns:
         flow (R, H, W, 2) float32, visibility (R, H, W) float32.
     """
-    band = band_width(targets.masks.shape[2]) if band is None else int(band)
+    width = band_width(targets.masks.shape[2])
+    band = max(width, int(margin) + width // 2)
     flows = [extend_flow(dense_flow(ref_uv, ref_visible, targets.uv[r], targets.visible[r], targets.masks[r],
                                     complete=False), band) for r in rows]
     return np.stack([f.flow for f in flows]), np.stack([f.visibility for f in flows])

@@ -380,7 +380,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     import torch
 
     from motion2video.frames.data import body_structures
-    from motion2video.frames.mesh_flow import band_width, complete_reference_uv, flows_to_targets, grow_masks
+    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
     from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
@@ -399,13 +399,12 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     source = ref_mask if video.person is None else torch.maximum(
         ref_mask, torch.from_numpy(video.person[None, None].astype(np.float32)))
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
-    band = max(band_width(size), video.margin + band_width(size) // 2)
     net.eval()
     rows = np.asarray(rows, np.int64)
     with torch.inference_mode():
         for start in range(0, len(rows), batch_size):
             part = rows[start:start + batch_size]
-            flows, vis = flows_to_targets(ref_uv, video.reference.visible[0], video.targets, part, band=band)
+            flows, vis = flows_to_targets(ref_uv, video.reference.visible[0], video.targets, part, margin=video.margin)
             n = len(part)
             sil = torch.from_numpy(grow_masks(video.targets.masks[part][:, None], video.margin).astype(np.float32))
             structure = torch.from_numpy(body_structures(video.tgt_points[part], size))
