@@ -176,14 +176,20 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     """The pairs with the correspondence of Anny fitted to every frame (:func:`stages.mesh_frames.video_mesh_track`),
     for the mesh generator: the fitted mesh's silhouettes, grown by the person's clothes margin in frame 0
     (:func:`stages.mesh_frames.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
-    person masks)."""
+    person masks). As in ``synthesize``, a vertex frame 0 shows counts as shown only where it lands on the person
+    (:func:`stages.mesh_frames.on_person`), and the colours are sampled from the segmented person
+    (:func:`frames.mesh_warp.mesh_source_mask`)."""
     from dataclasses import replace
 
-    from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.stages.mesh_frames import clothes_margin, video_mesh_track
+    from motion2video.frames.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
+    from motion2video.stages.mesh_frames import clothes_margin, on_person, video_mesh_track
 
     size = frames.images.shape[1]
     track = video_mesh_track(frames.joints3d, frames.points, size=size, person_mask=frames.masks[0])
+    # as synthesize does (stages.mesh_frames.mesh_video): a vertex frame 0 shows counts as shown only on the person
+    shown = track.visible.copy()
+    shown[0] &= on_person(track.uv[0], frames.masks[0])
+    track = MeshTrack(track.uv, shown, track.masks)
     margin = clothes_margin(frames.masks[0], track.masks[0])
     ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
     flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)), margin=margin)

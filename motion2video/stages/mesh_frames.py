@@ -364,6 +364,20 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
                              size=size)
 
 
+def sampled_person(video: MeshVideo):
+    """(1, 1, S, S) float tensor: the reference pixels whose colours the mesh generator samples (its
+    ``source_mask``). The person BlazePose segments in the reference when there is one; else the fitted mesh's
+    silhouette grown by the clothes margin. A fitted silhouette reaches past a real person where the fit is off
+    (:func:`motion2video.frames.mesh_warp.mesh_source_mask` says what that cost)."""
+    import torch
+
+    from motion2video.frames.mesh_flow import grow_masks
+
+    if video.person is not None and video.person.any():
+        return torch.from_numpy(video.person[None, None].astype(np.float32))
+    return torch.from_numpy(grow_masks(video.reference.masks[:1, None], video.margin).astype(np.float32))
+
+
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
                          batch_size: int = 8) -> np.ndarray:
     """Frames of the mesh generator for target ``rows`` of ``video``, pasted into the reference.
@@ -396,8 +410,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
-    source = ref_mask if video.person is None else torch.maximum(
-        ref_mask, torch.from_numpy(video.person[None, None].astype(np.float32)))
+    source = sampled_person(video)
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
     net.eval()
     rows = np.asarray(rows, np.int64)
