@@ -1,7 +1,7 @@
 """How the mesh generator does when the reference picture's body is *fitted*, as ``synthesize`` fits it.
 
     python scripts/measure_fitted_reference.py [--model frames-body-mesh-256] [--clips 08_01,13_42,05_14]
-        [--json out/fitted_reference.json]
+        [--lifts guide,pictured] [--rules 0,1,2,3] [--face aligned|fitted] [--json out/fitted_reference.json]
 
 ``evaluate-frames --poses`` poses the held-out identities by real CMU clips and gives the generator each reference
 frame's exact mesh. ``synthesize`` never has it. It lifts the picture's 2D joints to 3D
@@ -20,7 +20,9 @@ This script scores the same pairs with the reference's mesh replaced by such a f
     (``camera_joints``: BlazePose's world landmarks, or a render's known pose).
 
 Four rules decide which fitted vertices lend their colour: the depth test alone, and ``on_person`` with the mask
-eroded by 2 px, by 1 px (both at 256) or as it is.
+eroded by 2 px, by 1 px (both at 256) or as it is (``--rules`` picks some). The fitted face is moved onto
+BlazePose's eyes as ``synthesize`` moves it (:func:`motion2video.stages.mesh_frames.align_face`; ``--face fitted``
+leaves it where the fit puts it).
 
 The fit is put in by wrapping ``BodyRenderer.render_with_masks`` for the length of a run: it is the one place that
 knows each window's camera. About 1.5 minutes per clip and variant on one thread.
@@ -63,18 +65,20 @@ def other_person(reference: np.ndarray) -> np.ndarray:
     return (other - other[0]) @ rot.T + reference[0]
 
 
-def person_mask(out, source: str) -> np.ndarray:
-    """The reference frame's person: the render's exact silhouette, or BlazePose's segmentation of the render (as
-    synthesize segments a picture); the exact one when BlazePose finds nobody."""
-    if source == "exact":
-        return out.masks[0]
-    from motion2video.stages.frames import reference_person_mask
+def person_found(out, source: str) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """The reference frame's person: (mask, eyes, eye visibility). The mask is the render's exact silhouette, or
+    BlazePose's segmentation of the render (as synthesize segments a picture; the exact one when BlazePose finds
+    nobody); the eyes are BlazePose's (None when it finds nobody)."""
+    from motion2video.stages.frames import reference_person
 
-    found = reference_person_mask(out.frames[0])
-    return out.masks[0] if found is None else found
+    found = reference_person(out.frames[0])
+    if found is None:
+        return out.masks[0], None, None
+    mask, eyes, visibility = found
+    return (out.masks[0] if source == "exact" else mask), eyes, visibility
 
 
-def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose"):
+def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: str = "aligned", with_clip: bool = True):
     """A wrapper of ``BodyRenderer.render_with_masks`` whose first frame's vertices are those of a fitted body."""
     import renderers.body as body
     from motion2video.core.camera import project
@@ -92,12 +96,21 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose"):
         pictured = (reference - np.asarray(camera.position)) @ camera.axes().T if lift == "pictured" else None
         lifted = mesh_frames.lift_reference(points, other_person(reference), camera, 1.0, np.zeros(2),
                                             pictured=pictured)
-        track = mesh_frames.render_mesh_track(lifted[None], phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
+        # synthesize poses the reference together with the clip (one body size, the clip's neck turn): the window's
+        # other frames stand in for the clip
+        posed = np.concatenate([lifted[None], np.asarray(motion.joints[1:], np.float64)]) if with_clip else lifted[None]
+        track = mesh_frames.render_mesh_track(posed, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
                                               size=camera.width)
         shown = track.visible[0]
+        person, eyes, eye_visibility = person_found(out, mask)
+        uv = track.uv[0]
+        if face == "aligned" and eyes is not None:
+            from renderers import anny_model
+
+            uv, _ = mesh_frames.align_face(uv, shown, eyes, eye_visibility, rest=anny_model.anny_rest({}))
         if rule is not None:
-            shown = shown & mesh_frames.on_person(track.uv[0], person_mask(out, mask), edge_px=rule)
-        out.vertex_uv[0] = track.uv[0]
+            shown = shown & mesh_frames.on_person(uv, person, edge_px=rule)
+        out.vertex_uv[0] = uv
         out.vertex_visible[0] = shown
         return out
 
@@ -114,6 +127,15 @@ def main(argv: list[str] | None = None) -> int:
                         help="the reference person for on_person: BlazePose's segmentation (as synthesize) or the "
                         "render's exact silhouette")
     parser.add_argument("--lifts", default=",".join(LIFTS), help="guide, pictured or both")
+    parser.add_argument("--rules", default=",".join(str(i) for i in range(len(RULES))),
+                        help="which of the shown-vertex rules, by index (0: depth test alone, 1: eroded 2 px, "
+                        "2: eroded 1 px, 3: the mask as it is, shipped)")
+    parser.add_argument("--face", choices=("aligned", "fitted"), default="aligned",
+                        help="the fitted face moved onto BlazePose's eyes (stages.mesh_frames.align_face, as "
+                        "synthesize does) or left where the fit puts it")
+    parser.add_argument("--posed", choices=("with-clip", "alone"), default="with-clip",
+                        help="pose the fitted reference together with the window's other frames, as synthesize poses "
+                        "it with the clip, or on its own (before 2026-11-26, later)")
     args = parser.parse_args(argv)
 
     import torch
@@ -128,9 +150,10 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, dict[str, dict[str, float]]] = {}
     for clip in args.clips.split(","):
         clips = load_body_clips(str(Path(args.mocap) / "cmu" / f"{clip}.bvh"))
-        for lift, (rule_name, rule) in [(lift, item) for lift in args.lifts.split(",") for item in RULES.items()]:
-            name = f"{lift} | {rule_name}"
-            plain, render = fitted_renders(rule, lift, args.mask)
+        rules = [list(RULES.items())[int(i)] for i in args.rules.split(",")]
+        for lift, (rule_name, rule) in [(lift, item) for lift in args.lifts.split(",") for item in rules]:
+            name = f"{lift} | {rule_name} | face {args.face} | posed {args.posed}"
+            plain, render = fitted_renders(rule, lift, args.mask, args.face, args.posed == "with-clip")
             body.BodyRenderer.render_with_masks = render
             try:
                 posed = render_posed_sequences(clips, PoseEvalSpec.for_size(model.config.image_size,

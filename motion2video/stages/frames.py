@@ -38,7 +38,8 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     """Body: the :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
     reference person's Anny body (the reference pose file's phenotype; without one, Anny's weight fitted to the
     person BlazePose segments) in the reference pose and in every target pose; only the reference vertices that land
-    on that segmented person count as shown. Face: None (the face structures carry their head mesh)."""
+    on that segmented person count as shown, and the fitted head is moved onto the eyes BlazePose finds
+    (:func:`~motion2video.stages.mesh_frames.align_face`). Face: None (the face structures carry their head mesh)."""
     from motion2video.core.errors import InputError
     from motion2video.stages.mesh_frames import mesh_video
 
@@ -52,10 +53,13 @@ def mesh_setup(net, reference: Reference, structures: Structures):
         raise InputError("the mesh frame generator makes body frames from a body motion")
     n = structures.num_targets
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
+    found = reference_person(reference.image)
+    mask, eyes, eye_visibility = (None, None, None) if found is None else found
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
                       output_size=structures.size, model_size=net.config.image_size,
-                      person_mask=reference_person_mask(reference.image), fit_to_mask=not phenotype,
-                      pictured=None if reference.pose is None else reference.pose.camera_joints)
+                      person_mask=mask, fit_to_mask=not phenotype,
+                      pictured=None if reference.pose is None else reference.pose.camera_joints,
+                      eyes=eyes, eye_visibility=eye_visibility)
 
 
 def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,
@@ -69,16 +73,21 @@ def mesh_frames(net, reference: Reference, structures: Structures, video, rows: 
     return generate_mesh_frames(net, reference.image, video, rows, batch_size=batch_size)
 
 
-def reference_person_mask(image: np.ndarray) -> np.ndarray | None:
-    """(H, W) bool the person BlazePose segments in a reference image, or None when it finds nobody."""
+def reference_person(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """What BlazePose finds in a reference image: ((H, W) bool the person's mask, (2, 2) its left and right eye in
+    pixels, (2,) their visibility), or None when it finds nobody."""
     from motion2video.core.errors import InputError
+    from motion2video.pose.blazepose import LANDMARK_NAMES
     from motion2video.pose.estimate import default_model, estimate_image
 
     try:
         pose = estimate_image(image, model=default_model())
-    except InputError:  # nobody found: no width fit
+    except InputError:  # nobody found
         return None
-    return pose.landmarks.person_mask(image.shape[1], image.shape[0]) > 0.5
+    eyes = [LANDMARK_NAMES.index("left_eye"), LANDMARK_NAMES.index("right_eye")]
+    landmarks = pose.landmarks
+    return (landmarks.person_mask(image.shape[1], image.shape[0]) > 0.5, np.asarray(landmarks.xy)[eyes, :2],
+            np.asarray(landmarks.visibility)[eyes])
 
 
 def default_generator_threads() -> int:
