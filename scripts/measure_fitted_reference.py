@@ -107,7 +107,9 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: s
         if face == "aligned" and eyes is not None:
             from renderers import anny_model
 
-            uv, _ = mesh_frames.align_face(uv, shown, eyes, eye_visibility, rest=anny_model.anny_rest({}))
+            rest = anny_model.anny_rest({})
+            uv, _ = mesh_frames.align_face(uv, shown, eyes, eye_visibility, rest=rest,
+                                           crown_dy=mesh_frames.crown_offset(uv, track.masks[0], person))
         if rule is not None:
             shown = shown & mesh_frames.on_person(uv, person, edge_px=rule)
         out.vertex_uv[0] = uv

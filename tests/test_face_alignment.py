@@ -11,7 +11,8 @@ import os
 import numpy as np
 
 from motion2video.stages import mesh_frames
-from motion2video.stages.mesh_frames import MAX_FACE_SHIFT, align_face, head_weights
+from motion2video.stages.mesh_frames import (FACE_HAIRLINE_M, MAX_FACE_SHIFT, align_face, crown_offset, face_weights,
+                                             head_weights)
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
@@ -43,6 +44,42 @@ def test_the_head_moves_onto_the_pictured_eyes_and_the_body_stays():
     neck = (weights > 0.05) & (weights < 0.95)  # the neck follows part of the way
     assert neck.sum() > 50
     np.testing.assert_allclose(moved[neck] - uv[neck], weights[neck, None] * [3.0, -4.0], atol=1e-4)
+
+
+def test_the_face_follows_the_eyes_and_the_crown_the_pictured_head_top():
+    """A fitted face too high under a crown in the right place (the demo's reference): the face moves, the hair
+    stays."""
+    from renderers import anny_model
+
+    rest, uv, shown, irises = frontal_picture()
+    moved, shift = align_face(uv, shown, irises + [2.0, 5.0], np.array([0.9, 0.9]), rest=rest, crown_dy=0.0)
+    np.testing.assert_allclose(shift, [2.0, 5.0], atol=1e-6)
+    head = anny_model.head_vertices()
+    z = rest.vertices[:, 2]
+    eyes = float(np.mean(z[anny_model.vertex_regions(rest) == anny_model.IRIS]))
+    face, crown = head & (z <= eyes), head & (z >= eyes + FACE_HAIRLINE_M)
+    assert face.sum() > 1000 and crown.sum() > 100
+    np.testing.assert_allclose(moved[face] - uv[face], np.broadcast_to([2.0, 5.0], (face.sum(), 2)), atol=1e-4)
+    np.testing.assert_allclose(moved[crown] - uv[crown], np.broadcast_to([2.0, 0.0], (crown.sum(), 2)), atol=1e-4)
+    w = face_weights(rest)
+    assert np.all(w[~head] == 0) and np.all((w >= 0) & (w <= 1))
+
+
+def test_crown_offset_is_how_far_the_pictured_head_top_lies_below_the_fitted_one():
+    from renderers import anny_model
+
+    head = anny_model.head_vertices()
+    uv = np.zeros((len(head), 2))
+    uv[head, 0] = np.linspace(40.0, 60.0, head.sum())  # the fitted head spans columns 40..60
+    silhouette = np.zeros((128, 128), bool)
+    silhouette[30:100, 38:63] = True
+    person = np.zeros((128, 128), bool)
+    person[34:100, 36:65] = True
+    assert crown_offset(uv, silhouette, person) == 4.0
+    person[:, 50] = False  # a column without the person: no measure
+    assert crown_offset(uv, silhouette, person) is None
+    uv[head, 0] = 50.0  # a head one column wide: no measure
+    assert crown_offset(uv, silhouette, silhouette) is None
 
 
 def test_the_head_stays_where_the_eyes_are_unsure_unseen_or_too_far():

@@ -243,8 +243,10 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     if eyes is not None and eye_visibility is not None:
         from renderers import anny_model
 
+        rest = anny_model.anny_rest(phenotype)
+        crown = None if small is None else crown_offset(both.uv[0], both.masks[0], small)
         moved, _ = align_face(both.uv[0], both.visible[0], (np.asarray(eyes, np.float64) - [x0, y0]) * k,
-                              eye_visibility, rest=anny_model.anny_rest(phenotype))
+                              eye_visibility, rest=rest, crown_dy=crown)
         ref_uv = moved[None]
     ref_visible = both.visible[:1]
     if small is not None and small.any():
@@ -330,11 +332,9 @@ MAX_FACE_SHIFT = 3.0
 def head_weights(rest) -> np.ndarray:
     """(V,) float in [0, 1]: how much each vertex follows a move of the face in the picture (:func:`align_face`):
     1 on the head (:func:`renderers.anny_model.head_vertices`), falling linearly to 0 down the neck, from the head
-    bone to the lowest neck bone (``neck01``), by height in the rest pose; 0 below.
-
-    The whole head moves, hair too. Measured on fitted references (``scripts/measure_fitted_reference.py``, head
-    PSNR): weights by how far in front of the skull base a point lies, as a turn of the head would move it, gave
-    up to 0.4 dB less, and the face alone (the hair kept in place) 0.9-1.1 dB less."""
+    bone to the lowest neck bone (``neck01``), by height in the rest pose; 0 below. (Weights by how far in front
+    of the skull base a point lies, as a turn of the head would move it, gave up to 0.4 dB less head PSNR with
+    the fitted references of ``scripts/measure_fitted_reference.py``.)"""
     from renderers import anny_model
 
     head = anny_model.head_vertices()
@@ -344,27 +344,62 @@ def head_weights(rest) -> np.ndarray:
     return np.where(head, 1.0, ramp)
 
 
+FACE_HAIRLINE_M = 0.05  # face_weights: the hairline's height above the eyes in the rest pose (Anny's regions use 5 cm)
+
+
+def face_weights(rest) -> np.ndarray:
+    """(V,) float in [0, 1]: which head vertices are the face (1 at and below the eyes' height in the rest pose)
+    and which the crown (0 from :data:`FACE_HAIRLINE_M` above the eyes up), linear between; 0 off the head."""
+    from renderers import anny_model
+
+    iris = anny_model.vertex_regions(rest) == anny_model.IRIS
+    eyes = float(np.mean(rest.vertices[iris, 2]))
+    face = np.clip((eyes + FACE_HAIRLINE_M - rest.vertices[:, 2]) / FACE_HAIRLINE_M, 0.0, 1.0)
+    return np.where(anny_model.head_vertices(), face, 0.0)
+
+
+def crown_offset(uv: np.ndarray, silhouette: np.ndarray, person: np.ndarray) -> float | None:
+    """How far (pixels, + down) the pictured person's head top lies below the fitted head's: the median over the
+    middle half of the fitted head's columns of the difference between the first person row and the first
+    silhouette row; None when a column has no person or the head is under 4 columns wide."""
+    from renderers import anny_model
+
+    head = np.asarray(uv)[anny_model.head_vertices()]
+    w = silhouette.shape[1]
+    lo, hi = np.quantile(head[:, 0], [0.25, 0.75])
+    columns = np.arange(max(0, int(np.floor(lo))), min(w, int(np.ceil(hi)) + 1))
+    if len(columns) < 4:
+        return None
+    sil, per = np.asarray(silhouette, bool)[:, columns], np.asarray(person, bool)[:, columns]
+    if not sil.any(axis=0).all() or not per.any(axis=0).all():
+        return None
+    return float(np.median(per.argmax(axis=0) - sil.argmax(axis=0)))
+
+
 def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibility: np.ndarray, *,
-               rest) -> tuple[np.ndarray, np.ndarray | None]:
-    """The reference vertices' pixels with the fitted head moved onto the pictured eyes.
+               rest, crown_dy: float | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The reference vertices' pixels with the fitted face moved onto the pictured eyes.
 
     A body fitted to a picture puts its joints on the picture's joints, but not its face on the pictured face: the
     head joints are built from the ears and body lengths, and which way the head nods or looks they do not fix. On
     ``skier.jpg`` the fitted irises lay 7 px above and 6 px beside hers at 256, and her face sampled the stripes of
-    her hat. The head's pixels are shifted by the mean offset between BlazePose's eyes and the centres of the
-    irises the fitted mesh shows, the neck following part of the way (:func:`head_weights`). Only where the colours
-    are sampled changes: not the fitted body, nor the targets. On held-out identities fitted as ``synthesize`` fits
-    them, head PSNR +1.9 to +2.5 dB (docs/results.md, "The fitted face on the pictured eyes"). A scale fitted from
-    the mouth as well gave 0.3-1.2 dB less than the shift alone.
+    her hat; on the demo's reference the fitted face lay 5 px too high while the fitted crown matched the picture's.
+    So the face is shifted by the mean offset between BlazePose's eyes and the centres of the irises the fitted
+    mesh shows, and the crown by the offset of the pictured head top (``crown_dy``, :func:`crown_offset`; the eyes'
+    sideways offset), blended over the forehead (:func:`face_weights`); the neck follows the face part of the way
+    (:func:`head_weights`). Without ``crown_dy`` the whole head takes the eyes' shift. Only where the colours are
+    sampled changes: not the fitted body, nor the targets. Measured on held-out identities fitted as ``synthesize``
+    fits them: head PSNR +2.6 to +3.3 dB where it applies (docs/results.md, "The fitted face on the pictured eyes").
 
     Args:
         uv: (V, 2) the fitted reference vertices' pixels; visible: (V,) bool which of them the mesh shows.
         eyes: (2, 2) BlazePose's left and right eye in the same pixels; eye_visibility: (2,) their visibility.
         rest: the fitted body's :class:`renderers.anny_model.AnnyRest` (its phenotype's rest pose).
+        crown_dy: pixels (+ down) by which the pictured head top lies below the fitted one, or None.
     Returns:
-        (the moved (V, 2) pixels, the (2,) shift), or (``uv`` unchanged, None) when an eye is not seen surely
-        (:data:`EYE_VISIBILITY`), the mesh shows fewer than :data:`MIN_IRIS_SHOWN` vertices of an iris, or the shift
-        is longer than :data:`MAX_FACE_SHIFT` times the distance between the pictured eyes.
+        (the moved (V, 2) pixels, the (2,) shift of the face), or (``uv`` unchanged, None) when an eye is not seen
+        surely (:data:`EYE_VISIBILITY`), the mesh shows fewer than :data:`MIN_IRIS_SHOWN` vertices of an iris, or
+        the shift is longer than :data:`MAX_FACE_SHIFT` times the distance between the pictured eyes.
     """
     from renderers import anny_model
 
@@ -381,7 +416,13 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
     shift = np.mean(offsets, axis=0)
     if np.linalg.norm(shift) > MAX_FACE_SHIFT * np.linalg.norm(eyes[0] - eyes[1]):
         return uv, None
-    moved = np.asarray(uv, np.float64) + head_weights(rest)[:, None] * shift[None]
+    per_vertex = head_weights(rest)[:, None] * shift[None]  # (V, 2)
+    if crown_dy is not None:  # the crown moves down by the pictured crown's offset, the face by the eyes'
+        face = face_weights(rest)[:, None]
+        crown = np.array([shift[0], crown_dy])
+        head = anny_model.head_vertices()[:, None]
+        per_vertex = np.where(head, face * shift[None] + (1.0 - face) * crown[None], per_vertex)
+    moved = np.asarray(uv, np.float64) + per_vertex
     return moved.astype(np.asarray(uv).dtype), shift
 
 
