@@ -125,4 +125,3 @@ def test_the_demo_references_fitted_irises_land_on_its_eyes(monkeypatch):
     before, after = iris_offset(fitted, eyes), iris_offset(video, eyes)
     assert before > 3.0  # where the fit alone puts them
     assert after < 2.0
-
