@@ -483,16 +483,14 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
 
 def sampled_person(video: MeshVideo):
     """(1, 1, S, S) float tensor: the reference pixels whose colours the mesh generator samples (its
-    ``source_mask``). The person BlazePose segments in the reference when there is one; else the fitted mesh's
-    silhouette grown by the clothes margin. A fitted silhouette reaches past a real person where the fit is off
-    (:func:`motion2video.frames.mesh_warp.mesh_source_mask` says what that cost)."""
+    ``source_mask``): the person BlazePose segments in the reference; None when nobody is segmented (the generator
+    then samples inside the fitted silhouette it is given). A fitted silhouette reaches past a real person where
+    the fit is off (:func:`motion2video.frames.mesh_warp.mesh_source_mask` says what that cost)."""
     import torch
 
-    from motion2video.frames.mesh_flow import grow_masks
-
-    if video.person is not None and video.person.any():
-        return torch.from_numpy(video.person[None, None].astype(np.float32))
-    return torch.from_numpy(grow_masks(video.reference.masks[:1, None], video.margin).astype(np.float32))
+    if video.person is None or not video.person.any():
+        return None
+    return torch.from_numpy(video.person[None, None].astype(np.float32))
 
 
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
@@ -541,7 +539,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
                                       torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                       sil, structure, plate=plate.expand(n, -1, -1, -1),
-                                      source_mask=source.expand(n, -1, -1, -1))
+                                      source_mask=None if source is None else source.expand(n, -1, -1, -1))
             gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
             region = np.maximum(parts.alpha[:, 0].numpy(), ref_mask[0].numpy())
             alpha = paste_mask(region, size)
