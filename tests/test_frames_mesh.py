@@ -187,9 +187,9 @@ def test_untrained_mesh_generator_is_its_prior(mesh_seqs):
     torch.testing.assert_close(out.flow, flow)  # no flow residual yet
     person = sil[:, 0] > 0.5
     # The prior samples the reference person, the background outside it given the nearest person colour.
-    from motion2video.frames.mesh_warp import fill_outside_person, person_edge_refined
+    from motion2video.frames.mesh_warp import person_colours
 
-    prior = warp_image(fill_outside_person(x, person_edge_refined(x, ref_mask, out.plate)), flow, "bicubic")
+    prior = warp_image(person_colours(x, ref_mask, out.plate), flow, "bicubic")
     err_in = (out.image - prior).abs().amax(dim=1)[person]
     err_out = (out.image - out.plate).abs().amax(dim=1)[~person]
     assert err_in.mean() < 0.03 and err_out.mean() < 0.03  # alpha = sigmoid(+-4): 98 % prior

@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from motion2video.frames.mesh_flow import complete_reference_uv, surface_graph, touching_other_part
-from motion2video.frames.mesh_warp import fill_outside_person, person_edge_refined
+from motion2video.frames.mesh_warp import fill_outside_person, person_colours, person_edge_refined
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
@@ -123,7 +123,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     from renderers import anny_model
 
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.mesh_warp import EDGE_TEST_DIFF, EDGE_TEST_PX, mesh_plate
+    from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.stages.mesh_frames import sampled_person
 
     reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
@@ -133,8 +133,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     picture = reference.image[y0:y0 + side, x0:x0 + side]
     image = torch.from_numpy(np.ascontiguousarray(picture)).permute(2, 0, 1)[None].float() / 255.0
     mesh = torch.from_numpy(video.reference.masks[:1, None].astype(np.float32))
-    source = fill_outside_person(image, person_edge_refined(image, sampled_person(video), mesh_plate(image, mesh),
-                                                            EDGE_TEST_PX, EDGE_TEST_DIFF))
+    source = person_colours(image, sampled_person(video), mesh_plate(image, mesh))
     hidden_trousers = ~seen & (anny_model.vertex_regions() == anny_model.TROUSERS)
     assert hidden_trousers.sum() > 300
     assert video.margin == 0  # an Anny render: BlazePose's fringe is not clothes past the body
@@ -162,7 +161,7 @@ def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():
     with her segmented person painted white patches into her trousers in every frame; the segmented person alone
     does not."""
     from motion2video.frames.mesh_flow import flows_to_targets, grow_masks
-    from motion2video.frames.mesh_warp import EDGE_TEST_DIFF, EDGE_TEST_PX, mesh_plate
+    from motion2video.frames.mesh_warp import mesh_plate
     from motion2video.frames.warp import warp_image
     from motion2video.stages.mesh_frames import sampled_person
 
@@ -182,7 +181,7 @@ def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():
     assert video.margin > 0 and legs.sum() > 10000
 
     def white_share(person):
-        source = fill_outside_person(image, person_edge_refined(image, person, plate, EDGE_TEST_PX, EDGE_TEST_DIFF))
+        source = person_colours(image, person, plate)
         sampled = warp_image(source.expand(len(rows), -1, -1, -1), torch.from_numpy(flows))
         white = sampled.min(dim=1).values.numpy() > 170 / 255
         return float((white & legs).sum() / legs.sum())

@@ -188,6 +188,13 @@ def person_edge_refined(image: torch.Tensor, person: torch.Tensor, plate: torch.
     return m * (1.0 - (m - inner) * like_background)
 
 
+def person_colours(image: torch.Tensor, person: torch.Tensor, plate: torch.Tensor) -> torch.Tensor:
+    """(B, 3, H, W): what the generator samples the person's colours from: ``image`` with everything outside the
+    person (its outline refined against the ``plate``, :func:`person_edge_refined`) given the nearest person colour
+    (:func:`fill_outside_person`)."""
+    return fill_outside_person(image, person_edge_refined(image, person, plate))
+
+
 UNSHARP_SIGMA_PX = 0.8  # the unsharp mask's Gaussian, pixels (at any image size: it targets resampling blur)
 
 
@@ -270,8 +277,7 @@ class MeshWarpGenerator(nn.Module):
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
         # what the person's colours are sampled from
-        person = person_edge_refined(ref_image, ref_mask if source_mask is None else source_mask, plate)
-        source = fill_outside_person(ref_image, person)
+        source = person_colours(ref_image, ref_mask if source_mask is None else source_mask, plate)
         sampled = unsharp(source, self.config.sharpen)
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate
