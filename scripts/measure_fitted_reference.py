@@ -81,6 +81,7 @@ def person_found(out, source: str) -> tuple[np.ndarray, np.ndarray | None, np.nd
 def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: str = "aligned", with_clip: bool = True):
     """A wrapper of ``BodyRenderer.render_with_masks`` whose first frame's vertices are those of a fitted body."""
     import renderers.body as body
+    from renderers import anny_model
     from motion2video.core.camera import project
     from motion2video.stages import mesh_frames
 
@@ -101,17 +102,10 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: s
         posed = np.concatenate([lifted[None], np.asarray(motion.joints[1:], np.float64)]) if with_clip else lifted[None]
         track = mesh_frames.render_mesh_track(posed, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
                                               size=camera.width)
-        shown = track.visible[0]
         person, eyes, eye_visibility = person_found(out, mask)
-        uv = track.uv[0]
-        if face == "aligned" and eyes is not None:
-            from renderers import anny_model
-
-            rest = anny_model.anny_rest({})
-            uv, _ = mesh_frames.align_face(uv, shown, eyes, eye_visibility, rest=rest,
-                                           crown_dy=mesh_frames.crown_offset(uv, track.masks[0], person))
-        if rule is not None:
-            shown = shown & mesh_frames.on_person(uv, person, edge_px=rule)
+        uv, shown = mesh_frames.reference_sampling(  # as synthesize does (stages.mesh_frames.mesh_video)
+            track.uv[0], track.visible[0], track.masks[0], person, eyes if face == "aligned" else None,
+            eye_visibility, rest=anny_model.anny_rest({}), edge_px=rule)
         out.vertex_uv[0] = uv
         out.vertex_visible[0] = shown
         return out

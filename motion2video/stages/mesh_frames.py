@@ -239,19 +239,13 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
                                      person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
                              transform=to_crop, size=model_size)
-    ref_uv = both.uv[:1]
-    if eyes is not None and eye_visibility is not None:
-        from renderers import anny_model
+    from renderers import anny_model
 
-        rest = anny_model.anny_rest(phenotype)
-        crown = None if small is None else crown_offset(both.uv[0], both.masks[0], small)
-        moved, _ = align_face(both.uv[0], both.visible[0], (np.asarray(eyes, np.float64) - [x0, y0]) * k,
-                              eye_visibility, rest=rest, crown_dy=crown)
-        ref_uv = moved[None]
-    ref_visible = both.visible[:1]
-    if small is not None and small.any():
-        ref_visible = ref_visible & on_person(ref_uv[0], small)[None]
-    ref = MeshTrack(ref_uv, ref_visible, both.masks[:1])
+    ref_uv, ref_visible = reference_sampling(
+        both.uv[0], both.visible[0], both.masks[0], small,
+        None if eyes is None else (np.asarray(eyes, np.float64) - [x0, y0]) * k, eye_visibility,
+        rest=anny_model.anny_rest(phenotype))
+    ref = MeshTrack(ref_uv[None], ref_visible[None], both.masks[:1])
     tgt = MeshTrack(both.uv[1:], both.visible[1:], both.masks[1:])
     ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
     tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
@@ -424,6 +418,23 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
         per_vertex = np.where(head, face * shift[None] + (1.0 - face) * crown[None], per_vertex)
     moved = np.asarray(uv, np.float64) + per_vertex
     return moved.astype(np.asarray(uv).dtype), shift
+
+
+def reference_sampling(uv: np.ndarray, visible: np.ndarray, silhouette: np.ndarray, person: np.ndarray | None,
+                       eyes: np.ndarray | None, eye_visibility: np.ndarray | None, *, rest,
+                       edge_px: float | None = PERSON_EDGE_PX) -> tuple[np.ndarray, np.ndarray]:
+    """Where a body fitted to a picture lends its colours: its (V, 2) vertex pixels with the face moved onto the
+    pictured eyes and the crown onto the pictured head top (:func:`align_face`, :func:`crown_offset`; not moved
+    without ``eyes``), and which of its (V,) depth-tested ``visible`` vertices count as shown: those landing on the
+    segmented ``person`` (:func:`on_person` with ``edge_px``; all of them without a person or with ``edge_px``
+    None). ``silhouette`` is the fitted body's (S, S) mask; ``rest`` its :class:`renderers.anny_model.AnnyRest`."""
+    if eyes is not None and eye_visibility is not None:
+        crown = None if person is None else crown_offset(uv, silhouette, person)
+        uv, _ = align_face(uv, visible, eyes, eye_visibility, rest=rest, crown_dy=crown)
+    shown = np.asarray(visible, bool)
+    if person is not None and person.any() and edge_px is not None:
+        shown = shown & on_person(uv, person, edge_px=edge_px)
+    return uv, shown
 
 
 def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
