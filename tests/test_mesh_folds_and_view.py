@@ -94,6 +94,29 @@ def test_reference_in_view_zooms_out_with_a_note_and_only_when_asked():
     assert reference_in_view(still, ref, size=256, fit_view=True) is ref
 
 
+def test_the_person_found_in_a_reference_zooms_out_with_it():
+    """A person found where the pose was estimated is re-framed with the picture: what the zoom adds around the
+    picture (its border replicated) is not the person, and the eyes move as the joints do."""
+    from dataclasses import replace
+
+    from motion2video.stages.reference import ReferencePerson
+
+    forecast = jump_forecast()
+    ref = load_reference(DEMO / "reference_body.png", size=256, domain="body")
+    eyes = ref.pose.points[[10, 10]] + [[4.0, 0.0], [-4.0, 0.0]]
+    whole = ReferencePerson(mask=np.ones((256, 256), np.float32), eyes=eyes, eye_visibility=np.ones(2))
+    framed = reference_in_view(forecast, replace(ref, person=whole), size=256, fit_view=True)
+    placement = place_body(forecast.observed, forecast.futures, size=256, reference_points=ref.pose.points)
+    rows = np.concatenate([placement.reference[None], placement.observed, placement.futures.reshape(-1, 17, 2)])
+    x0, y0, side = view_to_fit(rows, 256)  # the view reference_in_view zooms to
+    k = 256 / side
+    top = int(np.ceil(-y0 * k))  # the picture's first row in the re-framed pixels
+    mask, moved_eyes, _ = framed.person.found()
+    assert top > 2 and not mask[:top - 1].any() and mask[top + 1:top + 20, 128].all()
+    np.testing.assert_allclose(moved_eyes - framed.pose.points[[10, 10]], (eyes - ref.pose.points[[10, 10]]) * k,
+                               atol=1e-9)
+
+
 @pytest.mark.slow
 def test_transfer_of_a_real_jump_keeps_the_head_in_view(tmp_path, capsys):
     """The demo's transfer: the real CMU jump re-enacted as the reference person through the mesh generator. With

@@ -208,6 +208,34 @@ def test_crop_person_makes_a_person_fill_a_square(photos_dir):
     np.testing.assert_array_equal(inside, image[max(0, top):, max(0, left):][:100, :100])
 
 
+def test_an_estimated_reference_keeps_the_person_found_in_the_photo(photos_dir):
+    """The person's mask and eyes are found once, in the photo as given, and cut and resized with it: the border
+    the crop replicates below the man's shoes is never the person (segmenting the cut picture again, as the mesh
+    generator did, took 515 of those replicated pixels for him: his trousers, repeated down to the frame's edge)."""
+    from motion2video.stages.frames import reference_person
+    from motion2video.stages.reference import ReferencePose, crop_to_person, load_reference
+
+    path = photos_dir / "man_by_truck.jpg"
+    reference = load_reference(path, size=256, domain="body", crop_person=True)
+    assert reference.person is not None
+    image = read_image_rgb(path)
+    _, _, (left, top, side) = crop_to_person(image, ReferencePose("body", 1280, 720,
+                                                                  points=estimate_image(image).points2d))
+    photo_bottom = (720 - top) / side * 256  # the photo's last row in the reference's pixels; the crop goes below
+    assert photo_bottom < 250
+    carried, eyes, visibility = reference.person.found()
+    below = int(np.ceil(photo_bottom)) + 1
+    assert not carried[below:].any()
+    again, eyes_again, _ = reference_person(reference.image)
+    assert again[below:].sum() > 100  # the replicated trousers segmented as him
+    above = slice(0, int(photo_bottom) - 1)
+    iou = (carried[above] & again[above]).sum() / (carried[above] | again[above]).sum()
+    assert iou > 0.9  # the same person where the photo is
+    np.testing.assert_allclose(eyes, eyes_again, atol=3.0)
+    assert carried[tuple(np.round(reference.pose.points[0, ::-1]).astype(int))]  # the pelvis is on him
+    assert visibility.shape == (2,)
+
+
 # --- real video --------------------------------------------------------------------------------------------------
 
 def _cut_video(src: Path, dst: Path, frames: int, *, size: tuple[int, int] | None = None) -> Path:

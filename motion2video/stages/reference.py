@@ -199,6 +199,49 @@ def fit_square(image: np.ndarray, size: int) -> tuple[np.ndarray, ImageFit]:
 
 
 @dataclass(frozen=True)
+class ReferencePerson:
+    """What the pose estimator found of the person in a reference picture, besides the pose.
+
+    Found once in the picture as the user gave it, and moved with it through every cut, pad and zoom
+    (:meth:`moved`), so that pixels the pipeline adds around a picture (a replicated border) are never the person.
+
+    Attributes:
+        mask: (H, W) float32 the person's probability per pixel (BlazePose's segmentation), 0 outside the picture.
+        eyes: (2, 2) the left and right eye in pixels.
+        eye_visibility: (2,) BlazePose's visibility of each eye.
+    """
+
+    mask: np.ndarray
+    eyes: np.ndarray
+    eye_visibility: np.ndarray
+
+    @staticmethod
+    def of(person) -> "ReferencePerson":
+        """From a :class:`motion2video.pose.estimate.PersonPose` found in an image."""
+        from motion2video.pose.blazepose import LANDMARK_NAMES
+
+        eyes = [LANDMARK_NAMES.index("left_eye"), LANDMARK_NAMES.index("right_eye")]
+        lm = person.landmarks
+        return ReferencePerson(mask=lm.person_mask(person.width, person.height),
+                               eyes=np.asarray(lm.xy, np.float64)[eyes, :2],
+                               eye_visibility=np.asarray(lm.visibility, np.float64)[eyes])
+
+    def moved(self, scale: float, offset, size: tuple[int, int]) -> "ReferencePerson":
+        """The same person in a picture made by ``out = in * scale + offset`` (pixels), ``size`` = (W, H) of the
+        new picture; what lies outside the old picture is not the person."""
+        mat = affine_matrix(scale, np.asarray(offset, np.float64))
+        mask = cv2.warpAffine(np.asarray(self.mask, np.float32), mat, (int(size[0]), int(size[1])),
+                              flags=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+        return replace(self, mask=mask, eyes=np.asarray(self.eyes, np.float64) * scale + np.asarray(offset))
+
+    def found(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(mask (H, W) bool, eyes (2, 2), eye visibility (2,)), as
+        :func:`motion2video.stages.frames.reference_person` gives them."""
+        return np.asarray(self.mask) > 0.5, np.asarray(self.eyes), np.asarray(self.eye_visibility)
+
+
+@dataclass(frozen=True)
 class Reference:
     """The reference appearance at the generator's size.
 
@@ -207,12 +250,15 @@ class Reference:
         pose: the reference pose moved into these pixels (camera resized to S x S), or None when unknown.
         notes: what was converted or assumed, one line each (the CLI prints them).
         path: the image file.
+        person: the person's mask and eyes in these pixels when the pose was estimated here (None with a pose
+            file: the mesh generator then segments the image itself, :func:`motion2video.stages.frames.mesh_setup`).
     """
 
     image: np.ndarray
     pose: ReferencePose | None
     notes: tuple[str, ...]
     path: Path
+    person: ReferencePerson | None = None
 
 
 def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[int, int]) -> ReferencePose:
@@ -231,17 +277,19 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
     return ReferencePose("face", size, size, face=pose.face, identity=dict(pose.identity), camera=camera)
 
 
-def estimate_reference_pose(image: np.ndarray, path: str | Path) -> ReferencePose | None:
-    """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`);
-    None when nobody is found."""
+def estimate_reference_pose(image: np.ndarray, path: str | Path
+                            ) -> tuple[ReferencePose, ReferencePerson] | tuple[None, None]:
+    """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`), and
+    that person's mask and eyes; (None, None) when nobody is found."""
     from motion2video.pose.estimate import estimate_image
 
     try:
         person = estimate_image(image, source=path)
     except InputError:
-        return None
-    return ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d,
+        return None, None
+    pose = ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d,
                          camera_joints=person_camera_joints(person))
+    return pose, ReferencePerson.of(person)
 
 
 def person_camera_joints(person) -> np.ndarray:
@@ -297,9 +345,11 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     if pose is not None:
         pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
         pose = replace(pose, width=size, height=size, points=pts)
+    person = None if reference.person is None else reference.person.moved(k, -np.array([x0, y0]) * k, (size, size))
     note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
             f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
-    return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path)
+    return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path,
+                     person=person)
 
 
 def load_reference(path: str | Path, *, size: int, domain: str,
@@ -328,7 +378,7 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         raise InputError("--crop-person is for body references (this frame model makes face frames)", path)
     explicit = pose_path is not None
     pose_path = Path(pose_path) if explicit else reference_pose_path(path)
-    pose = None
+    pose, person = None, None
     from_file = explicit or pose_path.is_file()
     if from_file:
         pose = load_reference_pose(pose_path)
@@ -336,7 +386,7 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             raise InputError(f"this reference pose is a {pose.kind} pose, but the frame model makes {domain} "
                              "frames", pose_path)
     elif domain == "body":
-        pose = estimate_reference_pose(image, path)
+        pose, person = estimate_reference_pose(image, path)
         if pose is not None:
             notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
                          f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "
@@ -346,12 +396,16 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             raise InputError("--crop-person: no person found in the reference image", path)
         h0, w0 = image.shape[:2]
         image, pose, (left, top, side) = crop_to_person(image, pose)
+        if person is not None:
+            person = person.moved(1.0, (-left, -top), (side, side))
         notes.append(f"reference cut to the person: a {side}x{side} square at ({left}, {top}) of the {w0}x{h0} image")
     h, w = image.shape[:2]
     fitted, fit = fit_square(image, size)
     if (h, w) != (size, size):
         how = f"padded to {max(h, w)}x{max(h, w)} and " if h != w else ""
         notes.append(f"reference image is {w}x{h}: {how}resized to {size}x{size} for the frame generator")
+    if person is not None:
+        person = person.moved(fit.scale, fit.offset, (size, size))
     if pose is not None:
         pose = _fit_pose(pose, fit, size, (h, w))
         if domain == "body":  # a person to move: joints inside the image, and the image shows them
@@ -363,4 +417,4 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         nobody = " and no person found in it" if domain == "body" else ""
         notes.append(f"no reference pose file ({pose_path.name}){nobody}: assuming the reference image shows the "
                      "first observed pose, framed like the default renderer")
-    return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path)
+    return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person)
