@@ -208,3 +208,27 @@ def test_clothes_margin_measures_how_far_a_person_reaches_past_the_fitted_body()
     # At 256 px the smallest margin that counts is 4 px; the same suit measures twice as wide.
     big = np.kron(silhouette, np.ones((2, 2), bool))
     assert clothes_margin(grow_masks(big, 3), big) == 0 and clothes_margin(grow_masks(big, 8), big) == 8
+    # One blob beyond the body (a shoe's reflection on the floor) does not widen the whole person: the margin is
+    # measured along the outline, where the blob touches a few pixels of it.
+    reflection = fringe.copy()
+    reflection[101:117, 54:66] = True  # 192 pixels below the feet, up to 16 px away
+    assert clothes_margin(reflection, silhouette) == 0
+    suit_and_reflection = loose.copy()
+    suit_and_reflection[104:120, 54:66] = True
+    assert clothes_margin(suit_and_reflection, silhouette) == 4
+
+
+def test_a_real_photos_floor_reflection_does_not_widen_the_person():
+    """``three_walking.jpg`` (../shared/data/photos): BlazePose's mask takes in the shine of the floor under his shoe.
+    Counted over the pixels, that blob made his margin 11 px at 256, and every frame showed a hood of his head's
+    fringe colour around his head; along the outline it is a few pixels of the foot."""
+    from scipy.ndimage import distance_transform_edt
+
+    photo = ROOT.parent / "shared" / "data" / "photos" / "three_walking.jpg"
+    _, video = fitted_reference(photo, crop_person=True)
+    silhouette, person = video.reference.masks[0], video.person
+    distance = distance_transform_edt(~silhouette)
+    far = person & (distance > 6)
+    assert far.sum() > 100 and np.nonzero(far)[0].min() > 220  # the reflection: far from the body, below the feet
+    assert np.quantile(distance[person & ~silhouette], 0.9) > 8  # the old rule's margin, over the pixels
+    assert video.margin <= 4  # along the outline: under the smallest margin that counts at 256
