@@ -208,10 +208,25 @@ def test_crop_person_makes_a_person_fill_a_square(photos_dir):
     np.testing.assert_array_equal(inside, image[max(0, top):, max(0, left):][:100, :100])
 
 
+def test_crop_person_takes_in_as_much_of_the_image_as_it_can(photos_dir):
+    """The man of ``three_walking.jpg`` walks at the image's right edge: a square centred on him reached 278 px past
+    it (a third of the picture replicated border); moved while keeping him inside, it holds the image's whole width
+    and reaches past it by the 124 px its side exceeds the width by."""
+    from motion2video.stages.reference import ReferencePose, crop_to_person
+
+    image = read_image_rgb(photos_dir / "three_walking.jpg")  # 665 x 1000
+    pose = estimate_image(image)
+    crop, moved, (left, top, side) = crop_to_person(image, ReferencePose("body", 665, 1000, points=pose.points2d))
+    assert side > 665 and left == 0  # the whole width, the border on one side only
+    assert 0 <= top and top + side <= 1000  # the square fits the height: no border above or below
+    assert (moved.points[:, 0] > 0.05 * side).all() and (moved.points[:, 0] < 0.95 * side).all()
+    np.testing.assert_array_equal(crop[:, :665], image[top:top + side])
+
+
 def test_an_estimated_reference_keeps_the_person_found_in_the_photo(photos_dir):
     """The person's mask and eyes are found once, in the photo as given, and cut and resized with it: the border
     the crop replicates below the man's shoes is never the person (segmenting the cut picture again, as the mesh
-    generator did, took 515 of those replicated pixels for him: his trousers, repeated down to the frame's edge)."""
+    generator did, takes those replicated pixels for him: his trousers, repeated down to the frame's edge)."""
     from motion2video.stages.frames import reference_person
     from motion2video.stages.reference import ReferencePose, crop_to_person, load_reference
 
@@ -222,12 +237,12 @@ def test_an_estimated_reference_keeps_the_person_found_in_the_photo(photos_dir):
     _, _, (left, top, side) = crop_to_person(image, ReferencePose("body", 1280, 720,
                                                                   points=estimate_image(image).points2d))
     photo_bottom = (720 - top) / side * 256  # the photo's last row in the reference's pixels; the crop goes below
-    assert photo_bottom < 250
+    assert photo_bottom < 254
     carried, eyes, visibility = reference.person.found()
     below = int(np.ceil(photo_bottom)) + 1
     assert not carried[below:].any()
     again, eyes_again, _ = reference_person(reference.image)
-    assert again[below:].sum() > 100  # the replicated trousers segmented as him
+    assert again[below:].sum() > 20  # the replicated trousers segmented as him (56 pixels on 2026-11-26)
     above = slice(0, int(photo_bottom) - 1)
     iou = (carried[above] & again[above]).sum() / (carried[above] | again[above]).sum()
     assert iou > 0.9  # the same person where the photo is
