@@ -261,14 +261,16 @@ class MeshWarpGenerator(nn.Module):
 
     def forward_parts(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor,
                       visibility: torch.Tensor, silhouette: torch.Tensor, tgt_structure: torch.Tensor,
-                      plate: torch.Tensor | None = None, source_mask: torch.Tensor | None = None
-                      ) -> MeshWarpOutput:
+                      plate: torch.Tensor | None = None, source_mask: torch.Tensor | None = None,
+                      colours: torch.Tensor | None = None) -> MeshWarpOutput:
         """The output and its parts.
 
         Args: as :meth:`forward`, and plate: (B, 3, H, W) the background (:func:`mesh_plate` of the reference
             when None); source_mask: (B, 1, H, W) the reference pixels that are the person, whose colours are
             sampled (:func:`fill_outside_person`; ``ref_mask`` when None). For a fitted body, the segmented
             person (:func:`mesh_source_mask`, :func:`motion2video.stages.mesh_frames.sampled_person`).
+            colours: (B, 3, H, W) :func:`person_colours` of the reference when the caller has them already (one
+            reference for many batches of targets); ``source_mask`` is then not used.
         """
         b, _, h, w = ref_image.shape
         dtype = ref_image.dtype
@@ -277,7 +279,8 @@ class MeshWarpGenerator(nn.Module):
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
         # what the person's colours are sampled from
-        source = person_colours(ref_image, ref_mask if source_mask is None else source_mask, plate)
+        source = colours if colours is not None else person_colours(
+            ref_image, ref_mask if source_mask is None else source_mask, plate)
         sampled = unsharp(source, self.config.sharpen)
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate

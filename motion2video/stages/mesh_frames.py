@@ -532,7 +532,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
 
     from motion2video.frames.data import body_structures
     from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.frames.mesh_warp import mesh_plate
+    from motion2video.frames.mesh_warp import mesh_plate, person_colours
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
     size = net.config.image_size
@@ -548,6 +548,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
     source = sampled_person(video)
+    colours = person_colours(x_ref, ref_mask if source is None else source, plate)  # once for every target
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
     net.eval()
     rows = np.asarray(rows, np.int64)
@@ -561,7 +562,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
                                       torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                       sil, structure, plate=plate.expand(n, -1, -1, -1),
-                                      source_mask=None if source is None else source.expand(n, -1, -1, -1))
+                                      colours=colours.expand(n, -1, -1, -1))
             gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
             region = np.maximum(parts.alpha[:, 0].numpy(), ref_mask[0].numpy())
             alpha = paste_mask(region, size)
@@ -587,7 +588,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
 
     from motion2video.frames.data import face_structures
     from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets
-    from motion2video.frames.mesh_warp import mesh_plate
+    from motion2video.frames.mesh_warp import mesh_plate, person_colours
 
     track = structures.face_mesh
     size = net.config.image_size
