@@ -386,3 +386,36 @@ def test_video_smoothing_removes_jitter_not_motion(dancer_clip):
     accel = lambda p: np.linalg.norm(np.diff(p, 2, axis=0), axis=-1).mean()  # noqa: E731
     assert accel(smooth.points2d) < 0.5 * accel(raw.points2d)
     assert np.linalg.norm(smooth.points2d - raw.points2d, axis=-1).mean() < 0.01 * height
+
+
+def test_crop_person_keeps_the_person_and_adds_border_only_where_the_square_exceeds_the_image():
+    """Any image size and any person inside it: the square holds every joint, and on each axis it reaches past the
+    image only by what its side exceeds the image's (vertically: when the head room above the head and the feet
+    room below the ankles lie inside the image; otherwise the person needs the border)."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from motion2video.stages.reference import ReferencePose, crop_to_person
+
+    @settings(max_examples=200, deadline=None)
+    @given(w=st.integers(40, 400), h=st.integers(40, 400), fx=st.floats(0, 1), fy=st.floats(0, 1),
+           sx=st.floats(0.05, 1), sy=st.floats(0.05, 1), seed=st.integers(0, 1000))
+    def check(w, h, fx, fy, sx, sy, seed):
+        rng = np.random.default_rng(seed)
+        bw, bh = sx * (w - 2), sy * (h - 2)
+        x0, y0 = 1 + fx * (w - 2 - bw), 1 + fy * (h - 2 - bh)
+        points = np.column_stack([rng.uniform(x0, x0 + bw, 17), rng.uniform(y0, y0 + bh, 17)])
+        crop, moved, (left, top, side) = crop_to_person(np.zeros((h, w, 3), np.uint8),
+                                                        ReferencePose("body", w, h, points=points))
+        assert crop.shape == (side, side, 3)
+        assert (moved.points >= 0).all() and (moved.points <= side).all()  # every joint inside the square
+
+        def border(start: int, length: int) -> int:
+            return max(0, -start) + max(0, start + side - length)
+
+        assert border(left, w) == max(0, side - w)
+        tall = np.ptp(points[:, 1])
+        if points[:, 1].min() - 0.12 * tall >= 0 and points[:, 1].max() + 0.06 * tall <= h:
+            assert border(top, h) == max(0, side - h)
+
+    check()
