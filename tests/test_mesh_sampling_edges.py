@@ -232,3 +232,31 @@ def test_a_real_photos_floor_reflection_does_not_widen_the_person():
     assert far.sum() > 100 and np.nonzero(far)[0].min() > 220  # the reflection: far from the body, below the feet
     assert np.quantile(distance[person & ~silhouette], 0.9) > 8  # the old rule's margin, over the pixels
     assert video.margin <= 4  # along the outline: under the smallest margin that counts at 256
+
+
+def test_a_pose_files_padded_border_is_never_the_person(tmp_path):
+    """A photo with a pose file beside it (``motion2video pose photo.jpg -o photo.pose.npz``, as the README shows)
+    is made square by replicating its border; the mesh generator segments that picture itself, and BlazePose took
+    164 of the rows replicated under the truck man's shoes for him. The pixels that are not the photo's are no
+    longer the person."""
+    import shutil
+
+    import cv2
+
+    from motion2video.cli import main
+    from motion2video.core.camera import affine_matrix
+    from motion2video.stages.frames import reference_person
+
+    photo = tmp_path / "man_by_truck.jpg"
+    shutil.copy(ROOT.parent / "shared" / "data" / "photos" / "man_by_truck.jpg", photo)
+    assert main(["pose", str(photo), "-o", str(tmp_path / "man_by_truck.pose.npz")]) == 0
+    reference, video = fitted_reference(photo)
+    assert reference.person is None  # the pose came from the file
+    border = ~reference.picture_mask()
+    assert border.sum() > 20000  # 1280 x 720 made square: 56 rows above and below at 256
+    assert (reference_person(reference.image)[0] & border).sum() > 50  # what segmenting the square picture finds
+    x0, y0, side = video.crop
+    k = video.person.shape[0] / side
+    small = cv2.warpAffine(border.astype(np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
+                           video.person.shape[::-1], flags=cv2.INTER_LINEAR) > 0.99
+    assert small.any() and not (video.person & small).any()

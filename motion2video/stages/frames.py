@@ -53,9 +53,12 @@ def mesh_setup(net, reference: Reference, structures: Structures):
         raise InputError("the mesh frame generator makes body frames from a body motion")
     n = structures.num_targets
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
-    # the person as found where the pose was estimated (in the picture as given, before any pad); else segmented here
+    # the person as found where the pose was estimated (in the picture as given, before any pad); else segmented
+    # here, where a border the pad or zoom replicated is never the person
     found = reference.person.found() if reference.person is not None else reference_person(reference.image)
     mask, eyes, eye_visibility = (None, None, None) if found is None else found
+    if mask is not None:
+        mask = mask & reference.picture_mask()
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
                       output_size=structures.size, model_size=net.config.image_size,
                       person_mask=mask, fit_to_mask=not phenotype,

@@ -198,6 +198,15 @@ def fit_square(image: np.ndarray, size: int) -> tuple[np.ndarray, ImageFit]:
     return np.ascontiguousarray(image), ImageFit(scale, (left * scale, top * scale), (left, top))
 
 
+def move_map(values: np.ndarray, scale: float, offset, size: tuple[int, int]) -> np.ndarray:
+    """A per-pixel (H, W) map moved into a picture made by ``out = in * scale + offset`` (pixels), ``size`` = (W, H)
+    of the new picture: float32, 0 where the new picture lies outside the old one."""
+    mat = affine_matrix(scale, np.asarray(offset, np.float64))
+    return cv2.warpAffine(np.asarray(values, np.float32), mat, (int(size[0]), int(size[1])),
+                          flags=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+
+
 @dataclass(frozen=True)
 class ReferencePerson:
     """What the pose estimator found of the person in a reference picture, besides the pose.
@@ -229,11 +238,8 @@ class ReferencePerson:
     def moved(self, scale: float, offset, size: tuple[int, int]) -> "ReferencePerson":
         """The same person in a picture made by ``out = in * scale + offset`` (pixels), ``size`` = (W, H) of the
         new picture; what lies outside the old picture is not the person."""
-        mat = affine_matrix(scale, np.asarray(offset, np.float64))
-        mask = cv2.warpAffine(np.asarray(self.mask, np.float32), mat, (int(size[0]), int(size[1])),
-                              flags=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR,
-                              borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        return replace(self, mask=mask, eyes=np.asarray(self.eyes, np.float64) * scale + np.asarray(offset))
+        return replace(self, mask=move_map(self.mask, scale, offset, size),
+                       eyes=np.asarray(self.eyes, np.float64) * scale + np.asarray(offset))
 
     def found(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(mask (H, W) bool, eyes (2, 2), eye visibility (2,)), as
@@ -252,6 +258,8 @@ class Reference:
         path: the image file.
         person: the person's mask and eyes in these pixels when the pose was estimated here (None with a pose
             file: the mesh generator then segments the image itself, :func:`motion2video.stages.frames.mesh_setup`).
+        picture: (S, S) float32, 1 where these pixels come from the image file, 0 where a pad or zoom replicated its
+            border (None: all of them come from it).
     """
 
     image: np.ndarray
@@ -259,6 +267,13 @@ class Reference:
     notes: tuple[str, ...]
     path: Path
     person: ReferencePerson | None = None
+    picture: np.ndarray | None = None
+
+    def picture_mask(self) -> np.ndarray:
+        """(S, S) bool: the pixels that come from the image file (not a replicated border)."""
+        if self.picture is None:
+            return np.ones(self.image.shape[:2], bool)
+        return np.asarray(self.picture) > 0.5
 
 
 def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[int, int]) -> ReferencePose:
@@ -358,10 +373,12 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
         pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
         pose = replace(pose, width=size, height=size, points=pts)
     person = None if reference.person is None else reference.person.moved(k, -np.array([x0, y0]) * k, (size, size))
+    picture = move_map(np.ones((size, size)) if reference.picture is None else reference.picture, k,
+                       -np.array([x0, y0]) * k, (size, size))
     note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
             f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path,
-                     person=person)
+                     person=person, picture=picture)
 
 
 def load_reference(path: str | Path, *, size: int, domain: str,
@@ -403,11 +420,13 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
                          f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "
                          "saves it and shows it)")
+    picture = np.ones(image.shape[:2], np.float32)  # which pixels are the file's, through every cut and pad
     if crop_person:
         if pose is None:
             raise InputError("--crop-person: no person found in the reference image", path)
         h0, w0 = image.shape[:2]
         image, pose, (left, top, side) = crop_to_person(image, pose)
+        picture = move_map(picture, 1.0, (-left, -top), (side, side))
         if person is not None:
             person = person.moved(1.0, (-left, -top), (side, side))
         notes.append(f"reference cut to the person: a {side}x{side} square at ({left}, {top}) of the {w0}x{h0} image")
@@ -416,6 +435,7 @@ def load_reference(path: str | Path, *, size: int, domain: str,
     if (h, w) != (size, size):
         how = f"padded to {max(h, w)}x{max(h, w)} and " if h != w else ""
         notes.append(f"reference image is {w}x{h}: {how}resized to {size}x{size} for the frame generator")
+    picture = move_map(picture, fit.scale, fit.offset, (size, size))
     if person is not None:
         person = person.moved(fit.scale, fit.offset, (size, size))
     if pose is not None:
@@ -429,4 +449,5 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         nobody = " and no person found in it" if domain == "body" else ""
         notes.append(f"no reference pose file ({pose_path.name}){nobody}: assuming the reference image shows the "
                      "first observed pose, framed like the default renderer")
-    return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person)
+    return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person,
+                     picture=None if picture.min() > 0.5 else picture)
