@@ -239,6 +239,19 @@ def head_vertices() -> np.ndarray:
     return inside[dominant_bones()]
 
 
+HAND_BONES = ("wrist", "metacarpal", "finger")  # a hand's bones, by name prefix (each with its side's suffix)
+
+
+def hand_vertices(side: str) -> np.ndarray:
+    """(V,) bool: the vertices of one hand (``side`` "L" or "R", the body's own left or right) whose dominant bone
+    is its wrist, a metacarpal or a finger bone."""
+    if side not in ("L", "R"):
+        raise ValueError(f"side must be 'L' or 'R', got {side!r}")
+    names = bone_names()
+    hand = np.array([n.endswith(f".{side}") and n.startswith(HAND_BONES) for n in names])
+    return hand[dominant_bones()]
+
+
 def head_submesh() -> tuple[np.ndarray, np.ndarray]:
     """The head's own triangles: (H,) int64 indices of :func:`head_vertices` into the full mesh and (F, 3)
     int64 triangles (those with all three corners on the head) indexing that subset."""

@@ -1,7 +1,8 @@
 """How the mesh generator does when the reference picture's body is *fitted*, as ``synthesize`` fits it.
 
     python scripts/measure_fitted_reference.py [--model frames-body-mesh-256] [--clips 08_01,13_42,05_14]
-        [--lifts guide,pictured] [--rules 0,1,2,3] [--face aligned|fitted] [--json out/fitted_reference.json]
+        [--lifts guide,pictured] [--rules 0,1,2,3] [--face aligned|fitted] [--hands colour|off]
+        [--json out/fitted_reference.json]
 
 ``evaluate-frames --poses`` poses the held-out identities by real CMU clips and gives the generator each reference
 frame's exact mesh. ``synthesize`` never has it. It lifts the picture's 2D joints to 3D
@@ -22,7 +23,11 @@ This script scores the same pairs with the reference's mesh replaced by such a f
 Four rules decide which fitted vertices lend their colour: the depth test alone, and ``on_person`` with the mask
 eroded by 2 px, by 1 px (both at 256) or as it is (``--rules`` picks some). The fitted face is moved onto
 BlazePose's eyes as ``synthesize`` moves it (:func:`motion2video.stages.mesh_frames.align_face`; ``--face fitted``
-leaves it where the fit puts it).
+leaves it where the fit puts it). A fitted hand vertex that lands beside the pictured hand samples the pictured hand
+(:func:`motion2video.stages.mesh_frames.hand_colour_sources`; ``--hands off`` leaves it). Here that is applied to
+the reference's pixels before the surface completion, where ``synthesize`` applies it after (the completion's test of
+a thigh under the hand then sees the moved hand). ``hands_colour_de`` is the mean colour difference (CIE76) over the
+target's hand pixels (each silhouette pixel labelled by its nearest visible vertex).
 
 The fit is put in by wrapping ``BodyRenderer.render_with_masks`` for the length of a run: it is the one place that
 knows each window's camera. About 1.5 minutes per clip and variant on one thread.
@@ -65,20 +70,22 @@ def other_person(reference: np.ndarray) -> np.ndarray:
     return (other - other[0]) @ rot.T + reference[0]
 
 
-def person_found(out, source: str) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """The reference frame's person: (mask, eyes, eye visibility). The mask is the render's exact silhouette, or
-    BlazePose's segmentation of the render (as synthesize segments a picture; the exact one when BlazePose finds
-    nobody); the eyes are BlazePose's (None when it finds nobody)."""
+def person_found(out, source: str):
+    """The reference frame's person as synthesize finds it in a picture (BlazePose's
+    :class:`motion2video.stages.reference.ReferencePerson`: mask, eyes), its mask replaced by the render's exact
+    silhouette with ``source`` "exact"; None when BlazePose finds nobody."""
+    from dataclasses import replace
+
     from motion2video.stages.frames import reference_person
 
     found = reference_person(out.frames[0])
-    if found is None:
-        return out.masks[0], None, None
-    mask, eyes, visibility = found
-    return (out.masks[0] if source == "exact" else mask), eyes, visibility
+    if found is None or source != "exact":
+        return found
+    return replace(found, mask=np.asarray(out.masks[0], np.float32))
 
 
-def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: str = "aligned", with_clip: bool = True):
+def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: str = "aligned", with_clip: bool = True,
+                   hands: str = "colour"):
     """A wrapper of ``BodyRenderer.render_with_masks`` whose first frame's vertices are those of a fitted body."""
     import renderers.body as body
     from renderers import anny_model
@@ -102,10 +109,13 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: s
         posed = np.concatenate([lifted[None], np.asarray(motion.joints[1:], np.float64)]) if with_clip else lifted[None]
         track = mesh_frames.render_mesh_track(posed, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
                                               size=camera.width)
-        person, eyes, eye_visibility = person_found(out, mask)
+        person, rest = person_found(out, mask), anny_model.anny_rest({})
         uv, shown = mesh_frames.reference_sampling(  # as synthesize does (stages.mesh_frames.mesh_video)
-            track.uv[0], track.visible[0], track.masks[0], person, eyes if face == "aligned" else None,
-            eye_visibility, rest=anny_model.anny_rest({}), edge_px=rule)
+            track.uv[0], track.visible[0], track.masks[0], person, rest=rest, edge_px=rule, align=face == "aligned")
+        if hands == "colour" and person is not None:  # synthesize applies them after the surface completion
+            sources = mesh_frames.hand_colour_sources(uv, shown, out.frames[0], person.hands, person.hand_visibility,
+                                                      rest=rest)
+            uv = uv if sources is None else uv[sources]
         out.vertex_uv[0] = uv
         out.vertex_visible[0] = shown
         return out
@@ -129,6 +139,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--face", choices=("aligned", "fitted"), default="aligned",
                         help="the fitted face moved onto BlazePose's eyes (stages.mesh_frames.align_face, as "
                         "synthesize does) or left where the fit puts it")
+    parser.add_argument("--hands", choices=("colour", "off"), default="colour",
+                        help="a fitted hand vertex beside the pictured hand samples the pictured hand "
+                        "(stages.mesh_frames.hand_colour_sources, as synthesize does), or not")
     parser.add_argument("--posed", choices=("with-clip", "alone"), default="with-clip",
                         help="pose the fitted reference together with the window's other frames, as synthesize poses "
                         "it with the clip, or on its own (before 2026-11-26, later)")
@@ -138,7 +151,8 @@ def main(argv: list[str] | None = None) -> int:
 
     import renderers.body as body
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.evaluate import evaluate_sequences
+    from motion2video.frames.evaluate import evaluate_sequences, vertex_region_masks
+    from renderers import anny_model
     from motion2video.frames.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
 
     torch.set_num_threads(1)
@@ -148,17 +162,25 @@ def main(argv: list[str] | None = None) -> int:
         clips = load_body_clips(str(Path(args.mocap) / "cmu" / f"{clip}.bvh"))
         rules = [list(RULES.items())[int(i)] for i in args.rules.split(",")]
         for lift, (rule_name, rule) in [(lift, item) for lift in args.lifts.split(",") for item in rules]:
-            name = f"{lift} | {rule_name} | face {args.face} | posed {args.posed}"
-            plain, render = fitted_renders(rule, lift, args.mask, args.face, args.posed == "with-clip")
+            name = f"{lift} | {rule_name} | face {args.face} | hands {args.hands} | posed {args.posed}"
+            plain, render = fitted_renders(rule, lift, args.mask, args.face, args.posed == "with-clip", args.hands)
             body.BodyRenderer.render_with_masks = render
             try:
                 posed = render_posed_sequences(clips, PoseEvalSpec.for_size(model.config.image_size,
                                                                             windows_per_clip=4))
             finally:
                 body.BodyRenderer.render_with_masks = plain
-            scores = evaluate_sequences(model, posed.sequences, head_masks=posed.head_masks).results["generator"]
-            row = {k: round(float(v), 3) for k, v in scores.to_dict().items()
-                   if k in ("person_psnr", "head_psnr", "person_sharpness", "psnr")}
+            seqs = posed.sequences
+            n, t = seqs.masks.shape[:2]
+            hand_labels = (anny_model.hand_vertices("L") | anny_model.hand_vertices("R")).astype(np.int64)
+            hands = vertex_region_masks(seqs.vertex_uv.reshape(n * t, -1, 2).astype(np.float64),
+                                        seqs.vertex_visible.reshape(n * t, -1), seqs.masks.reshape(n * t, *seqs.masks.shape[2:]),
+                                        hand_labels, {"hands": 1})["hands"].reshape(seqs.masks.shape)
+            scores = evaluate_sequences(model, seqs, head_masks=posed.head_masks,
+                                        region_masks={"hands": hands}).results["generator"]
+            row = {k: round(float(v), 3) for k, v in scores.person.items()
+                   if k in ("person_psnr", "head_psnr", "person_sharpness", "hands_colour_de")}
+            row["psnr"] = round(scores.psnr, 3)
             results.setdefault(clip, {})[name] = row
             print(f"{clip} | {name} | {row}", flush=True)
     if args.json:

@@ -116,7 +116,8 @@ def test_the_demo_references_fitted_irises_land_on_its_eyes(monkeypatch):
         return float(np.linalg.norm(centres - eyes, axis=1).max())
 
     reference, video = fitted_reference(root / "demo_inputs" / "reference_body.png")
-    _, eyes, visibility = reference_person(reference.image)
+    found = reference_person(reference.image)
+    eyes, visibility = found.eyes, found.eye_visibility
     assert (visibility > 0.5).all()
     x0, y0, side = video.crop
     eyes = (eyes - [x0, y0]) * 256 / side

@@ -104,14 +104,16 @@ def test_the_person_found_in_a_reference_zooms_out_with_it():
     forecast = jump_forecast()
     ref = load_reference(DEMO / "reference_body.png", size=256, domain="body")
     eyes = ref.pose.points[[10, 10]] + [[4.0, 0.0], [-4.0, 0.0]]
-    whole = ReferencePerson(mask=np.ones((256, 256), np.float32), eyes=eyes, eye_visibility=np.ones(2))
+    hands = np.repeat(ref.pose.points[[16, 13]][:, None], 4, axis=1)  # both hands' points at the wrists
+    whole = ReferencePerson(mask=np.ones((256, 256), np.float32), eyes=eyes, eye_visibility=np.ones(2), hands=hands,
+                            hand_visibility=np.ones((2, 4)))
     framed = reference_in_view(forecast, replace(ref, person=whole), size=256, fit_view=True)
     placement = place_body(forecast.observed, forecast.futures, size=256, reference_points=ref.pose.points)
     rows = np.concatenate([placement.reference[None], placement.observed, placement.futures.reshape(-1, 17, 2)])
     x0, y0, side = view_to_fit(rows, 256)  # the view reference_in_view zooms to
     k = 256 / side
     top = int(np.ceil(-y0 * k))  # the picture's first row in the re-framed pixels
-    mask, moved_eyes, _ = framed.person.found()
+    mask, moved_eyes = framed.person.segmented(), framed.person.eyes
     assert top > 2 and not mask[:top - 1].any() and mask[top + 1:top + 20, 128].all()
     np.testing.assert_allclose(moved_eyes - framed.pose.points[[10, 10]], (eyes - ref.pose.points[[10, 10]]) * k,
                                atol=1e-9)

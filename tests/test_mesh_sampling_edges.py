@@ -254,9 +254,67 @@ def test_a_pose_files_padded_border_is_never_the_person(tmp_path):
     assert reference.person is None  # the pose came from the file
     border = ~reference.picture_mask()
     assert border.sum() > 20000  # 1280 x 720 made square: 56 rows above and below at 256
-    assert (reference_person(reference.image)[0] & border).sum() > 50  # what segmenting the square picture finds
+    assert (reference_person(reference.image).segmented() & border).sum() > 50  # what segmenting the square picture finds
     x0, y0, side = video.crop
     k = video.person.shape[0] / side
     small = cv2.warpAffine(border.astype(np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
                            video.person.shape[::-1], flags=cv2.INTER_LINEAR) > 0.99
     assert small.any() and not (video.person & small).any()
+
+
+def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
+    """A hand vertex that lands on something other than the pictured hand takes the pixel of the nearest hand vertex
+    that lands on it; the pictured hand's colour is read at BlazePose's hand points, so a glove stays a glove."""
+    from renderers import anny_model
+
+    from motion2video.stages.mesh_frames import hand_colour_sources
+
+    rest = anny_model.anny_rest({})
+    left = anny_model.hand_vertices("L")
+    assert left.sum() > 500 and not (left & anny_model.hand_vertices("R")).any()
+    image = np.zeros((64, 64, 3), np.uint8)
+    image[:, :32] = (200, 30, 30)  # a red glove on the left half
+    image[:, 32:] = (30, 30, 120)  # dark blue trousers on the right half
+    uv = np.full((len(left), 2), 5.0)
+    ids = np.flatnonzero(left)
+    on_glove = rest.vertices[ids, 0] > np.median(rest.vertices[ids, 0])  # half the hand on the glove, half beside it
+    uv[ids[on_glove]] = (10.0, 10.0)
+    uv[ids[~on_glove]] = (50.0, 10.0)
+    shown = np.ones(len(left), bool)
+    hands = np.array([[[9.0, 9.0], [11.0, 9.0], [9.0, 11.0], [50.0, 50.0]],  # three points on the glove, one off
+                      [[0.0, 0.0]] * 4])
+    seen = np.array([[0.9, 0.9, 0.9, 0.9], [0.1, 0.1, 0.1, 0.1]])  # the right hand unseen: left as it is
+    sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest)
+    moved = uv[sources]
+    assert (moved[ids, 0] == 10.0).all()  # every left-hand vertex now samples the glove
+    np.testing.assert_array_equal(sources[~left], np.flatnonzero(~left))  # nothing else moves
+    assert left[sources[ids]].all()  # sources are hand vertices of the same hand
+    # Unseen hands, or a hand already on its colour, change nothing.
+    assert hand_colour_sources(uv, shown, image, hands, np.zeros((2, 4)), rest=rest) is None
+    uv[ids] = (10.0, 10.0)
+    assert hand_colour_sources(uv, shown, image, hands, seen, rest=rest) is None
+
+
+def test_the_demo_pictures_hands_sample_skin():
+    """End to end on the demo's reference and its pose file: the fitted right hand shows its palm where the pictured
+    one hangs edge-on beside the thigh, and most of its shown vertices landed on the trousers (the hands came out
+    dark in many frames of make demo). Now what they sample is skin."""
+    from renderers import anny_model
+
+    from motion2video.frames.mesh_flow import complete_reference_uv
+
+    reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
+    x0, y0, side = video.crop
+    picture = reference.image[y0:y0 + side, x0:x0 + side].astype(int)
+    uv, seen = video.reference.uv[0], video.reference.visible[0]
+
+    def skin_share(pixels: np.ndarray, rows: np.ndarray) -> float:
+        px = np.clip(np.floor(pixels[rows]).astype(int), 0, side - 1)
+        c = picture[px[:, 1], px[:, 0]]
+        return float(((c[:, 0] > 150) & (c[:, 0] - c[:, 2] > 40)).mean())
+
+    right = np.flatnonzero(anny_model.hand_vertices("R") & seen)
+    completed = complete_reference_uv(uv, seen)
+    assert len(right) > 500 and skin_share(completed, right) < 0.5  # 929 shown, 57% beside the hand (2026-11-26)
+    assert video.uv_sources is not None
+    assert skin_share(completed[video.uv_sources], right) > 0.9

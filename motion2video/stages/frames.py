@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Iterator
 
 import numpy as np
@@ -38,8 +38,10 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     """Body: the :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
     reference person's Anny body (the reference pose file's phenotype; without one, Anny's weight fitted to the
     person BlazePose segments) in the reference pose and in every target pose; only the reference vertices that land
-    on that segmented person count as shown, and the fitted head is moved onto the eyes BlazePose finds
-    (:func:`~motion2video.stages.mesh_frames.align_face`). Face: None (the face structures carry their head mesh)."""
+    on that segmented person count as shown, the fitted head is moved onto the eyes BlazePose finds
+    (:func:`~motion2video.stages.mesh_frames.align_face`) and a fitted hand vertex that lands beside the pictured hand
+    samples the pictured hand (:func:`~motion2video.stages.mesh_frames.hand_colour_sources`). Face: None (the face
+    structures carry their head mesh)."""
     from motion2video.core.errors import InputError
     from motion2video.stages.mesh_frames import mesh_video
 
@@ -55,15 +57,13 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     phenotype = dict(reference.pose.identity) if reference.pose is not None else {}
     # the person as found where the pose was estimated (in the picture as given, before any pad); else segmented
     # here, where a border the pad or zoom replicated is never the person
-    found = reference.person.found() if reference.person is not None else reference_person(reference.image)
-    mask, eyes, eye_visibility = (None, None, None) if found is None else found
-    if mask is not None:
-        mask = mask & reference.picture_mask()
+    person = reference.person if reference.person is not None else reference_person(reference.image)
+    if person is not None:
+        person = replace(person, mask=np.where(reference.picture_mask(), person.mask, 0.0).astype(np.float32))
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
-                      output_size=structures.size, model_size=net.config.image_size,
-                      person_mask=mask, fit_to_mask=not phenotype,
-                      pictured=None if reference.pose is None else reference.pose.camera_joints,
-                      eyes=eyes, eye_visibility=eye_visibility)
+                      output_size=structures.size, model_size=net.config.image_size, person=person,
+                      image=reference.image, fit_to_mask=not phenotype,
+                      pictured=None if reference.pose is None else reference.pose.camera_joints)
 
 
 def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,
@@ -77,21 +77,18 @@ def mesh_frames(net, reference: Reference, structures: Structures, video, rows: 
     return generate_mesh_frames(net, reference.image, video, rows, batch_size=batch_size)
 
 
-def reference_person(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """What BlazePose finds in a reference image: ((H, W) bool the person's mask, (2, 2) its left and right eye in
-    pixels, (2,) their visibility), or None when it finds nobody."""
+def reference_person(image: np.ndarray):
+    """What BlazePose finds of the person in a reference image (its mask, eyes and hands): a
+    :class:`motion2video.stages.reference.ReferencePerson`, or None when it finds nobody."""
     from motion2video.core.errors import InputError
-    from motion2video.pose.blazepose import LANDMARK_NAMES
     from motion2video.pose.estimate import default_model, estimate_image
+    from motion2video.stages.reference import ReferencePerson
 
     try:
         pose = estimate_image(image, model=default_model())
     except InputError:  # nobody found
         return None
-    eyes = [LANDMARK_NAMES.index("left_eye"), LANDMARK_NAMES.index("right_eye")]
-    landmarks = pose.landmarks
-    return (landmarks.person_mask(image.shape[1], image.shape[0]) > 0.5, np.asarray(landmarks.xy)[eyes, :2],
-            np.asarray(landmarks.visibility)[eyes])
+    return ReferencePerson.of(pose)
 
 
 def default_generator_threads() -> int:

@@ -183,6 +183,8 @@ class MeshVideo:
         person: (S, S) bool the person segmented in the reference crop, or None when not segmented.
         margin: pixels (at S) by which the person's clothes and hair reach past the fitted mesh in the reference
             (:func:`clothes_margin`); every silhouette is grown by it.
+        uv_sources: (V,) int64, or None: after the surface completion, vertex v samples where vertex
+            ``uv_sources[v]`` does (:func:`hand_colour_sources`: a fitted hand sampling beside the pictured hand).
     """
 
     crop: tuple[int, int, int]
@@ -192,12 +194,12 @@ class MeshVideo:
     tgt_points: np.ndarray
     person: np.ndarray | None = None
     margin: int = 0
+    uv_sources: np.ndarray | None = None
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
-               output_size: int, model_size: int, person_mask: np.ndarray | None = None,
-               fit_to_mask: bool = True, pictured: np.ndarray | None = None, eyes: np.ndarray | None = None,
-               eye_visibility: np.ndarray | None = None) -> MeshVideo:
+               output_size: int, model_size: int, person=None, image: np.ndarray | None = None,
+               fit_to_mask: bool = True, pictured: np.ndarray | None = None) -> MeshVideo:
     """The meshes of a placed body video.
 
     Args:
@@ -206,13 +208,15 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         target_rows: (N, 17, 2) the target joints in output pixels (to place the crop).
         phenotype: the reference person's Anny phenotype.
         output_size: the output frames' side; model_size: the generator's.
-        person_mask: (output_size, output_size) bool the reference person's pixels, or None. Anny's weight is
-            fitted to it (:func:`fit_width`, when ``fit_to_mask``), and a vertex the reference mesh shows counts as
-            shown only where it lands on the person (:func:`on_person`).
+        person: what BlazePose found of the reference person in output pixels
+            (:class:`motion2video.stages.reference.ReferencePerson`), or None. Anny's weight is fitted to its mask
+            (:func:`fit_width`, when ``fit_to_mask``); where the colours are sampled, a vertex the reference mesh
+            shows counts as shown only where it lands on the person, and the fitted head is moved onto its eyes
+            (:func:`reference_sampling`).
+        image: (output_size, output_size, 3) uint8 the reference picture, or None: a fitted hand vertex that lands
+            beside the pictured hand samples where a hand vertex on it does (:func:`hand_colour_sources`).
         pictured: (17, 3) the reference picture's own 3D pose in its camera's axes (its pose file's
             ``camera_joints``), or None (:func:`lift_reference`).
-        eyes: (2, 2) the pictured left and right eye in output pixels (BlazePose), with ``eye_visibility`` (2,):
-            the fitted head is moved onto them where the colours are sampled (:func:`align_face`); None: not moved.
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -228,12 +232,13 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift, pictured=pictured)
-    small = None
-    if person_mask is not None:
-        import cv2
+    import cv2
 
-        small = cv2.warpAffine(np.asarray(person_mask, np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
-                               (model_size, model_size), flags=cv2.INTER_LINEAR) > 0.5
+    to_model = affine_matrix(k, -np.array([x0, y0]) * k)
+    small, seen = None, None
+    if person is not None:
+        seen = person.moved(k, -np.array([x0, y0]) * k, (model_size, model_size))
+        small = seen.segmented()
         if fit_to_mask:
             phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
                                      person_mask=small, phenotype=phenotype)
@@ -241,17 +246,20 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
                              transform=to_crop, size=model_size)
     from renderers import anny_model
 
-    ref_uv, ref_visible = reference_sampling(
-        both.uv[0], both.visible[0], both.masks[0], small,
-        None if eyes is None else (np.asarray(eyes, np.float64) - [x0, y0]) * k, eye_visibility,
-        rest=anny_model.anny_rest(phenotype))
+    rest = anny_model.anny_rest(phenotype)
+    ref_uv, ref_visible = reference_sampling(both.uv[0], both.visible[0], both.masks[0], seen, rest=rest)
+    sources = None
+    if image is not None and seen is not None:
+        picture = cv2.warpAffine(np.asarray(image), to_model, (model_size, model_size),
+                                 flags=cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR)
+        sources = hand_colour_sources(ref_uv, ref_visible, picture, seen.hands, seen.hand_visibility, rest=rest)
     ref = MeshTrack(ref_uv[None], ref_visible[None], both.masks[:1])
     tgt = MeshTrack(both.uv[1:], both.visible[1:], both.masks[1:])
     ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
     tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
     margin = 0 if small is None else clothes_margin(small, ref.masks[0])
     return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32), person=small,
-                     margin=margin)
+                     margin=margin, uv_sources=sources)
 
 
 # clothes_margin: the quantile, over the fitted silhouette's outline, of how far the person reaches past each outline
@@ -431,21 +439,91 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
     return moved.astype(np.asarray(uv).dtype), shift
 
 
-def reference_sampling(uv: np.ndarray, visible: np.ndarray, silhouette: np.ndarray, person: np.ndarray | None,
-                       eyes: np.ndarray | None, eye_visibility: np.ndarray | None, *, rest,
-                       edge_px: float | None = PERSON_EDGE_PX) -> tuple[np.ndarray, np.ndarray]:
+def reference_sampling(uv: np.ndarray, visible: np.ndarray, silhouette: np.ndarray, person, *, rest,
+                       edge_px: float | None = PERSON_EDGE_PX, align: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Where a body fitted to a picture lends its colours: its (V, 2) vertex pixels with the face moved onto the
     pictured eyes and the crown onto the pictured head top (:func:`align_face`, :func:`crown_offset`; not moved
-    without ``eyes``), and which of its (V,) depth-tested ``visible`` vertices count as shown: those landing on the
-    segmented ``person`` (:func:`on_person` with ``edge_px``; all of them without a person or with ``edge_px``
-    None). ``silhouette`` is the fitted body's (S, S) mask; ``rest`` its :class:`renderers.anny_model.AnnyRest`."""
-    if eyes is not None and eye_visibility is not None:
-        crown = None if person is None else crown_offset(uv, silhouette, person)
-        uv, _ = align_face(uv, visible, eyes, eye_visibility, rest=rest, crown_dy=crown)
+    without a person or with ``align`` False), and which of its (V,) depth-tested ``visible`` vertices count as
+    shown: those landing on the segmented person (:func:`on_person` with ``edge_px``; all of them without a person
+    or with ``edge_px`` None).
+
+    Args:
+        uv, visible: the fitted reference mesh's (V, 2) vertex pixels and (V,) depth test, at the model's size S.
+        silhouette: the fitted body's (S, S) bool mask.
+        person: what BlazePose found in the picture, in the same pixels
+            (:class:`motion2video.stages.reference.ReferencePerson`), or None.
+        rest: the fitted body's :class:`renderers.anny_model.AnnyRest`.
+    """
+    mask = None if person is None else person.segmented()
+    if person is not None and align:
+        crown = crown_offset(uv, silhouette, mask)
+        uv, _ = align_face(uv, visible, person.eyes, person.eye_visibility, rest=rest, crown_dy=crown)
     shown = np.asarray(visible, bool)
-    if person is not None and person.any() and edge_px is not None:
-        shown = shown & on_person(uv, person, edge_px=edge_px)
+    if mask is not None and mask.any() and edge_px is not None:
+        shown = shown & on_person(uv, mask, edge_px=edge_px)
     return uv, shown
+
+
+# hand_colour_sources: a hand vertex whose pixel's colour lies further than this from the pictured hand's colour
+# (Euclidean, RGB 0-255) samples where its nearest hand vertex that does not samples; the pictured hand's colour is
+# the median over 3x3 pixels at each of its landmarks BlazePose sees at least HAND_VISIBILITY surely (at least
+# MIN_HAND_LANDMARKS of the four).
+HAND_COLOUR_DISTANCE = 80.0
+HAND_VISIBILITY = 0.5
+MIN_HAND_LANDMARKS = 3
+
+
+def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, hands: np.ndarray,
+                        hand_visibility: np.ndarray, *, rest) -> np.ndarray | None:
+    """(V,) int64: for every vertex, the vertex whose reference pixel it samples: itself, except a shown hand vertex
+    that lands on something other than the pictured hand, which samples where the nearest hand vertex (on the body
+    at rest) that lands on it does. None when no vertex changes.
+
+    A 17-joint pose does not say which way a hand turns. On the demo's reference the pictured right hand hangs
+    edge-on beside the thigh while the fitted one shows its palm: 929 of its vertices counted as shown and 57% of
+    them landed on the dark trousers beside the hand, so the hand came out dark in many frames. The hand's colour
+    is read at BlazePose's wrist, index, pinky and thumb points (:data:`motion2video.stages.reference.HAND_LANDMARKS`);
+    a hand vertex whose pixel is far from it (:data:`HAND_COLOUR_DISTANCE`) takes a pixel on the hand. A gloved hand
+    keeps its glove (its landmarks read the glove's colour). Applied after the surface completion
+    (:func:`motion2video.frames.mesh_flow.complete_reference_uv`), whose test of a thigh touching the hand must see
+    the fitted hand where it lies.
+
+    Args:
+        uv: (V, 2) vertex pixels; shown: (V,) bool. image: (S, S, 3) uint8 in the same pixels.
+        hands: (2, 4, 2) the left and right hand's landmarks in those pixels; hand_visibility: (2, 4).
+        rest: the fitted body's :class:`renderers.anny_model.AnnyRest`.
+    """
+    from scipy.spatial import cKDTree
+
+    from renderers import anny_model
+
+    shown = np.asarray(shown, bool)
+    sources = np.arange(len(uv), dtype=np.int64)
+    h, w = image.shape[:2]
+    picture = np.asarray(image, np.float64)
+
+    def pixels(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        p = np.floor(np.asarray(points, np.float64)).astype(np.int64)
+        return np.clip(p[:, 1], 0, h - 1), np.clip(p[:, 0], 0, w - 1)
+
+    changed = False
+    for side, points, seen in zip(("L", "R"), np.asarray(hands), np.asarray(hand_visibility)):
+        points = points[seen >= HAND_VISIBILITY]
+        if len(points) < MIN_HAND_LANDMARKS:
+            continue
+        patch = points[:, None, :] + np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1]), -1).reshape(1, 9, 2)
+        ys, xs = pixels(patch.reshape(-1, 2))
+        colour = np.median(picture[ys, xs], axis=0)
+        hand = np.flatnonzero(anny_model.hand_vertices(side) & shown)
+        ys, xs = pixels(uv[hand])
+        far = np.linalg.norm(picture[ys, xs] - colour, axis=1) > HAND_COLOUR_DISTANCE
+        off, on = hand[far], hand[~far]
+        if len(off) == 0 or len(on) == 0:
+            continue
+        _, nearest = cKDTree(rest.vertices[on]).query(rest.vertices[off])
+        sources[off] = on[nearest]
+        changed = True
+    return sources if changed else None
 
 
 def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
@@ -550,6 +628,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     source = sampled_person(video)
     colours = person_colours(x_ref, ref_mask if source is None else source, plate)  # once for every target
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
+    if video.uv_sources is not None:  # a fitted hand beside the pictured one samples the pictured one
+        ref_uv = ref_uv[video.uv_sources]
     net.eval()
     rows = np.asarray(rows, np.int64)
     with torch.inference_mode():

@@ -31,6 +31,7 @@ from motion2video.core.camera import affine_matrix
 from motion2video.core.errors import InputError
 
 REFERENCE_POSE_SUFFIX = ".pose.npz"
+HAND_LANDMARKS = ("wrist", "index", "pinky", "thumb")  # BlazePose's points of each hand (ReferencePerson.hands)
 PERSON_CROP_MARGIN = 0.1  # --crop-person: of the square's side, on every side
 
 
@@ -218,11 +219,15 @@ class ReferencePerson:
         mask: (H, W) float32 the person's probability per pixel (BlazePose's segmentation), 0 outside the picture.
         eyes: (2, 2) the left and right eye in pixels.
         eye_visibility: (2,) BlazePose's visibility of each eye.
+        hands: (2, 4, 2) the left and right hand's :data:`HAND_LANDMARKS` in pixels.
+        hand_visibility: (2, 4) BlazePose's visibility of each.
     """
 
     mask: np.ndarray
     eyes: np.ndarray
     eye_visibility: np.ndarray
+    hands: np.ndarray
+    hand_visibility: np.ndarray
 
     @staticmethod
     def of(person) -> "ReferencePerson":
@@ -230,21 +235,24 @@ class ReferencePerson:
         from motion2video.pose.blazepose import LANDMARK_NAMES
 
         eyes = [LANDMARK_NAMES.index("left_eye"), LANDMARK_NAMES.index("right_eye")]
+        hands = [[LANDMARK_NAMES.index(f"{side}_{name}") for name in HAND_LANDMARKS] for side in ("left", "right")]
         lm = person.landmarks
-        return ReferencePerson(mask=lm.person_mask(person.width, person.height),
-                               eyes=np.asarray(lm.xy, np.float64)[eyes, :2],
-                               eye_visibility=np.asarray(lm.visibility, np.float64)[eyes])
+        xy, visibility = np.asarray(lm.xy, np.float64), np.asarray(lm.visibility, np.float64)
+        return ReferencePerson(mask=lm.person_mask(person.width, person.height), eyes=xy[eyes, :2],
+                               eye_visibility=visibility[eyes], hands=xy[np.array(hands), :2],
+                               hand_visibility=visibility[np.array(hands)])
 
     def moved(self, scale: float, offset, size: tuple[int, int]) -> "ReferencePerson":
         """The same person in a picture made by ``out = in * scale + offset`` (pixels), ``size`` = (W, H) of the
         new picture; what lies outside the old picture is not the person."""
+        offset = np.asarray(offset, np.float64)
         return replace(self, mask=move_map(self.mask, scale, offset, size),
-                       eyes=np.asarray(self.eyes, np.float64) * scale + np.asarray(offset))
+                       eyes=np.asarray(self.eyes, np.float64) * scale + offset,
+                       hands=np.asarray(self.hands, np.float64) * scale + offset)
 
-    def found(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(mask (H, W) bool, eyes (2, 2), eye visibility (2,)), as
-        :func:`motion2video.stages.frames.reference_person` gives them."""
-        return np.asarray(self.mask) > 0.5, np.asarray(self.eyes), np.asarray(self.eye_visibility)
+    def segmented(self) -> np.ndarray:
+        """(H, W) bool: the pixels that are more likely the person than not."""
+        return np.asarray(self.mask) > 0.5
 
 
 @dataclass(frozen=True)
