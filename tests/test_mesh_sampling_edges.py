@@ -281,7 +281,7 @@ def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     uv[ids[on_glove]] = (10.0, 10.0)
     uv[ids[~on_glove]] = (50.0, 10.0)
     shown = np.ones(len(left), bool)
-    hands = np.array([[[9.0, 9.0], [11.0, 9.0], [9.0, 11.0], [50.0, 50.0]],  # three points on the glove, one off
+    hands = np.array([[[9.0, 9.0], [11.0, 9.0], [9.0, 11.0], [12.0, 11.0]],  # the hand points, on the glove
                       [[0.0, 0.0]] * 4])
     seen = np.array([[0.9, 0.9, 0.9, 0.9], [0.1, 0.1, 0.1, 0.1]])  # the right hand unseen: left as it is
     sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest)
@@ -293,12 +293,26 @@ def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     assert hand_colour_sources(uv, shown, image, hands, np.zeros((2, 4)), rest=rest) is None
     uv[ids] = (10.0, 10.0)
     assert hand_colour_sources(uv, shown, image, hands, seen, rest=rest) is None
+    # Trousers under the hand take the hand's colour in the picture: those beside it sample the trousers again;
+    # the same colour far from the hand (and forearm) is the trousers' own business.
+    trousers = np.flatnonzero(anny_model.vertex_regions(rest) == anny_model.TROUSERS)
+    uv[trousers] = (50.0, 40.0)  # on the dark blue
+    under, elsewhere = trousers[:20], trousers[20:40]
+    uv[under] = (12.0, 12.0)  # on the glove, beside the hand points
+    uv[elsewhere] = (20.0, 60.0)  # red too, but far from the hand and its forearm
+    sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest, elbows=np.array([[9.0, 0.0], [0.0, 0.0]]))
+    np.testing.assert_array_equal(uv[sources[under]], np.full((20, 2), (50.0, 40.0)))
+    np.testing.assert_array_equal(sources[elsewhere], elsewhere)
+    uv[elsewhere] = (9.0, 2.0)  # beside the forearm, from the elbow (9, 0) to the hand
+    sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest, elbows=np.array([[9.0, 0.0], [0.0, 0.0]]))
+    np.testing.assert_array_equal(uv[sources[elsewhere]], np.full((20, 2), (50.0, 40.0)))
 
 
 def test_the_demo_pictures_hands_sample_skin():
     """End to end on the demo's reference and its pose file: the fitted right hand shows its palm where the pictured
     one hangs edge-on beside the thigh, and most of its shown vertices landed on the trousers (the hands came out
-    dark in many frames of make demo). Now what they sample is skin."""
+    dark in many frames of make demo), while thigh vertices under the hands took their skin (specks on the trousers
+    when a hand moves away). Now the hands sample skin and the trousers trousers."""
     from renderers import anny_model
 
     from motion2video.frames.mesh_flow import complete_reference_uv
@@ -318,3 +332,7 @@ def test_the_demo_pictures_hands_sample_skin():
     assert len(right) > 500 and skin_share(completed, right) < 0.5  # 929 shown, 57% beside the hand (2026-11-26)
     assert video.uv_sources is not None
     assert skin_share(completed[video.uv_sources], right) > 0.9
+    # The thigh under a hand hanging beside it: shown trousers vertices that took the hand's skin sample trousers.
+    trousers = np.flatnonzero(seen & (anny_model.vertex_regions() == anny_model.TROUSERS))
+    assert skin_share(completed, trousers) * len(trousers) >= 8  # 12 on 2026-11-26
+    assert skin_share(completed[video.uv_sources], trousers) * len(trousers) <= 2  # 1
