@@ -294,18 +294,15 @@ def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     uv[ids] = (10.0, 10.0)
     assert hand_colour_sources(uv, shown, image, hands, seen, rest=rest) is None
     # Trousers under the hand take the hand's colour in the picture: those beside it sample the trousers again;
-    # the same colour far from the hand (and forearm) is the trousers' own business.
+    # the same colour far from the hand is the trousers' own business.
     trousers = np.flatnonzero(anny_model.vertex_regions(rest) == anny_model.TROUSERS)
     uv[trousers] = (50.0, 40.0)  # on the dark blue
     under, elsewhere = trousers[:20], trousers[20:40]
     uv[under] = (12.0, 12.0)  # on the glove, beside the hand points
-    uv[elsewhere] = (20.0, 60.0)  # red too, but far from the hand and its forearm
-    sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest, elbows=np.array([[9.0, 0.0], [0.0, 0.0]]))
+    uv[elsewhere] = (20.0, 60.0)  # red too, but far from the hand
+    sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest)
     np.testing.assert_array_equal(uv[sources[under]], np.full((20, 2), (50.0, 40.0)))
     np.testing.assert_array_equal(sources[elsewhere], elsewhere)
-    uv[elsewhere] = (9.0, 2.0)  # beside the forearm, from the elbow (9, 0) to the hand
-    sources = hand_colour_sources(uv, shown, image, hands, seen, rest=rest, elbows=np.array([[9.0, 0.0], [0.0, 0.0]]))
-    np.testing.assert_array_equal(uv[sources[elsewhere]], np.full((20, 2), (50.0, 40.0)))
 
 
 def test_the_demo_pictures_hands_sample_skin():
@@ -335,4 +332,4 @@ def test_the_demo_pictures_hands_sample_skin():
     # The thigh under a hand hanging beside it: shown trousers vertices that took the hand's skin sample trousers.
     trousers = np.flatnonzero(seen & (anny_model.vertex_regions() == anny_model.TROUSERS))
     assert skin_share(completed, trousers) * len(trousers) >= 8  # 12 on 2026-11-26
-    assert skin_share(completed[video.uv_sources], trousers) * len(trousers) <= 2  # 1
+    assert skin_share(completed[video.uv_sources], trousers) * len(trousers) <= 7  # 6 (the rest lie beside the forearms)
