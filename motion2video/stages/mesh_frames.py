@@ -232,9 +232,6 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift, pictured=pictured)
-    import cv2
-
-    to_model = affine_matrix(k, -np.array([x0, y0]) * k)
     small, seen = None, None
     if person is not None:
         seen = person.moved(k, -np.array([x0, y0]) * k, (model_size, model_size))
@@ -250,8 +247,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     ref_uv, ref_visible = reference_sampling(both.uv[0], both.visible[0], both.masks[0], seen, rest=rest)
     sources = None
     if image is not None and seen is not None:
-        picture = cv2.warpAffine(np.asarray(image), to_model, (model_size, model_size),
-                                 flags=cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR)
+        picture = reference_crop(image, (x0, y0, side), model_size)
         sources = hand_colour_sources(ref_uv, ref_visible, picture, seen.hands, seen.hand_visibility, rest=rest)
     ref = MeshTrack(ref_uv[None], ref_visible[None], both.masks[:1])
     tgt = MeshTrack(both.uv[1:], both.visible[1:], both.masks[1:])
@@ -618,6 +614,16 @@ def sampled_person(video: MeshVideo):
     return torch.from_numpy(video.person[None, None].astype(np.float32))
 
 
+def reference_crop(image: np.ndarray, crop: tuple[int, int, int], size: int) -> np.ndarray:
+    """(size, size, 3) uint8: the square ``crop`` (x0, y0, side) of an (S, S, 3) picture at the model's size, as
+    the mesh generator sees the reference."""
+    import cv2
+
+    x0, y0, side = crop
+    part = image[y0:y0 + side, x0:x0 + side]
+    return part if side == size else cv2.resize(part, (size, size), interpolation=cv2.INTER_AREA)
+
+
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
                          batch_size: int = 8) -> np.ndarray:
     """Frames of the mesh generator for target ``rows`` of ``video``, pasted into the reference.
@@ -630,7 +636,6 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     Returns:
         (R, S, S, 3) uint8.
     """
-    import cv2
     import torch
 
     from motion2video.frames.data import body_structures
@@ -641,7 +646,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     size = net.config.image_size
     x0, y0, side = video.crop
     crop = image[y0:y0 + side, x0:x0 + side]
-    small = crop if side == size else cv2.resize(crop, (size, size), interpolation=cv2.INTER_AREA)
+    small = reference_crop(image, video.crop, size)
     x_ref = torch.from_numpy(np.ascontiguousarray(small)).permute(2, 0, 1)[None].float() / 255.0
     ref_mask = torch.from_numpy(grow_masks(video.reference.masks[:1, None], video.margin).astype(np.float32))
     # The background plate removes the mesh's silhouette and the keypoint warp's person region: a real person's
@@ -703,6 +708,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     x_ref = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)[None].float() / 255.0
     ref_mask = torch.from_numpy(track.masks[:1, None].astype(np.float32))
     plate = mesh_plate(x_ref, ref_mask)
+    colours = person_colours(x_ref, ref_mask, plate)  # once for every target
     rows = np.asarray(rows, np.int64)
     out = np.empty((len(rows), size, size, 3), np.uint8)
     ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
@@ -716,6 +722,6 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
                                     torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                     torch.from_numpy(track.masks[part][:, None].astype(np.float32)),
                                     torch.from_numpy(face_structures(structures.images[part])),
-                                    plate=plate.expand(n, -1, -1, -1)).image
+                                    plate=plate.expand(n, -1, -1, -1), colours=colours.expand(n, -1, -1, -1)).image
             out[start:start + n] = (gen.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy()
     return out
