@@ -264,8 +264,9 @@ class Reference:
         pose: the reference pose moved into these pixels (camera resized to S x S), or None when unknown.
         notes: what was converted or assumed, one line each (the CLI prints them).
         path: the image file.
-        person: the person's mask and eyes in these pixels when the pose was estimated here (None with a pose
-            file: the mesh generator then segments the image itself, :func:`motion2video.stages.frames.mesh_setup`).
+        person: the person's mask, eyes and hands in these pixels when the pose was estimated here (None with a
+            pose file: the mesh generator then segments the image itself,
+            :func:`motion2video.stages.frames.mesh_setup`).
         picture: (S, S) float32, 1 where these pixels come from the image file, 0 where a pad or zoom replicated its
             border (None: all of them come from it).
     """
@@ -303,7 +304,7 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
 def estimate_reference_pose(image: np.ndarray, path: str | Path
                             ) -> tuple[ReferencePose, ReferencePerson] | tuple[None, None]:
     """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`), and
-    that person's mask and eyes; (None, None) when nobody is found."""
+    that person's mask, eyes and hands; (None, None) when nobody is found."""
     from motion2video.pose.estimate import estimate_image
 
     try:
@@ -369,7 +370,8 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     view larger than the picture zooms out, one beside it pans; outside the picture its border is replicated.
 
     Used to keep a motion that leaves the picture (a jump's head above the top) in view
-    (:func:`motion2video.stages.structure.view_to_fit`). The pose moves with the picture; a note says what changed.
+    (:func:`motion2video.stages.structure.view_to_fit`). The pose, the person found in the picture and which
+    pixels are the file's move with it; a note says what changed.
     """
     size = reference.image.shape[0]
     x0, y0, side = (float(v) for v in view)
