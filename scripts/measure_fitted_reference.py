@@ -171,10 +171,11 @@ def main(argv: list[str] | None = None) -> int:
             finally:
                 body.BodyRenderer.render_with_masks = plain
             seqs = posed.sequences
-            n, t = seqs.masks.shape[:2]
+            frames = seqs.masks.shape[0] * seqs.masks.shape[1]  # every frame of every window
             hand_labels = (anny_model.hand_vertices("L") | anny_model.hand_vertices("R")).astype(np.int64)
-            hands = vertex_region_masks(seqs.vertex_uv.reshape(n * t, -1, 2).astype(np.float64),
-                                        seqs.vertex_visible.reshape(n * t, -1), seqs.masks.reshape(n * t, *seqs.masks.shape[2:]),
+            hands = vertex_region_masks(seqs.vertex_uv.reshape(frames, -1, 2).astype(np.float64),
+                                        seqs.vertex_visible.reshape(frames, -1),
+                                        seqs.masks.reshape(frames, *seqs.masks.shape[2:]),
                                         hand_labels, {"hands": 1})["hands"].reshape(seqs.masks.shape)
             scores = evaluate_sequences(model, seqs, head_masks=posed.head_masks,
                                         region_masks={"hands": hands}).results["generator"]

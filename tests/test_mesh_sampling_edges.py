@@ -254,7 +254,7 @@ def test_a_pose_files_padded_border_is_never_the_person(tmp_path):
     assert reference.person is None  # the pose came from the file
     border = ~reference.picture_mask()
     assert border.sum() > 20000  # 1280 x 720 made square: 56 rows above and below at 256
-    assert (reference_person(reference.image).segmented() & border).sum() > 50  # what segmenting the square picture finds
+    assert (reference_person(reference.image).segmented() & border).sum() > 50  # segmenting the square picture
     x0, y0, side = video.crop
     k = video.person.shape[0] / side
     small = cv2.warpAffine(border.astype(np.float32), affine_matrix(k, -np.array([x0, y0]) * k),
@@ -332,4 +332,4 @@ def test_the_demo_pictures_hands_sample_skin():
     # The thigh under a hand hanging beside it: shown trousers vertices that took the hand's skin sample trousers.
     trousers = np.flatnonzero(seen & (anny_model.vertex_regions() == anny_model.TROUSERS))
     assert skin_share(completed, trousers) * len(trousers) >= 8  # 12 on 2026-11-26
-    assert skin_share(completed[video.uv_sources], trousers) * len(trousers) <= 7  # 6 (the rest lie beside the forearms)
+    assert skin_share(completed[video.uv_sources], trousers) * len(trousers) <= 7  # 6 (the rest: beside the forearms)

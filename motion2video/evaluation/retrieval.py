@@ -78,9 +78,9 @@ class RetrievedFutures(nn.Module):
         """(k,) database rows nearest one (D,) descriptor, no two of one clip within ``separation`` frames."""
         d2 = self.key_norms - 2.0 * self.keys @ query
         chosen: list[int] = []
+        apart = self.config.separation
         for j in np.argsort(d2):
-            if any(self.clip_ids[j] == self.clip_ids[c] and abs(self.starts[j] - self.starts[c]) < self.config.separation
-                   for c in chosen):
+            if any(self.clip_ids[j] == self.clip_ids[c] and abs(self.starts[j] - self.starts[c]) < apart for c in chosen):
                 continue
             chosen.append(int(j))
             if len(chosen) == k:
