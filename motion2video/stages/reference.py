@@ -201,11 +201,12 @@ def fit_square(image: np.ndarray, size: int) -> tuple[np.ndarray, ImageFit]:
 
 def move_map(values: np.ndarray, scale: float, offset, size: tuple[int, int]) -> np.ndarray:
     """A per-pixel (H, W) map moved into a picture made by ``out = in * scale + offset`` (pixels), ``size`` = (W, H)
-    of the new picture: float32, 0 where the new picture lies outside the old one."""
+    of the new picture: float32, 0 where the new picture lies outside the old one. Bilinear both ways: OpenCV's
+    ``warpAffine`` has no area mode (given ``INTER_AREA`` it interpolates linearly, as it did here until
+    2026-11-26)."""
     mat = affine_matrix(scale, np.asarray(offset, np.float64))
     return cv2.warpAffine(np.asarray(values, np.float32), mat, (int(size[0]), int(size[1])),
-                          flags=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR,
-                          borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+                          flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
 
 
 @dataclass(frozen=True)
@@ -377,7 +378,7 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     x0, y0, side = (float(v) for v in view)
     k = size / side
     image = cv2.warpAffine(reference.image, affine_matrix(k, -np.array([x0, y0]) * k), (size, size),
-                           flags=cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+                           flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     pose = reference.pose
     if pose is not None:
         pts = (np.asarray(pose.points, np.float64) * (size / pose.width, size / pose.height) - (x0, y0)) * k
