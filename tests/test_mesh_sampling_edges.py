@@ -13,7 +13,8 @@ import numpy as np
 import torch
 
 from motion2video.frames.mesh_flow import complete_reference_uv, surface_graph, touching_other_part
-from motion2video.frames.mesh_warp import fill_outside_person, person_colours, person_edge_refined
+from motion2video.frames.mesh_warp import (fill_outside_person, person_colours, person_edge_refined,
+                                           segmented_core_px)
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
@@ -40,6 +41,29 @@ def test_fill_outside_person_gives_every_background_pixel_its_nearest_person_col
     # No person, or nothing but person: the image as it is.
     assert torch.equal(fill_outside_person(image, torch.zeros_like(person)), image)
     assert torch.equal(fill_outside_person(image, torch.ones_like(person)), image)
+
+
+def test_the_fill_comes_from_inside_a_mixed_outline():
+    """A segmented outline runs through pixels mixed with the background (grey between black trousers and snow):
+    with ``core_px`` the outside takes the colour found that far inside, and the person's own pixels stay."""
+    image = torch.ones(1, 3, 16, 16)  # snow
+    image[:, :, 4:12, 4:12] = 0.5  # the outline ring: mixed pixels
+    image[:, :, 5:11, 5:11] = 0.0  # the trousers
+    person = torch.zeros(1, 1, 16, 16)
+    person[:, :, 4:12, 4:12] = 1.0
+    plain = fill_outside_person(image, person)
+    cored = fill_outside_person(image, person, core_px=1)
+    inside = person[0, 0] > 0.5
+    assert torch.equal(cored[:, :, inside], image[:, :, inside])
+    assert float(plain[0, 0, 8, 0]) == 0.5  # without the core: the mixed outline spread outward
+    assert float(cored[0, :, 8, 0].max()) == 0.0 and float(cored[0, :, 0, 0].max()) == 0.0
+    # A person thinner than the erosion: the fill falls back to the person as it is.
+    thin = torch.zeros(1, 1, 16, 16)
+    thin[:, :, 8, 4:12] = 1.0
+    np.testing.assert_allclose(fill_outside_person(image, thin, core_px=2)[0, :, 0, 6].numpy(),
+                               image[0, :, 8, 6].numpy())
+    # the core of a segmented person scales with the image: 1 px at 128, 2 px at 256
+    assert (segmented_core_px(128), segmented_core_px(256)) == (1, 2)
 
 
 def test_the_outline_drops_pixels_that_are_the_background_and_keeps_the_rest():

@@ -125,7 +125,7 @@ def mesh_plate(ref_image: torch.Tensor, ref_mask: torch.Tensor) -> torch.Tensor:
     return torch.from_numpy(out).permute(0, 3, 1, 2).to(ref_image.dtype).div(255.0)
 
 
-def fill_outside_person(image: torch.Tensor, person: torch.Tensor) -> torch.Tensor:
+def fill_outside_person(image: torch.Tensor, person: torch.Tensor, core_px: int = 0) -> torch.Tensor:
     """The image with every pixel outside the person given the colour of the nearest person pixel (SciPy's
     Euclidean distance transform): what the person's colours are sampled from.
 
@@ -137,12 +137,18 @@ def fill_outside_person(image: torch.Tensor, person: torch.Tensor) -> torch.Tens
     ``evaluate-frames --poses`` (exact meshes, frames-body-mesh-256): person PSNR +0.005 / +0.04 / +0.02 dB on
     cmu/08_01, 13_42, 05_14, sharpness -0.01 (docs/results.md, "What the generator samples").
 
+    With ``core_px`` > 0 the fill takes the colour of the nearest pixel of the person eroded by that many pixels
+    (the person as it is where the erosion leaves nothing): the segmented outline of a real photo runs through
+    pixels mixed with the background (the grey between a skier's black trousers and the snow), and spread outward
+    those gave a turned leg's samples grey and lilac patches. The person's own pixels are never changed.
+
     Args:
         image: (B, 3, H, W); person: (B, 1, H, W) or (B, H, W) in [0, 1] (> 0.5 is the person).
+        core_px: erosion (pixels) of the person whose colours fill the outside.
     Returns:
         (B, 3, H, W), unchanged on the person (and for an image with no person pixel or no other pixel).
     """
-    from scipy.ndimage import distance_transform_edt
+    from scipy.ndimage import binary_erosion, distance_transform_edt
 
     b, _, h, w = image.shape
     masks = (person.detach().reshape(b, h, w) > 0.5).cpu().numpy()
@@ -153,8 +159,12 @@ def fill_outside_person(image: torch.Tensor, person: torch.Tensor) -> torch.Tens
             continue
         if not masks[i].any() or masks[i].all():
             continue
-        _, (iy, ix) = distance_transform_edt(~masks[i], return_indices=True)
-        out[i] = image[i][:, torch.from_numpy(iy), torch.from_numpy(ix)]
+        core = binary_erosion(masks[i], iterations=core_px) if core_px > 0 else masks[i]
+        if not core.any():
+            core = masks[i]
+        _, (iy, ix) = distance_transform_edt(~core, return_indices=True)
+        filled = image[i][:, torch.from_numpy(iy), torch.from_numpy(ix)]
+        out[i] = torch.where(torch.from_numpy(masks[i]), image[i], filled)
     return out
 
 
@@ -162,6 +172,10 @@ def fill_outside_person(image: torch.Tensor, person: torch.Tensor) -> torch.Tens
 # 128 px) whose colour is within EDGE_TEST_DIFF (any channel, [0, 1]) of the background plate are background.
 EDGE_TEST_PX = 1
 EDGE_TEST_DIFF = 0.1
+# A segmented person (BlazePose's mask of a real picture): the outside takes the colour found this far (at 128 px)
+# inside its outline (fill_outside_person's core_px; segmented_core_px). A rendered silhouette's outline is exact and
+# keeps the fill from the outline itself.
+FILL_CORE_PX = 1.0
 
 
 def person_edge_refined(image: torch.Tensor, person: torch.Tensor, plate: torch.Tensor, ring_px: float = EDGE_TEST_PX,
@@ -188,11 +202,19 @@ def person_edge_refined(image: torch.Tensor, person: torch.Tensor, plate: torch.
     return m * (1.0 - (m - inner) * like_background)
 
 
-def person_colours(image: torch.Tensor, person: torch.Tensor, plate: torch.Tensor) -> torch.Tensor:
+def segmented_core_px(width: int) -> int:
+    """The ``core_px`` of :func:`person_colours` for a segmented person in an image ``width`` pixels wide
+    (:data:`FILL_CORE_PX` scaled from 128 px)."""
+    return max(0, round(FILL_CORE_PX * width / 128))
+
+
+def person_colours(image: torch.Tensor, person: torch.Tensor, plate: torch.Tensor, *, core_px: int = 0
+                   ) -> torch.Tensor:
     """(B, 3, H, W): what the generator samples the person's colours from: ``image`` with everything outside the
     person (its outline refined against the ``plate``, :func:`person_edge_refined`) given the nearest person colour
-    (:func:`fill_outside_person`)."""
-    return fill_outside_person(image, person_edge_refined(image, person, plate))
+    ``core_px`` inside the outline (:func:`fill_outside_person`; :func:`segmented_core_px` for a segmented person,
+    0 for a rendered silhouette)."""
+    return fill_outside_person(image, person_edge_refined(image, person, plate), core_px=core_px)
 
 
 UNSHARP_SIGMA_PX = 0.8  # the unsharp mask's Gaussian, pixels (at any image size: it targets resampling blur)
@@ -268,7 +290,8 @@ class MeshWarpGenerator(nn.Module):
         Args: as :meth:`forward`, and plate: (B, 3, H, W) the background (:func:`mesh_plate` of the reference
             when None); source_mask: (B, 1, H, W) the reference pixels that are the person, whose colours are
             sampled (:func:`fill_outside_person`; ``ref_mask`` when None). For a fitted body, the segmented
-            person (:func:`mesh_source_mask`, :func:`motion2video.stages.mesh_frames.sampled_person`).
+            person (:func:`mesh_source_mask`, :func:`motion2video.stages.mesh_frames.sampled_person`), whose
+            outside is filled from inside its outline (:func:`segmented_core_px`).
             colours: (B, 3, H, W) :func:`person_colours` of the reference when the caller has them already (one
             reference for many batches of targets); ``source_mask`` is then not used.
         """
@@ -279,8 +302,12 @@ class MeshWarpGenerator(nn.Module):
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
         # what the person's colours are sampled from
-        source = colours if colours is not None else person_colours(
-            ref_image, ref_mask if source_mask is None else source_mask, plate)
+        if colours is not None:
+            source = colours
+        elif source_mask is None:
+            source = person_colours(ref_image, ref_mask, plate)
+        else:  # a segmented person: the fill from inside its outline
+            source = person_colours(ref_image, source_mask, plate, core_px=segmented_core_px(w))
         sampled = unsharp(source, self.config.sharpen)
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate
