@@ -76,13 +76,24 @@ def write_json(path: str | Path, record: dict, *, indent: int = 2) -> Path:
 def write_section(path: str | Path, begin: str, end: str, body: str) -> Path:
     """Replace the text between the marker lines ``begin`` and ``end`` of a document (or append the marked
     block when the markers are missing; a missing file starts as ``# Results``), keeping everything else;
-    written atomically. Used by the ``scripts/make_results*.py`` generators of ``docs/``."""
+    written atomically. Used by the ``scripts/make_results*.py`` generators of ``docs/``.
+
+    Raises:
+        ValueError: the marked block holds a heading that ``body`` does not: hand-written text placed between
+            the markers would be lost (move it outside them). Nothing is written.
+    """
     path = Path(path)
     text = path.read_text() if path.is_file() else "# Results\n"
     block = f"{begin}\n{body.strip()}\n{end}"
     if begin in text and end in text:
         head, rest = text.split(begin, 1)
-        text = head + block + rest.split(end, 1)[1]
+        old, tail = rest.split(end, 1)
+        new_headings = {line.strip() for line in body.splitlines() if line.startswith("#")}
+        lost = [line.strip() for line in old.splitlines() if line.startswith("#") and line.strip() not in new_headings]
+        if lost:
+            raise ValueError(f"{path}: the block between {begin} and {end} holds {lost[0]!r}, which the new section "
+                             "does not: move hand-written text outside the markers")
+        text = head + block + tail
     else:
         text = text.rstrip() + "\n\n" + block + "\n"
     return write_text(path, text)
