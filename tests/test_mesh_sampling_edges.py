@@ -147,7 +147,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     from renderers import anny_model
 
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.mesh_warp import mesh_plate
+    from motion2video.frames.mesh_warp import mesh_plate, sampled_colours
     from motion2video.stages.mesh_frames import sampled_person
 
     reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
@@ -157,7 +157,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     picture = reference.image[y0:y0 + side, x0:x0 + side]
     image = torch.from_numpy(np.ascontiguousarray(picture)).permute(2, 0, 1)[None].float() / 255.0
     mesh = torch.from_numpy(video.reference.masks[:1, None].astype(np.float32))
-    source = person_colours(image, sampled_person(video), mesh_plate(image, mesh))
+    source = sampled_colours(image, mesh, mesh_plate(image, mesh), sampled_person(video))
     hidden_trousers = ~seen & (anny_model.vertex_regions() == anny_model.TROUSERS)
     assert hidden_trousers.sum() > 300
     assert video.margin == 0  # an Anny render: BlazePose's fringe is not clothes past the body

@@ -217,6 +217,16 @@ def person_colours(image: torch.Tensor, person: torch.Tensor, plate: torch.Tenso
     return fill_outside_person(image, person_edge_refined(image, person, plate), core_px=core_px)
 
 
+def sampled_colours(image: torch.Tensor, ref_mask: torch.Tensor, plate: torch.Tensor,
+                    source_mask: torch.Tensor | None = None) -> torch.Tensor:
+    """(B, 3, H, W): the reference colours the mesh generator samples: :func:`person_colours` of ``source_mask``, a
+    segmented person, filled from inside its outline (:func:`segmented_core_px`), or, when None, of the rendered
+    silhouette ``ref_mask``, filled from its outline."""
+    if source_mask is None:
+        return person_colours(image, ref_mask, plate)
+    return person_colours(image, source_mask, plate, core_px=segmented_core_px(image.shape[-1]))
+
+
 UNSHARP_SIGMA_PX = 0.8  # the unsharp mask's Gaussian, pixels (at any image size: it targets resampling blur)
 
 
@@ -292,7 +302,7 @@ class MeshWarpGenerator(nn.Module):
             sampled (:func:`fill_outside_person`; ``ref_mask`` when None). For a fitted body, the segmented
             person (:func:`mesh_source_mask`, :func:`motion2video.stages.mesh_frames.sampled_person`), whose
             outside is filled from inside its outline (:func:`segmented_core_px`).
-            colours: (B, 3, H, W) :func:`person_colours` of the reference when the caller has them already (one
+            colours: (B, 3, H, W) :func:`sampled_colours` of the reference when the caller has them already (one
             reference for many batches of targets); ``source_mask`` is then not used.
         """
         b, _, h, w = ref_image.shape
@@ -302,12 +312,7 @@ class MeshWarpGenerator(nn.Module):
             plate = mesh_plate(ref_image, ref_mask)
         mode = self.config.sample_mode
         # what the person's colours are sampled from
-        if colours is not None:
-            source = colours
-        elif source_mask is None:
-            source = person_colours(ref_image, ref_mask, plate)
-        else:  # a segmented person: the fill from inside its outline
-            source = person_colours(ref_image, source_mask, plate, core_px=segmented_core_px(w))
+        source = colours if colours is not None else sampled_colours(ref_image, ref_mask, plate, source_mask)
         sampled = unsharp(source, self.config.sharpen)
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate

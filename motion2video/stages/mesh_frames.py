@@ -640,7 +640,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
 
     from motion2video.frames.data import body_structures
     from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.frames.mesh_warp import mesh_plate, person_colours, segmented_core_px
+    from motion2video.frames.mesh_warp import mesh_plate, sampled_colours
     from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
 
     size = net.config.image_size
@@ -655,9 +655,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
-    source = sampled_person(video)
-    colours = (person_colours(x_ref, ref_mask, plate) if source is None  # once for every target
-               else person_colours(x_ref, source, plate, core_px=segmented_core_px(size)))
+    colours = sampled_colours(x_ref, ref_mask, plate, sampled_person(video))  # once for every target
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
     if video.uv_sources is not None:  # a fitted hand beside the pictured one samples the pictured one
         ref_uv = ref_uv[video.uv_sources]
