@@ -39,13 +39,13 @@ def _pairs(values: list[str]) -> list[tuple[str, str]]:
     return out
 
 
-def benchmark_rows(mocap: str, behaviors: list[tuple[str, str]], analogy: str | None) -> dict:
+def benchmark_rows(mocap: str, behaviors: list[tuple[str, str]], analogy: str | None, *, adapt_steps: int) -> dict:
     from motion2video.models.checkpoint import load_model
     from motion2video.evaluation import transfer_benchmark as B
 
     rows: dict[str, list[dict]] = {}
     for label, path in behaviors:
-        res = B.run_benchmark(mocap, transfer=load_model(path))
+        res = B.run_benchmark(mocap, transfer=load_model(path), adapt_steps=adapt_steps)
         rows[f"transfer ({label})"] = [r for r in B.summarise(res) if r["method"] == "transfer"]
         rows["copy the source"] = [r for r in B.summarise(res) if r["method"] == "copy"]
     if analogy:
@@ -168,7 +168,8 @@ def _relative_table(rows: dict, split: str) -> list[str]:
     return lines
 
 
-def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: str, seconds: float) -> str:
+def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: str, seconds: float,
+           adapt_steps: int) -> str:
     from motion2video.evaluation import transfer_benchmark as B
 
     import torch
@@ -186,7 +187,9 @@ def render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: 
          "height above the knee, from the hanging-shin position; walk/run = mean horizontal root speed; turn = "
          "net heading change; dance/martial arts = mean wrist/ankle speed relative to the pelvis.",
          "- transfer: the behaviour model, z = E(source window), decoded from the target posture "
-         "(as `motion2video transfer`);",
+         f"(as `motion2video transfer --adapt-steps {adapt_steps}`: "
+         + ("the decoder as trained);" if adapt_steps == 0 else
+            f"the decoder first fitted to each source for {adapt_steps} steps);"),
          "- analogy: MT-VAE A : B :: C : D, A = 16 frames before the source start (the first frame repeated "
          "where the clip starts there), C = 16 frames up to the target posture;",
          "- copy the source: the source moved rigidly onto the target's position and heading (ratio 1 by "
@@ -294,12 +297,17 @@ def main(argv: list[str] | None = None) -> int:
                         help="LABEL=CHECKPOINT whose sampled futures are measured (repeatable)")
     parser.add_argument("--samples", type=int, default=10, help="futures per window for --sampler")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--adapt-steps", type=int, default=None,
+                        help="decoder adaptation steps of the transfer rows (default: motion2video transfer's)")
     parser.add_argument("--out", default=str(ROOT / "docs" / "results_transfer.md"))
     parser.add_argument("--json", default=None, help="also write the raw numbers here")
     args = parser.parse_args(argv)
     behaviors = _pairs(args.behavior) or [("shipped", "behavior")]
     t0 = time.time()
-    bench = benchmark_rows(args.data, behaviors, args.analogy or None)
+    from motion2video.stages.latents import ADAPT_STEPS
+
+    adapt_steps = ADAPT_STEPS if args.adapt_steps is None else args.adapt_steps
+    bench = benchmark_rows(args.data, behaviors, args.analogy or None, adapt_steps=adapt_steps)
     live = {}
     if not args.no_liveliness:
         models = [(f"behavior ({label})", path) for label, path in behaviors]
@@ -312,10 +320,12 @@ def main(argv: list[str] | None = None) -> int:
     command = "python scripts/make_results_transfer_benchmark.py " + " ".join(
         [f"--behavior {label}={path}" for label, path in behaviors]
         + ([f"--analogy {args.analogy}"] if args.analogy != "mtvae-add" else [])
-        + [f"--sampler {shlex.quote(v)}" for v in args.sampler])
+        + [f"--sampler {shlex.quote(v)}" for v in args.sampler]
+        + ([f"--adapt-steps {args.adapt_steps}"] if args.adapt_steps is not None else []))
     from motion2video.core.atomic import write_section
 
-    section = render(bench, live, samplers, controls, command=command, seconds=time.time() - t0)
+    section = render(bench, live, samplers, controls, command=command, seconds=time.time() - t0,
+                     adapt_steps=adapt_steps)
     write_section(Path(args.out), BEGIN, END, section)
     if args.json:
         Path(args.json).write_text(json.dumps({"benchmark": bench, "liveliness": live, "samplers": samplers,

@@ -101,6 +101,27 @@ def test_copying_the_source_carries_every_signature_but_not_the_start_posture(mo
 
 
 
+def test_posture_kept_is_one_for_a_held_posture_and_zero_for_a_copy_of_the_source(clip):
+    """posture_kept: a re-enactment that holds the target's posture throughout keeps all of it (1, up to the
+    source's own motion), one that turns into the source's poses (moved onto the target) keeps none (0), and one
+    half way between keeps half; the same posture as the source's start gives NaN."""
+    source = clip("cmu/05_14.bvh")[64:64 + 49]  # the arabesque: a moving body
+    posture = clip("cmu/07_03.bvh")[30]  # a walker
+    copy = B.copy_reenactment(source, posture)
+    held = np.repeat(copy[:1], len(copy), axis=0) - copy[:1, :1] + copy[:, :1]  # the posture carried along the root
+    held[0] = posture - posture[:1] + copy[:1, :1]
+    becomes = held.copy()
+    becomes[len(becomes) // 2:] = copy[len(copy) // 2:]
+    assert B.posture_kept(source, posture, becomes) == pytest.approx(0.0, abs=1e-9)
+    halfway = held.copy()
+    halfway[1:] = 0.5 * (held[1:] + copy[1:])
+    kept = B.posture_kept(source, posture, halfway)
+    assert 0.2 < kept < 0.8
+    whole = B.posture_kept(source, posture, held)
+    assert whole == pytest.approx(2 * kept, rel=1e-6) and whole > 0.5
+    assert np.isnan(B.posture_kept(source, source[0], source))
+
+
 def test_feet_above_bends_the_knees_of_a_sinking_body_and_keeps_its_bones(clip):
     """A real standing posture pushed 0.25 m down: leg IK puts the ankles back on the floor, the knees bend
     (the pelvis comes closer to the ankles by the drop), every bone keeps its length; a walk whose ankles

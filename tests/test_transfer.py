@@ -120,6 +120,43 @@ def test_reenactment_keeps_the_target_start_and_its_bone_lengths(ckpts, clips):
     assert np.abs(np.diff(seq[:, 0], axis=0)).max() > 0  # the body moves
 
 
+def test_adapting_the_decoder_fits_the_source_and_leaves_the_model_as_it_was(ckpts, clips):
+    """adapt_to_source: a copy whose decoder re-enacts the source from its own start posture closer than the
+    trained one did, by moving only the decoder; the trained model's weights do not change; the same inputs give
+    the same adapted weights; 0 steps is the model itself; through transfer_behavior, the adapted re-enactment
+    starts at the same target posture as the one as trained (adapt_steps=0) and then differs from it."""
+    from motion2video.stages.latents import (adapt_to_source, behavior_latents, behavior_root, encode_sequences,
+                                             reenact)
+
+    bundle = load_model(ckpts["behavior"])
+    model = bundle.model
+    source = load_clip(bundle, clips["source"])
+    feats, _ = encode_sequences(bundle, source.data[None, 40:40 + 1 + HORIZON])  # (1, 1 + H, F)
+    z = behavior_latents(model, feats)
+    before = {k: v.clone() for k, v in model.state_dict().items()}
+
+    def error(m):
+        made = reenact(m, z, feats[:, 0], horizon=HORIZON, root=behavior_root(m, feats, feats[:, 0]))
+        return float(np.square(made - feats[:, 1:]).sum())
+
+    adapted = adapt_to_source(model, feats, z, steps=60)
+    again = adapt_to_source(model, feats, z, steps=60)
+    assert adapted is not model and error(adapted) < 0.5 * error(model)
+    for key, value in model.state_dict().items():
+        assert torch.equal(value, before[key]), key
+    for (key, a), b in zip(adapted.state_dict().items(), again.state_dict().values()):
+        assert torch.equal(a, b), key
+    changed = [k for k, v in adapted.state_dict().items() if not torch.equal(v, before[k])]
+    assert changed and all(k.startswith("decoder.") for k in changed)  # only the decoder moves
+    assert not any(p.requires_grad for p in adapted.parameters())
+    assert adapt_to_source(model, feats, z, steps=0) is model
+    target = load_clip(bundle, clips["target"])
+    as_trained = transfer_behavior(bundle, source, target, target_frame=100, horizon=HORIZON, adapt_steps=0)
+    fitted = transfer_behavior(bundle, source, target, target_frame=100, horizon=HORIZON, adapt_steps=60)
+    np.testing.assert_array_equal(as_trained.reenacted[0, 0], fitted.reenacted[0, 0])  # both start at the target
+    assert np.abs(as_trained.reenacted[0, 1:] - fitted.reenacted[0, 1:]).max() > 1e-3
+
+
 def test_flow_samples_grid_is_seeded(ckpts, clips, tmp_path):
     paths = {}
     for name, seed in (("a", 3), ("b", 3), ("c", 4)):
@@ -285,7 +322,8 @@ def other_skeleton(tmp_path, clips):
 
 @pytest.mark.parametrize("case", ["frame-too-large", "frame-negative", "source-too-short", "wrong-model",
                                   "baseline", "face-target", "face-model-body-clip", "other-skeleton",
-                                  "reference-without-frames", "no-flow", "zero-samples", "bad-suffix"])
+                                  "reference-without-frames", "no-flow", "zero-samples", "bad-suffix",
+                                  "negative-adapt-steps", "adapt-steps-with-samples"])
 def test_bad_input(case, ckpts, clips, face_dir, other_skeleton, tmp_path, capsys):
     out, npz = tmp_path / "out.mp4", tmp_path / "out.npz"
     face = str(face_dir / "llv" / "dao.csv")
@@ -307,6 +345,8 @@ def test_bad_input(case, ckpts, clips, face_dir, other_skeleton, tmp_path, capsy
         "no-flow": None,
         "zero-samples": base + ["--sample", "0", "--target", clips["target"]],
         "bad-suffix": base[:-4] + ["-o", str(tmp_path / "out.avi")] + src + ["--target", clips["target"]],
+        "negative-adapt-steps": base + src + ["--target", clips["target"], "--adapt-steps", "-1"],
+        "adapt-steps-with-samples": base + ["--sample", "2", "--target", clips["target"], "--adapt-steps", "10"],
     }[case]
     if case == "no-flow":
         bundle = load_model(ckpts["behavior"])
@@ -319,7 +359,8 @@ def test_bad_input(case, ckpts, clips, face_dir, other_skeleton, tmp_path, capsy
                 "source-too-short": "behaviour source needs", "wrong-model": "'mtvae-add' model",
                 "baseline": "baseline", "face-target": "face motion", "face-model-body-clip": "body motion",
                 "other-skeleton": "coco-17", "reference-without-frames": "--style frames", "no-flow": "flow",
-                "zero-samples": "--sample must be >= 1", "bad-suffix": "extension"}[case]
+                "zero-samples": "--sample must be >= 1", "bad-suffix": "extension",
+                "negative-adapt-steps": "--adapt-steps must be >= 0", "adapt-steps-with-samples": "--sample has none"}[case]
     assert expected in err
 
 
@@ -342,20 +383,25 @@ def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys)
     assert "blank.png" in err and "no visible person" in err
 
 
-def test_shipped_behavior_carries_held_out_jumps_and_speeds(mocap_dir, tmp_path, capsys):
-    """Issue 13 with the shipped checkpoint: on held-out subjects, re-enacted from other subjects' postures,
-    the median signature ratio of jumps (pelvis excursion) and walks / runs (root speed) is within 0.6-1.4,
-    the re-enactment starts at the target's posture and keeps its bone lengths; and the same number comes
-    out of ``transfer --npz``."""
+def test_shipped_behavior_carries_held_out_jumps_kicks_and_speeds(mocap_dir, tmp_path, capsys):
+    """Issues 13 and 24 with the shipped checkpoint: on held-out subjects, re-enacted from other subjects'
+    postures as ``motion2video transfer`` does it (the decoder adapted to the source), the median signature
+    ratio of jumps (pelvis excursion), kicks (ankle above the knee) and walks / runs (root speed) is within
+    0.6-1.4, and so are the jumps' and kicks' root-relative signatures (leg extension, arm swing, knee bend, ankle
+    lift: 0.61-1.10 when measured, docs/results_transfer.md; asserted from 0.55, which the decoder as trained
+    misses on the kick by far: 0.23-0.41); the re-enactment starts at the target's posture and keeps its bone
+    lengths; and the same numbers come out of ``transfer --npz`` (a hidden jump re-enacted by a hidden walker)."""
     from motion2video.evaluation import signatures as S
     from motion2video.evaluation import transfer_benchmark as B
 
-    cases = tuple(c for c in B.CASES if c.split == "held-out" and c.behaviour in ("jump", "walk/run"))
+    cases = tuple(c for c in B.CASES if c.split == "held-out" and c.behaviour in ("jump", "kick", "walk/run"))
     results = B.run_benchmark(str(mocap_dir), transfer=load_model("behavior"), cases=cases)
     for row in B.summarise(results):
         if row["method"] == "transfer":
             assert 0.6 <= row["median_ratio"] <= 1.4, row
-            assert row["start_error"] < 0.03 and row["bone_spread"] < 1e-4, row
+            assert row["start_error"] < 0.04 and row["bone_spread"] < 1e-4, row
+            if row["behaviour"] in ("jump", "kick"):
+                assert all(0.55 <= v <= 1.4 for v in row["relative"].values()), row
     npz = tmp_path / "t.npz"
     assert main(["transfer", "--model", "behavior", "--behavior", str(mocap_dir / "cmu/02_04.bvh"),
                  "--target", str(mocap_dir / "cmu/07_03.bvh"), "--target-frame", "144", "--style", "skeleton",
@@ -363,3 +409,6 @@ def test_shipped_behavior_carries_held_out_jumps_and_speeds(mocap_dir, tmp_path,
     kept = np.load(npz)
     ratio = S.pelvis_excursion(kept["reenacted"][0]) / S.pelvis_excursion(kept["source"])
     assert 0.6 <= ratio <= 1.4 and S.pelvis_excursion(kept["source"]) > 0.5
+    for name in S.ROOT_RELATIVE_SIGNATURES:  # 1.08 / 0.90 / 1.02 / 1.08 when measured
+        made, real = S.signature(name, kept["reenacted"][0], 25.0), S.signature(name, kept["source"], 25.0)
+        assert 0.6 <= made / real <= 1.4, name

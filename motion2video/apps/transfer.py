@@ -43,6 +43,8 @@ from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.stages.clips import LoadedClip, model_frame
 from motion2video.stages.latents import (
+    ADAPT_STEPS,
+    adapt_to_source,
     behavior_latents,
     behavior_model,
     behavior_root,
@@ -110,9 +112,11 @@ def _target_start(bundle: ModelBundle, target: LoadedClip, target_frame: int
 
 
 def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedClip, *, source_start: int = 0,
-                      target_frame: int = 0, horizon: int | None = None) -> TransferResult:
+                      target_frame: int = 0, horizon: int | None = None,
+                      adapt_steps: int = ADAPT_STEPS) -> TransferResult:
     """Re-enact the behaviour of ``source`` (from its file frame ``source_start``, 1 + horizon frames) from
-    the posture of ``target`` at file frame ``target_frame``.
+    the posture of ``target`` at file frame ``target_frame``. The decoder is first adapted to the source for
+    ``adapt_steps`` steps (:func:`motion2video.stages.latents.adapt_to_source`; 0: the model as trained).
 
     Raises:
         InputError: not a behaviour model, a frame outside a clip, or a source too short for the horizon.
@@ -127,6 +131,9 @@ def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedCli
     src_feats, src_frame = encode_sequences(bundle, source.data[None, s:s + 1 + horizon])  # (1, 1+H, F)
     tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
     z = behavior_latents(model, src_feats)  # (1, Z)
+    if adapt_steps < 0:
+        raise InputError(f"--adapt-steps must be >= 0, got {adapt_steps}")
+    model = adapt_to_source(model, src_feats, z, steps=adapt_steps)
     root = behavior_root(model, src_feats, tgt_feats[:, 0])  # (1, H, R) or None
     gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)
     seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)

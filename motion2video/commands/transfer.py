@@ -7,8 +7,8 @@ import sys
 
 from motion2video.core.atomic import save_npz
 from motion2video.commands.common import (FIT_VIEW_HELP, add_bvh_argument, add_command, add_motion_input_arguments,
-                                          add_video_output_arguments, check_bvh_output, check_video_and_npz,
-                                          set_threads)
+                                          add_video_output_arguments, check_at_least, check_bvh_output,
+                                          check_video_and_npz, set_threads)
 from motion2video.core.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
@@ -31,7 +31,8 @@ examples:
       --frame-model frames-body-128 --reference person.png -o out/transfer_frames.mp4
 
 The source's behaviour (--behavior-start, then 1 + horizon frames) is encoded by the behaviour model and
-re-enacted from the target's posture at --target-frame (frame numbers count the file's own frames). The
+re-enacted from the target's posture at --target-frame (frame numbers count the file's own frames), by
+the model's decoder first fitted to the source (--adapt-steps; 0 re-enacts with the decoder as trained). The
 video shows the source (left) and the target re-enacting it (right; start posture framed green, generated
 frames red) in another person's appearance: an Anny body with another phenotype and clothes (mesh), or the
 frame generator animating --reference (frames; without --reference the target's start posture is rendered
@@ -50,6 +51,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--target-frame", type=int, default=0, help="the target's start frame (file frames, default 0)")
     p.add_argument("--behavior-start", type=int, default=0, help="first frame of the source's behaviour (default 0)")
     p.add_argument("--horizon", type=int, default=None, help="generated frames (default: the model's, 48)")
+    p.add_argument("--adapt-steps", type=int, default=None, metavar="N",
+                   help="fit the decoder to the source for N steps before re-enacting it, so that large, rare limb "
+                   "motions (a kick) come across (default 300, about 5 s; 0: the model as trained)")
     p.add_argument("--style", choices=("mesh", "frames", "skeleton"), default=None,
                    help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
                    "(default when --reference is given); skeleton: limb maps")
@@ -83,6 +87,10 @@ def run(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     check_cell_size(args.size)
     out = check_video_and_npz(args.output, args.npz)
+    if args.adapt_steps is not None:
+        check_at_least("--adapt-steps", args.adapt_steps, 0)
+        if args.sample is not None:
+            raise InputError("--adapt-steps fits the decoder to a --behavior source; --sample has none")
     style = requested_style(args.style, args.reference)
     if args.model in BASELINES:
         raise InputError(f"behaviour transfer needs a 'behavior' model; {args.model!r} is a baseline")
@@ -102,7 +110,8 @@ def run(args: argparse.Namespace) -> int:
     if args.behavior is not None:
         source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
         result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
-                                   target_frame=args.target_frame, horizon=args.horizon)
+                                   target_frame=args.target_frame, horizon=args.horizon,
+                                   **({} if args.adapt_steps is None else {"adapt_steps": args.adapt_steps}))
     else:
         result = sample_behaviors(bundle, target, num_samples=args.sample, target_frame=args.target_frame,
                                   horizon=args.horizon, seed=args.seed)

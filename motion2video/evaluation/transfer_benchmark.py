@@ -138,6 +138,7 @@ class PairResult:
         start_error: metres, first generated frame vs the target posture (root-relative, heading-aligned).
         bone_spread: bone-length spread over the generated frames (:func:`signatures.bone_length_spread`).
         relative: root-relative signature name -> (source's, re-enactment's) (:data:`RELATIVE`).
+        posture_kept: :func:`posture_kept` of the re-enactment.
     """
 
     method: str
@@ -148,6 +149,7 @@ class PairResult:
     start_error: float
     bone_spread: float
     relative: dict
+    posture_kept: float = float("nan")
 
     @property
     def ratio(self) -> float:
@@ -175,7 +177,28 @@ def score(method: str, case: Case, target: tuple[str, int], source: np.ndarray, 
                       signature=S.signature(name, reenacted, FPS),
                       start_error=S.posture_error(reenacted[1:2], target_posture),
                       bone_spread=S.bone_length_spread(reenacted[1:]),
-                      relative={r: (S.signature(r, source, FPS), S.signature(r, reenacted, FPS)) for r in RELATIVE})
+                      relative={r: (S.signature(r, source, FPS), S.signature(r, reenacted, FPS)) for r in RELATIVE},
+                      posture_kept=posture_kept(source, target_posture, reenacted))
+
+
+def posture_kept(source: np.ndarray, target_posture: np.ndarray, reenacted: np.ndarray) -> float:
+    """How much of the target's own posture a re-enactment keeps: the mean per-joint distance (root-relative)
+    between the re-enactment and the source moved onto the target (:func:`copy_reenactment`) over the second
+    half of the generated frames, over the same distance at the start posture. About 1: it stays as different
+    from the source's poses as the target's posture was; 0: it turned into the source's poses. NaN when the
+    target posture equals the source's start.
+
+    Args:
+        source, reenacted: (1 + H, 17, 3), start posture first; target_posture: (17, 3).
+    """
+    copy = copy_reenactment(source, target_posture)
+    made = np.asarray(reenacted, np.float64)
+    rel = lambda x: x - x[:, :1]  # noqa: E731  root-relative
+    dist = np.linalg.norm(rel(made) - rel(copy), axis=-1).mean(axis=-1)  # (1 + H,)
+    if dist[0] < 1e-6:
+        return float("nan")
+    h = len(dist) - 1
+    return float(dist[1 + h // 2:].mean() / dist[0])
 
 
 def copy_reenactment(source: np.ndarray, target_posture: np.ndarray) -> np.ndarray:
@@ -205,8 +228,9 @@ def _median(x: np.ndarray) -> float:
 
 def summarise(results: list[PairResult]) -> list[dict]:
     """Per (split, behaviour, method): the median ratio, its inter-quartile range, the number of pairs, the
-    median start error, the median bone spread, and ``relative``: the median ratio of every root-relative
-    signature (NaN where no source of the behaviour moves that way, :data:`MIN_RELATIVE_AMPLITUDE`)."""
+    median start error, the median bone spread, ``relative``: the median ratio of every root-relative
+    signature (NaN where no source of the behaviour moves that way, :data:`MIN_RELATIVE_AMPLITUDE`), and the
+    median :func:`posture_kept`."""
     rows = []
     keys = sorted({(r.case.split, r.case.behaviour, r.method) for r in results},
                   key=lambda k: (k[0] != "held-out", BEHAVIOURS.index(k[1]), k[2]))
@@ -220,6 +244,7 @@ def summarise(results: list[PairResult]) -> list[dict]:
             "start_error": float(np.median([r.start_error for r in sel])),
             "bone_spread": float(np.median([r.bone_spread for r in sel])),
             "relative": {name: _median([r.relative_ratio(name) for r in sel]) for name in RELATIVE},
+            "posture_kept": _median([r.posture_kept for r in sel]),
         })
     return rows
 
@@ -244,10 +269,15 @@ def _window_before(clip: np.ndarray, frame: int, length: int) -> np.ndarray:
     return clip[idx]
 
 
-def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray) -> np.ndarray:
+def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray, *, adapt_steps: int | None = None
+                          ) -> np.ndarray:
     """A behaviour model's re-enactments: sources (N, 1 + H, 17, 3), postures (N, 17, 3) -> (N, 1 + H, 17, 3)
-    (the target posture, then H generated frames), exactly as ``motion2video transfer`` makes them."""
+    (the target posture, then H generated frames), exactly as ``motion2video transfer`` makes them: the decoder
+    adapted to each source for ``adapt_steps`` steps (default ``ADAPT_STEPS``, as the command; 0: as trained),
+    once per distinct source."""
     from motion2video.stages.latents import (
+        ADAPT_STEPS,
+        adapt_to_source,
         behavior_latents,
         behavior_model,
         behavior_root,
@@ -258,13 +288,19 @@ def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray) -> 
     )
 
     model = behavior_model(bundle)
+    steps = ADAPT_STEPS if adapt_steps is None else adapt_steps
     horizon = sources.shape[1] - 1
     out = []
+    adapted: dict[bytes, object] = {}  # one adaptation per distinct source
     for src, post in zip(sources, postures):
         src_feats, _ = encode_sequences(bundle, src[None])  # (1, 1+H, F)
         tgt_feats, tgt_frame = encode_sequences(bundle, post[None, None])  # (1, 1, F)
         z = behavior_latents(model, src_feats)
-        gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=behavior_root(model, src_feats, tgt_feats[:, 0]))
+        key = np.ascontiguousarray(src).tobytes()
+        if key not in adapted:
+            adapted[key] = adapt_to_source(model, src_feats, z, steps=steps)
+        m = adapted[key]
+        gen = reenact(m, z, tgt_feats[:, 0], horizon=horizon, root=behavior_root(m, src_feats, tgt_feats[:, 0]))
         seq = np.concatenate([tgt_feats, gen], axis=1)
         out.append(rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])[0])
     return np.stack(out)
@@ -280,9 +316,11 @@ def analogy_reenactments(bundle, a_b: np.ndarray, c: np.ndarray) -> np.ndarray:
     return np.concatenate([c[:, -1:], d], axis=1)
 
 
-def run_benchmark(mocap: str, *, transfer=None, analogy=None, cases=CASES) -> list[PairResult]:
-    """Every case x target, re-enacted by ``transfer`` (a behaviour bundle), ``analogy`` (an MT-VAE bundle)
-    and the copy baseline (either bundle may be None)."""
+def run_benchmark(mocap: str, *, transfer=None, analogy=None, cases=CASES, adapt_steps: int | None = None
+                  ) -> list[PairResult]:
+    """Every case x target, re-enacted by ``transfer`` (a behaviour bundle; its decoder adapted to each source
+    for ``adapt_steps`` steps, default as ``motion2video transfer``), ``analogy`` (an MT-VAE bundle) and the copy
+    baseline (either bundle may be None)."""
     clips: dict[str, np.ndarray] = {}
 
     def clip(name: str) -> np.ndarray:
@@ -301,7 +339,8 @@ def run_benchmark(mocap: str, *, transfer=None, analogy=None, cases=CASES) -> li
         n = len(targets)
         made = {"copy": np.stack([copy_reenactment(source, p) for p in postures])}
         if transfer is not None:
-            made["transfer"] = transfer_reenactments(transfer, np.repeat(source[None], n, axis=0), postures)
+            made["transfer"] = transfer_reenactments(transfer, np.repeat(source[None], n, axis=0), postures,
+                                                     adapt_steps=adapt_steps)
         if analogy is not None:
             a = _window_before(data, case.start, CONTEXT)
             a_b = np.concatenate([a, source[1:]])[None].repeat(n, axis=0)
