@@ -203,7 +203,8 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
         size = crop
     mesh_flow = mesh_vis = None
     if seqs.vertex_uv is not None and tgt_mask is not None:
-        mesh_flow, mesh_vis = pair_mesh_flows(seqs, index, flip, origins if crop else None, tgt_mask)
+        mesh_flow, mesh_vis = pair_mesh_flows(seqs, index, flip, origins if crop else None, tgt_mask,
+                                              ref_images=ref_img)
     if seqs.domain == "body":
         ref_st, tgt_st = body_structures(ref_pts, size), body_structures(tgt_pts, size)
     else:
@@ -214,10 +215,12 @@ def make_pairs(seqs: FrameSequences, index: np.ndarray, *, flip: np.ndarray | No
 
 
 def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | None, origins: np.ndarray | None,
-                    tgt_masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                    tgt_masks: np.ndarray, *, ref_images: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The mesh correspondence of every pair of ``index`` (B, 3) after its flip and crop (``origins`` (B, 2)
     or None), filling the (already flipped and cropped) target silhouettes ``tgt_masks`` (B, h, w) and a band
-    around them (:func:`frames.mesh_flow.extend_flow`).
+    around them (:func:`frames.mesh_flow.extend_flow`). ``ref_images`` (B, h, w, 3), the flipped and cropped
+    reference images, let the completion of hidden surface test its sources' colours
+    (:func:`frames.mesh_flow.complete_reference_uv`).
 
     Returns:
         flow (B, h, w, 2) float32 reference pixels, visibility (B, h, w) float32.
@@ -230,7 +233,8 @@ def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | 
         origin = tuple(float(v) for v in origins[k]) if origins is not None else (0.0, 0.0)
         ref_uv = transform_uv(seqs.vertex_uv[s, r], size=seqs.image_size, flip=f, origin=origin)
         tgt_uv = transform_uv(seqs.vertex_uv[s, t], size=seqs.image_size, flip=f, origin=origin)
-        mf = dense_flow(ref_uv, seqs.vertex_visible[s, r], tgt_uv, seqs.vertex_visible[s, t], tgt_masks[k])
+        mf = dense_flow(ref_uv, seqs.vertex_visible[s, r], tgt_uv, seqs.vertex_visible[s, t], tgt_masks[k],
+                        image=None if ref_images is None else ref_images[k])
         mf = extend_flow(mf, band_width(seqs.image_size))
         flows.append(mf.flow)
         vis.append(mf.visibility)

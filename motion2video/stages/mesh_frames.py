@@ -656,7 +656,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
     out = np.repeat(image[None], len(rows), axis=0)
     colours = sampled_colours(x_ref, ref_mask, plate, sampled_person(video))  # once for every target
-    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0])
+    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], image=small)
     if video.uv_sources is not None:  # a fitted hand beside the pictured one samples the pictured one
         ref_uv = ref_uv[video.uv_sources]
     net.eval()
@@ -710,7 +710,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     colours = person_colours(x_ref, ref_mask, plate)  # once for every target
     rows = np.asarray(rows, np.int64)
     out = np.empty((len(rows), size, size, 3), np.uint8)
-    ref_uv = complete_reference_uv(track.uv[0], track.visible[0])
+    ref_uv = complete_reference_uv(track.uv[0], track.visible[0], image=image)
     net.eval()
     with torch.inference_mode():
         for start in range(0, len(rows), batch_size):
