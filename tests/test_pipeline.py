@@ -48,6 +48,17 @@ def train_body_motion_model(mocap_dir: Path, folder: Path) -> Path:
     return out
 
 
+def train_dlow_model(base: Path) -> Path:
+    """A 2-step DLow sampler over the tiny body model ``base`` (the demo draws the best sampler's futures),
+    trained through the CLI on the body clips already linked by :func:`train_body_motion_model`."""
+    out = base.parent / "dlow.safetensors"
+    config = json.dumps({"model": {"num_samples": 6, "hidden_dim": 8},
+                         "train": {"batch_size": 4, "checkpoint_every": 5, "val_every": 5, "val_windows": 8}})
+    assert main(["train", "--model", "dlow", "--base", str(base), "--data", str(base.parent / "mocap"), "-o",
+                 str(out), "--steps", "2", "--config", config, "--no-progress"]) == 0
+    return out
+
+
 def train_behavior_model(folder: Path) -> Path:
     """A 2-step behaviour model (root-trajectory decoder) on the body clips already linked by
     :func:`train_body_motion_model`, trained through the CLI (the demo's transfer)."""
@@ -328,7 +339,7 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     mesh = save_frame_model(MeshWarpGenerator(MeshWarpConfig(image_size=64)), tmp_path / "mesh.safetensors", step=0)
     face_mesh = save_frame_model(MeshWarpGenerator(MeshWarpConfig(domain="face", image_size=64, structure_channels=1)),
                                  tmp_path / "face-mesh.safetensors", step=0)
-    names = {"mtvae-add": checkpoints["body"], demo.BODY["frame_model"]: mesh,
+    names = {demo.BODY["motion_model"]: train_dlow_model(checkpoints["body"]), demo.BODY["frame_model"]: mesh,
              "frames-body-128": checkpoints["frames_body"],
              "mtvae-add-face": train_face_motion_model(face_dir, tmp_path),
              demo.FACE["frame_model"]: face_mesh,
@@ -336,7 +347,7 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     for name, path in names.items():
         (weights / f"{name}.safetensors").symlink_to(path)
     out = tmp_path / "out"
-    # the real-photo video needs the shipped (warp) generator: tests/test_demo_photo.py runs it
+    # the real-photo video needs the shipped generators: tests/test_demo_photo.py runs it
     assert demo.main(["--out", str(out), "--weights", str(weights), "--samples", "1",
                       "--photos", str(tmp_path / "no-photos")]) == 0
     printed = capsys.readouterr().out
