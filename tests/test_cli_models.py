@@ -243,3 +243,18 @@ def test_face_model_samples_a_face_capture(face_dir, tmp_path):
     assert z["observed"].shape == (16, 58) and z["futures"].shape == (2, 3, 58)
     assert z["futures"][..., :52].min() >= 0.0 and z["futures"][..., :52].max() <= 1.0
     assert str(z["layout"]) == "face" and out.stat().st_size > 0
+
+
+def test_sample_help_lists_every_shipped_motion_model_and_names_the_best(capsys):
+    """Issue 24, item 7: `sample --help` lists the shipped motion models (every checkpoint in motion2video/weights
+    that is not a frame generator or the pose estimator), the best body sampler first."""
+    from motion2video.models.checkpoint import shipped_names
+
+    with pytest.raises(SystemExit):
+        main(["sample", "--help"])
+    text = capsys.readouterr().out
+    listed = text.split("shipped motion models")[1]
+    motion = [n for n in shipped_names() if not n.startswith("frames-")]
+    assert motion and all(f"  {name} " in listed for name in motion), motion
+    first = listed.strip().splitlines()[1].split()
+    assert first[0] == "mtvae-add-dlow" and "best" in " ".join(first)

@@ -26,6 +26,15 @@ examples:
 
 Every cell of the grid plays the observed frames framed in green, then one sampled future framed in red.
 --model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip.
+
+shipped motion models (model cards in motion2video/weights/NAME.md):
+  mtvae-add-dlow  3D body: the best sampler (lowest best-of-50 error on every action, docs/results.md)
+  mtvae-add       3D body: MT-VAE, the model mtvae-add-dlow samples from
+  lcpvae          3D body: LCP-VAE, a learned condition-dependent prior
+  behavior        3D body: the behaviour model (flow samples; transfer re-enacts with it)
+  mixer-dct       3D body: DCT + MLP-mixer forecaster (issue 24; not better than mtvae-add-dlow)
+  mtvae-add-2d    2D keypoints in a virtual camera
+  mtvae-add-face  ARKit face coefficients + head pose
 """
 
 
