@@ -53,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--horizon", type=int, default=None, help="generated frames (default: the model's, 48)")
     p.add_argument("--adapt-steps", type=int, default=None, metavar="N",
                    help="fit the decoder to the source for N steps before re-enacting it, so that large, rare limb "
-                   "motions (a kick) come across (default 300, about 5 s; 0: the model as trained)")
+                   "motions (a kick) come across (default 300, about 6 s; 0: the model as trained)")
     p.add_argument("--style", choices=("mesh", "frames", "skeleton"), default=None,
                    help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
                    "(default when --reference is given); skeleton: limb maps")
