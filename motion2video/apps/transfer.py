@@ -131,8 +131,6 @@ def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedCli
     src_feats, src_frame = encode_sequences(bundle, source.data[None, s:s + 1 + horizon])  # (1, 1+H, F)
     tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
     z = behavior_latents(model, src_feats)  # (1, Z)
-    if adapt_steps < 0:
-        raise InputError(f"--adapt-steps must be >= 0, got {adapt_steps}")
     model = adapt_to_source(model, src_feats, z, steps=adapt_steps)
     root = behavior_root(model, src_feats, tgt_feats[:, 0])  # (1, H, R) or None
     gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
                                             style_for, transfer_behavior, transfer_forecast)
     from motion2video.stages.clips import load_clip
-    from motion2video.stages.latents import behavior_model
+    from motion2video.stages.latents import ADAPT_STEPS, behavior_model
     from motion2video.stages.video import check_cell_size
     from motion2video.formats.video import VideoWriter
 
@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
         result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
                                    target_frame=args.target_frame, horizon=args.horizon,
-                                   **({} if args.adapt_steps is None else {"adapt_steps": args.adapt_steps}))
+                                   adapt_steps=ADAPT_STEPS if args.adapt_steps is None else args.adapt_steps)
     else:
         result = sample_behaviors(bundle, target, num_samples=args.sample, target_frame=args.target_frame,
                                   horizon=args.horizon, seed=args.seed)
