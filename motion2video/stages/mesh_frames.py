@@ -124,6 +124,9 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                       size: int, progress=None) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
+    Frame 0 is the reference, the others are targets: where two surfaces of the body meet in a target (a forearm
+    held against the waist), only the front one counts as shown (``renderers.mesh.behind_a_touching_surface``).
+
     Args:
         joints: (N, 17, 3) world joints (one body: a single size is fitted over all frames).
         phenotype: Anny phenotype values.
@@ -149,6 +152,7 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     shifts = shifts - scales[:, None] * pad  # the widened camera's pixels are the given camera's + pad
     pose = pose_anny_from_joints(np.asarray(joints, np.float64), phenotype=phenotype)
     faces = anny_model.triangles()
+    rest = anny_model.anny_rest(phenotype).vertices
     renderer = MeshRenderer(camera.width, camera.height)
     uv, visible, masks = None, None, np.zeros((n, size, size), bool)
     try:
@@ -160,7 +164,9 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                 i = start + k
                 out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
                 uvz = project(v, camera)
-                visible[i] = vertex_visibility(uvz, out.depth)
+                # a target frame shows only the front one where two surfaces meet (the reference frame keeps both:
+                # they sample the same pixel of the picture, and neither is a completion source there)
+                visible[i] = vertex_visibility(uvz, out.depth, rest=rest if i >= 1 else None)
                 uv[i] = uvz[:, :2] * scales[i] + shifts[i]
                 m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
                                    flags=cv2.INTER_LINEAR)
