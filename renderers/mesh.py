@@ -459,12 +459,21 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
     if len(shown) < 2:
         return out
     points = np.asarray(uv, np.float64)[shown]
-    rest = np.asarray(rest, np.float64)
+    # float32, one coordinate at a time: this runs on every target frame, over about 150,000 pairs
+    at_rest = np.ascontiguousarray(np.asarray(rest, np.float32)[shown].T)  # (3, S)
+
+    def apart(i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        squared = np.zeros(len(i), np.float32)
+        for coordinate in at_rest:
+            step = coordinate.take(i) - coordinate.take(j)
+            squared += step * step
+        return squared > TOUCH_APART_M ** 2
+
     tree = cKDTree(points)
     pairs = tree.query_pairs(TOUCH_PX, output_type="ndarray")  # (P, 2) indices into shown
     if len(pairs) == 0:
         return out
-    meet = pairs[np.linalg.norm(rest[shown[pairs[:, 0]]] - rest[shown[pairs[:, 1]]], axis=1) > TOUCH_APART_M]
+    meet = pairs[apart(pairs[:, 0], pairs[:, 1])]
     if len(meet) == 0:
         return out
     depth = np.asarray(behind, np.float64)[shown]
@@ -472,7 +481,7 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
     around = tree.query_ball_point(points[judged], TOUCH_SMOOTH_PX)  # each holds the vertex itself
     centre = np.repeat(np.arange(len(judged)), [len(n) for n in around])
     near = np.concatenate(around).astype(np.int64)
-    own = np.linalg.norm(rest[shown[near]] - rest[shown[judged[centre]]], axis=1) <= TOUCH_APART_M
+    own = ~apart(near, judged[centre])
     mean = np.zeros(len(shown))
     mean[judged] = (np.bincount(centre[own], weights=depth[near[own]], minlength=len(judged))
                     / np.bincount(centre[own], minlength=len(judged)))
