@@ -395,3 +395,76 @@ def test_the_hidden_back_of_the_shirt_and_the_head_take_the_shirt_and_the_hair()
     # the typical sources of a region are most of its shown vertices, not a hand-picked few
     top = np.flatnonzero(seen & (regions == anny_model.TOP))
     assert 0.8 * len(top) < len(typical_colour_sources(uv, top, picture, regions)) < len(top)
+
+
+def test_completion_sources_keep_away_from_another_region():
+    """Trousers beside a hand: the trousers' sources keep INTERIOR_PX from every shown vertex of the hand; the skin's
+    sources are left alone (a face's regions are a few pixels wide in a photo); a clothes region with too few such
+    sources keeps all of its own."""
+    from renderers.anny_model import SKIN, TOP, TROUSERS
+
+    from motion2video.frames.mesh_flow import COLOUR_MIN_SOURCES, interior_sources
+
+    ys, xs = np.mgrid[0:10, 0:20]
+    uv = np.stack([xs.ravel() + 0.5, ys.ravel() + 0.5], axis=1)
+    regions = np.where(xs.ravel() < 10, TROUSERS, SKIN)  # trousers left of x = 10, a hand right of it
+    seen = np.ones(len(uv), bool)
+    sources = np.arange(len(uv))
+    kept = interior_sources(uv, sources, seen, regions, radius_px=2.0)
+    trousers_kept = uv[kept][regions[kept] == TROUSERS, 0]
+    assert trousers_kept.max() == 7.5  # 8.5 and 9.5 lie within 2 px of the hand's 10.5
+    assert np.all(np.isin(sources[uv[:, 0] < 8], kept))  # the rest of the trousers stays
+    assert np.all(np.isin(sources[regions == SKIN], kept))  # the hand's own sources stay
+    # a hidden neighbour does not count: only what the reference shows can be sampled by mistake
+    only_trousers = regions == TROUSERS
+    assert len(interior_sources(uv, sources[only_trousers], only_trousers, regions, radius_px=2.0)) == 100
+    # a thin clothes region (one column of shirt) has no interior: it keeps its sources
+    regions_thin = regions.copy()
+    regions_thin[uv[:, 0] == 10.5] = TOP
+    thin = np.flatnonzero(regions_thin == TOP)
+    assert len(thin) < COLOUR_MIN_SOURCES
+    assert np.all(np.isin(thin, interior_sources(uv, sources, seen, regions_thin, radius_px=2.0)))
+
+
+def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypatch):
+    """A future of the demo (mtvae-add-dlow, sample 4 at +28: the body turned away, the hands hanging in front of it)
+    on the demo's reference. The back of the trousers is hidden in the reference and completed from shown trousers
+    vertices; those beside the hanging hands lay within a pixel or two of them, and the generator's flow correction
+    carried the samples onto the hands: 158 skin-coloured pixels where the target shows trousers or shirt. With the
+    clothes sources kept INTERIOR_PX from other regions, none. Over all 240 future frames of the demo: 9,119 -> 1,237."""
+    import motion2video.frames.mesh_flow as mesh_flow
+    from renderers import anny_model
+    from scipy.spatial import cKDTree
+
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.stages.frames import mesh_setup
+    from motion2video.stages.mesh_frames import generate_mesh_frames
+    from motion2video.stages.reference import load_reference
+    from motion2video.stages.sampling import Forecast
+    from motion2video.stages.structure import render_structures
+
+    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
+    away = np.array([[0.53, 0.57, 0.87], [0.588, 0.583, 0.865], [0.608, 0.705, 0.476], [0.618, 0.576, 0.07],
+                     [0.474, 0.57, 0.876], [0.45, 0.609, 0.505], [0.485, 0.428, 0.123], [0.511, 0.602, 1.09],
+                     [0.515, 0.554, 1.329], [0.491, 0.644, 1.43], [0.548, 0.628, 1.529], [0.436, 0.579, 1.332],
+                     [0.424, 0.602, 1.088], [0.443, 0.782, 1.049], [0.605, 0.587, 1.314], [0.603, 0.665, 1.061],
+                     [0.58, 0.733, 1.006]])
+    forecast = Forecast(observed=walk[24:40], futures=away[None, None], fps=25.0, layout="body3d", model="test",
+                        seed=0)
+    reference = load_reference(ROOT / "demo_inputs" / "reference_body.png", size=256, domain="body")
+    net = load_frame_model("frames-body-mesh-256").model
+    video = mesh_setup(net, reference, render_structures(forecast, domain="body", size=256, reference=reference))
+    regions = anny_model.vertex_regions()
+
+    def skin_on_cloth() -> int:
+        frame = generate_mesh_frames(net, reference.image, video, np.array([16]))[0]
+        uv, shown = video.targets.uv[16], np.flatnonzero(video.targets.visible[16])
+        ys, xs = np.nonzero(video.targets.masks[16])
+        _, idx = cKDTree(uv[shown]).query(np.stack([xs + 0.5, ys + 0.5], axis=1))
+        c = frame[ys, xs].astype(int)
+        skin = (c[:, 0] > 150) & (c[:, 0] - c[:, 2] > 40)
+        return int((skin & np.isin(regions[shown[idx]], [anny_model.TOP, anny_model.TROUSERS])).sum())
+
+    kept_inside = skin_on_cloth()
+    monkeypatch.setattr(mesh_flow, "interior_sources", lambda uv, sources, seen, regions, radius_px: sources)
+    assert skin_on_cloth() > 100 and kept_inside < 20  # 158 and 0 (2026-11-26)

@@ -203,6 +203,49 @@ def typical_colour_sources(ref_uv: np.ndarray, sources: np.ndarray, image: np.nd
     return sources[keep]
 
 
+# A clothes region's completion sources keep INTERIOR_PX pixels (at 128 px; scaled with the image) from every shown
+# vertex of another region (:func:`interior_sources`): the generator corrects the flow by up to a pixel or two, and from
+# a source on a region's edge that lands on the neighbour (the back of a turned body's trousers, completed from trousers
+# pixels beside the hanging hands, came out skin-coloured in `make demo`). The regions of a face are left alone: they
+# are a few pixels wide in a photo, and their hidden sides then took colours from far away.
+INTERIOR_PX = 2.0
+
+
+def interior_sources(ref_uv: np.ndarray, sources: np.ndarray, seen: np.ndarray, regions: np.ndarray, *,
+                     radius_px: float) -> np.ndarray:
+    """The subset of ``sources`` (vertex ids) without the clothes sources (shirt, trousers, shoes) that lie within
+    ``radius_px`` pixels of a shown vertex of another region; a region left with fewer than COLOUR_MIN_SOURCES
+    sources keeps all of its sources.
+
+    Args:
+        ref_uv: (V, 2) reference pixels; sources: (S,) int vertex ids; seen: (V,) bool shown by the reference;
+        regions: (V,) int region of every vertex (:func:`renderers.anny_model.vertex_regions`).
+    Returns:
+        (S',) int, in the order of ``sources``.
+    """
+    from renderers.anny_model import SHOES, TOP, TROUSERS
+
+    from scipy.spatial import cKDTree
+
+    shown = np.flatnonzero(seen)
+    if len(sources) == 0 or len(shown) < 2:
+        return sources
+    uv = np.asarray(ref_uv, np.float64)
+    pairs = cKDTree(uv[shown]).query_pairs(radius_px, output_type="ndarray")
+    edge = np.zeros(len(uv), bool)
+    if len(pairs):
+        a, b = shown[pairs[:, 0]], shown[pairs[:, 1]]
+        other = regions[a] != regions[b]
+        edge[a[other]] = True
+        edge[b[other]] = True
+    keep = ~edge[sources] | ~np.isin(regions[sources], (TOP, TROUSERS, SHOES))
+    for r in np.unique(regions[sources]):
+        mine = regions[sources] == r
+        if (keep & mine).sum() < COLOUR_MIN_SOURCES:
+            keep |= mine
+    return sources[keep]
+
+
 def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bool = True,
                           image: np.ndarray | None = None) -> np.ndarray:
     """(V, 2) reference pixels where every vertex the reference does not show takes the pixel of the nearest
@@ -218,7 +261,9 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
 
     Given the reference ``image``, a region's sources are only its shown vertices of a typical colour
     (:func:`typical_colour_sources`): the outline's vertices, which show part of what lies beside the region, do not
-    colour its hidden side.
+    colour its hidden side; and a clothes region's only those INTERIOR_PX (at 128 px) from every shown vertex of
+    another region (:func:`interior_sources`), so that the generator's small flow correction does not carry the
+    samples across.
 
     Args:
         ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
@@ -238,7 +283,10 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
     nearest = _nearest_sources(graph, sources)
     if by_region:
         inside, regions = region_graph()
-        typical = sources if image is None else typical_colour_sources(uv, sources, image, regions)
+        typical = sources
+        if image is not None:
+            typical = typical_colour_sources(uv, sources, image, regions)
+            typical = interior_sources(uv, typical, seen, regions, radius_px=INTERIOR_PX * image.shape[0] / 128)
         within = _nearest_sources(inside, typical)
         nearest = np.where(within >= 0, within, nearest)
     hidden = ~np.asarray(seen, bool) & (nearest >= 0)
