@@ -89,8 +89,8 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
     """A future of the demo (mtvae-add-dlow, sample 2 at +41: the body turned sideways, the near forearm against the
     waist) on the demo's reference. Its target mesh showed skin and shirt vertices interleaved over the forearm: 366
     shown vertices had a shown vertex of another surface within a pixel, and the generated frame had a dotted grid
-    of skin and shirt there. With the front surface kept, 25. The reference frame keeps both surfaces where they meet
-    (they sample the same pixel of the picture)."""
+    of skin and shirt there. With the front surface kept, 25. In the reference the rule only hides vertices (the thigh
+    under a hanging hand), never shows one the depth test hid."""
     from scipy.spatial import cKDTree
 
     import renderers.mesh as mesh
@@ -126,7 +126,8 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
     monkeypatch.setattr(mesh, "behind_a_touching_surface", lambda uv, seen, behind, rest: np.zeros(len(uv), bool))
     both = mesh_setup(net, reference, structures)
     assert interleaved(both) > 250 and interleaved(kept) < 60  # 366 and 25 (2026-11-26)
-    np.testing.assert_array_equal(kept.reference.visible, both.reference.visible)
+    hidden_in_reference = both.reference.visible & ~kept.reference.visible
+    assert not (kept.reference.visible & ~both.reference.visible).any() and hidden_in_reference.sum() > 20
 
 
 def test_dense_flow_of_a_shifted_grid_is_the_shift():

@@ -124,8 +124,8 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                       size: int, progress=None) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
-    Frame 0 is the reference, the others are targets: where two surfaces of the body meet in a target (a forearm
-    held against the waist), only the front one counts as shown (``renderers.mesh.behind_a_touching_surface``).
+    Where two surfaces of the body meet in a frame (a forearm held against the waist, a hand beside a thigh), only the
+    front one counts as shown (``renderers.mesh.behind_a_touching_surface``).
 
     Args:
         joints: (N, 17, 3) world joints (one body: a single size is fitted over all frames).
@@ -164,9 +164,10 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
                 i = start + k
                 out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
                 uvz = project(v, camera)
-                # a target frame shows only the front one where two surfaces meet (the reference frame keeps both:
-                # they sample the same pixel of the picture, and neither is a completion source there)
-                visible[i] = vertex_visibility(uvz, out.depth, rest=rest if i >= 1 else None)
+                # where two surfaces meet, only the front one is shown: in a target so that the flow does not
+                # alternate between them, in the reference so that the one behind (a thigh under the hand) does not
+                # carry the other's pixel when a target moves them apart
+                visible[i] = vertex_visibility(uvz, out.depth, rest=rest)
                 uv[i] = uvz[:, :2] * scales[i] + shifts[i]
                 m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
                                    flags=cv2.INTER_LINEAR)
