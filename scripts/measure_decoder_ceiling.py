@@ -37,33 +37,19 @@ from motion2video.data.dataset import DEFAULT_MOCAP, build_dataset  # noqa: E402
 from motion2video.data.windows import metric_vectors  # noqa: E402
 from motion2video.evaluation.forecasting import (EvalProtocol, dlow_metrics_per_window,  # noqa: E402
                                                  evaluate_bundles, posterior_futures)
-from motion2video.evaluation.per_action import group_by_action  # noqa: E402
+from motion2video.evaluation.per_action import group_by_action, macro_average, per_action_means  # noqa: E402
 from motion2video.models.checkpoint import baseline_bundle, load_model  # noqa: E402
-from motion2video.stages.sampling import as_model_input, continue_observed  # noqa: E402
+from motion2video.stages.sampling import continue_observed  # noqa: E402
 
 SAMPLES = 50
 
 
-@torch.no_grad()
-def posterior_mean_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarray, *,
-                           batch_size: int = 64) -> np.ndarray:
-    """(N, 1, Tf, F) normalised futures decoded from the recognition model's mean latent of each window."""
-    model.eval()
-    out = []
-    for i in range(0, len(obs), batch_size):
-        o, f = as_model_input(obs[i:i + batch_size], model), as_model_input(future[i:i + batch_size], model)
-        rec = model.decode(o, model.encode(o, f).mu, horizon=future.shape[1])
-        out.append(rec[:, None].float().cpu().numpy())
-    return np.concatenate(out)
-
-
-def ratios(per_window: dict[str, np.ndarray], zero: dict[str, dict[str, float]],
-           actions: dict[str, np.ndarray]) -> dict[str, list[float]]:
-    """action -> [ADE, FDE] ratio to zero-velocity over that action's windows, plus ``macro``."""
-    out = {a: [float(per_window["ade"][idx].mean() / zero[a]["ade"]),
-               float(per_window["fde"][idx].mean() / zero[a]["fde"])] for a, idx in actions.items()}
-    out["macro"] = [float(np.mean([v[i] for v in out.values()])) for i in (0, 1)]
-    return out
+def ratios(per_action: dict[str, dict[str, float]], zero: dict[str, dict[str, float]]) -> dict[str, list[float]]:
+    """action -> [ADE, FDE] ratio to zero-velocity (``per_action`` as :func:`per_action_means` gives it), plus
+    ``macro``, the unweighted mean over actions."""
+    rows = {a: {"ade": r["ade"] / zero[a]["ade"], "fde": r["fde"] / zero[a]["fde"]} for a, r in per_action.items()}
+    macro = macro_average(rows)
+    return {**{a: [r["ade"], r["fde"]] for a, r in rows.items()}, "macro": [macro["ade"], macro["fde"]]}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -95,17 +81,15 @@ def main(argv: list[str] | None = None) -> int:
 
         def score(normalised: np.ndarray) -> dict[str, list[float]]:
             pred = metric_vectors(bundle.stats.denormalize(continue_observed(normalised, windows.obs)), layout)
-            return ratios(dlow_metrics_per_window(pred, gt, last, threshold=threshold), zero, actions)
+            return ratios(per_action_means(dlow_metrics_per_window(pred, gt, last, threshold=threshold), actions), zero)
 
         rows = {
-            "posterior mean": score(posterior_mean_futures(decoder, windows.obs, windows.future)),
+            "posterior mean": score(posterior_futures(decoder, windows.obs, windows.future, num_samples=1, seed=0,
+                                                      from_mean=True)),
             f"posterior, best of {SAMPLES}": score(posterior_futures(decoder, windows.obs, windows.future,
                                                                       num_samples=SAMPLES, seed=0)),
-            f"sampled, best of {SAMPLES}": {a: [r["ade"] / zero[a]["ade"], r["fde"] / zero[a]["fde"]]
-                                            for a, r in scored.per_action[bundle.label].items()},
+            f"sampled, best of {SAMPLES}": ratios(scored.per_action[bundle.label], zero),
         }
-        sampled = rows[f"sampled, best of {SAMPLES}"]
-        sampled["macro"] = [float(np.mean([v[i] for v in sampled.values()])) for i in (0, 1)]
         counts = {a: int(len(idx)) for a, idx in actions.items()}
         report[bundle.label] = {"rows": rows, "windows": counts, "apd": scored.results[bundle.label]["apd"]}
 

@@ -116,9 +116,10 @@ def _rows_table(rows: dict[str, dict[str, float]], columns: tuple[str, ...], *, 
 
 @torch.no_grad()
 def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarray, *, num_samples: int, seed: int,
-                      batch_size: int = 32) -> np.ndarray | None:
+                      batch_size: int = 32, from_mean: bool = False) -> np.ndarray | None:
     """K reconstructions per window from latents drawn from the recognition model q(z | obs, future)
-    (for R-MSE): (N, K, Tf, F) normalised, or None for models without ``encode`` / ``decode``."""
+    (for R-MSE): (N, K, Tf, F) normalised, or None for models without ``encode`` / ``decode``. ``from_mean``:
+    every latent is the recognition model's mean instead (``scripts/measure_decoder_ceiling.py``)."""
     if not (hasattr(model, "encode") and hasattr(model, "decode")):
         return None
     model.eval()
@@ -130,6 +131,8 @@ def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarra
         post = model.encode(o, f)
         b, z_dim = post.mu.shape
         eps = torch.randn((b, num_samples, z_dim), generator=gen).to(post.mu.device)
+        if from_mean:
+            eps = torch.zeros_like(eps)
         z = post.mu[:, None] + torch.exp(0.5 * post.logvar)[:, None] * eps  # (B, K, Z)
         rec = model.decode(o.repeat_interleave(num_samples, 0), z.reshape(b * num_samples, z_dim), horizon=horizon)
         out.append(rec.reshape(b, num_samples, horizon, -1).float().cpu().numpy())
