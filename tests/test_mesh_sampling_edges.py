@@ -119,23 +119,28 @@ def test_vertices_of_two_body_parts_that_touch_in_the_picture_are_not_completion
     assert not touching_other_part(uv2, np.ones(n, bool)).any()
 
 
-def fitted_reference(path: Path, **load):
+def fitted_reference(path: Path, *, observed: np.ndarray | None = None, futures: np.ndarray | None = None, **load):
     """The reference picture at ``path`` and the :class:`~motion2video.stages.mesh_frames.MeshVideo` synthesize
-    fits to it (the frames-body-mesh-256 generator, two frames of ``demo_inputs/cmu_walk.npz`` observed and two
-    predicted)."""
+    fits to it (the frames-body-mesh-256 generator). The motion: ``observed`` (T, 17, 3) and ``futures``
+    (K, H, 17, 3) world joints; by default two frames of ``demo_inputs/cmu_walk.npz`` observed and two predicted."""
     from motion2video.frames.checkpoint import load_frame_model
     from motion2video.stages.frames import mesh_setup
     from motion2video.stages.reference import load_reference
     from motion2video.stages.sampling import Forecast
     from motion2video.stages.structure import render_structures
 
-    joints = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
-    forecast = Forecast(observed=joints[:2], futures=joints[None, 2:4], fps=25.0, layout="body3d", model="test",
-                        seed=0)
+    if observed is None:
+        observed, futures = demo_walk()[:2], demo_walk()[None, 2:4]
+    forecast = Forecast(observed=observed, futures=futures, fps=25.0, layout="body3d", model="test", seed=0)
     reference = load_reference(path, size=256, domain="body", **load)
     net = load_frame_model("frames-body-mesh-256").model
     return reference, mesh_setup(net, reference, render_structures(forecast, domain="body", size=256,
                                                                    reference=reference))
+
+
+def demo_walk() -> np.ndarray:
+    """(T, 17, 3) the world joints of ``demo_inputs/cmu_walk.npz``, the walk ``make demo`` observes (frames 24..39)."""
+    return np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
 
 
 def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_background(monkeypatch):
@@ -152,7 +157,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     from motion2video.stages.mesh_frames import sampled_person
 
     # the completion's own rules, on the depth test's visibility (the touching-surface rule of session 9, which hides
-    # thigh vertices under a hand in the reference, is tested in tests/test_frames_mesh.py)
+    # thigh vertices under a hand in the reference, is tested below: test_a_forearm_against_the_waist_...)
     plain = renderers.mesh.behind_a_touching_surface
     monkeypatch.setattr(renderers.mesh, "behind_a_touching_surface",
                         lambda uv, seen, behind, rest: np.zeros(len(uv), bool))
@@ -444,23 +449,16 @@ def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypa
     from scipy.spatial import cKDTree
 
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.stages.frames import mesh_setup
     from motion2video.stages.mesh_frames import generate_mesh_frames
-    from motion2video.stages.reference import load_reference
-    from motion2video.stages.sampling import Forecast
-    from motion2video.stages.structure import render_structures
 
-    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
     away = np.array([[0.53, 0.57, 0.87], [0.588, 0.583, 0.865], [0.608, 0.705, 0.476], [0.618, 0.576, 0.07],
                      [0.474, 0.57, 0.876], [0.45, 0.609, 0.505], [0.485, 0.428, 0.123], [0.511, 0.602, 1.09],
                      [0.515, 0.554, 1.329], [0.491, 0.644, 1.43], [0.548, 0.628, 1.529], [0.436, 0.579, 1.332],
                      [0.424, 0.602, 1.088], [0.443, 0.782, 1.049], [0.605, 0.587, 1.314], [0.603, 0.665, 1.061],
                      [0.58, 0.733, 1.006]])
-    forecast = Forecast(observed=walk[24:40], futures=away[None, None], fps=25.0, layout="body3d", model="test",
-                        seed=0)
-    reference = load_reference(ROOT / "demo_inputs" / "reference_body.png", size=256, domain="body")
+    reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png", observed=demo_walk()[24:40],
+                                        futures=away[None, None])
     net = load_frame_model("frames-body-mesh-256").model
-    video = mesh_setup(net, reference, render_structures(forecast, domain="body", size=256, reference=reference))
     regions = anny_model.vertex_regions()
 
     def skin_on_cloth() -> int:
@@ -475,3 +473,29 @@ def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypa
     kept_inside = skin_on_cloth()
     monkeypatch.setattr(mesh_flow, "interior_sources", lambda uv, sources, seen, regions, radius_px: sources)
     assert skin_on_cloth() > 100 and kept_inside < 20  # 158 and 0 (2026-11-26)
+
+
+def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(monkeypatch):
+    """A future of the demo (mtvae-add-dlow, sample 2 at +41: the body turned sideways, the near forearm against the
+    waist) on the demo's reference. Its target mesh showed skin and shirt vertices interleaved over the forearm: 366
+    shown vertices had a shown vertex of another surface within a pixel, and the generated frame had a dotted grid
+    of skin and shirt there. With the front surface kept, 25. In the reference the rule only hides vertices (the thigh
+    under a hanging hand), never shows one the depth test hid."""
+    import renderers.mesh as mesh
+
+    turned = np.array([[0.53, 0.57, 0.872], [0.56, 0.502, 0.872], [0.676, 0.582, 0.49], [0.503, 0.483, 0.089],
+                       [0.502, 0.652, 0.874], [0.612, 0.678, 0.531], [0.418, 0.61, 0.16], [0.543, 0.603, 1.093],
+                       [0.533, 0.586, 1.338], [0.551, 0.632, 1.436], [0.628, 0.633, 1.536], [0.486, 0.692, 1.338],
+                       [0.456, 0.741, 1.064], [0.677, 0.836, 0.952], [0.579, 0.51, 1.33], [0.538, 0.507, 1.07],
+                       [0.629, 0.605, 1.065]])
+    motion = dict(observed=demo_walk()[24:40], futures=turned[None, None])
+
+    def interleaved(video) -> int:  # shown target vertices with a shown vertex of another surface within a pixel
+        return int(touching_other_part(video.targets.uv[16], video.targets.visible[16], radius_px=1.0).sum())
+
+    _, kept = fitted_reference(ROOT / "demo_inputs" / "reference_body.png", **motion)
+    monkeypatch.setattr(mesh, "behind_a_touching_surface", lambda uv, seen, behind, rest: np.zeros(len(uv), bool))
+    _, both = fitted_reference(ROOT / "demo_inputs" / "reference_body.png", **motion)
+    assert interleaved(both) > 250 and interleaved(kept) < 60  # 366 and 25 (2026-11-26)
+    hidden_in_reference = both.reference.visible & ~kept.reference.visible
+    assert not (kept.reference.visible & ~both.reference.visible).any() and hidden_in_reference.sum() > 20
