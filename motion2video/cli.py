@@ -12,6 +12,7 @@ import sys
 import threading
 
 from motion2video import __version__
+from motion2video.core import interrupts
 from motion2video.core.errors import InputError
 
 # Sub-command modules, in the order `--help` lists them. A module that does not exist yet is skipped.
@@ -40,23 +41,40 @@ def build_parser() -> argparse.ArgumentParser:
 
 REDELIVER_DELAY_S = 0.01  # an interrupt dropped by a finaliser is sent again this much later
 
+_finished = threading.Event()  # set once main() has its result: an interrupt sent again after it is not sent
+
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised like Ctrl-C so that every ``finally`` and atomic writer cleans up on the way out."""
 
 
 def _raise_terminated(signum, frame) -> None:
+    interrupts.clear()  # this interrupt is the one delivered
     raise Terminated()
+
+
+def _raise_interrupted(signum, frame) -> None:
+    interrupts.clear()
+    raise KeyboardInterrupt()
+
+
+def _send_again(sig: int) -> None:
+    """The timer of :func:`_redeliver_interrupts`: the signal again, unless the interrupt was delivered since (at
+    a :func:`motion2video.core.interrupts.raise_pending` point, or by another signal) or the command has ended."""
+    if interrupts.pending() is not None and not _finished.is_set():
+        os.kill(os.getpid(), sig)
 
 
 def _redeliver_interrupts(unraisable) -> None:
     """``sys.unraisablehook``: a SIGTERM or Ctrl-C that arrives while Python runs a finaliser (``__del__``, e.g.
-    OpenGL freeing a buffer) is printed and dropped by Python, and the command would run on to the end. Send the
-    signal again, so it stops the command at the next ordinary line; other unraisable errors are printed as usual."""
+    OpenGL freeing a buffer) is printed and dropped by Python, and the command would run on to the end. Record it
+    (:mod:`motion2video.core.interrupts`: the video writers raise it at their next chunk) and send the signal
+    again, so it stops the command at the next ordinary line; other unraisable errors are printed as usual."""
     if isinstance(unraisable.exc_value, KeyboardInterrupt):
-        sig = signal.SIGTERM if isinstance(unraisable.exc_value, Terminated) else signal.SIGINT
+        terminated = isinstance(unraisable.exc_value, Terminated)
+        interrupts.note_swallowed(Terminated if terminated else KeyboardInterrupt)
         # From another thread a moment later: sent from here, it would be handled inside this hook and dropped again.
-        timer = threading.Timer(REDELIVER_DELAY_S, os.kill, (os.getpid(), sig))
+        timer = threading.Timer(REDELIVER_DELAY_S, _send_again, (signal.SIGTERM if terminated else signal.SIGINT,))
         timer.daemon = True
         timer.start()
         return
@@ -64,10 +82,15 @@ def _redeliver_interrupts(unraisable) -> None:
 
 
 def install_signal_handlers() -> None:
-    """SIGTERM raises :class:`Terminated`; an interrupt swallowed by a finaliser is delivered again. Main thread
-    only (Python allows signal handlers there alone)."""
+    """SIGTERM raises :class:`Terminated` and Ctrl-C KeyboardInterrupt (unless SIGINT is ignored, as in a
+    background job); an interrupt swallowed by a finaliser is delivered again. Main thread only (Python allows
+    signal handlers there alone)."""
     if threading.current_thread() is threading.main_thread():
+        _finished.clear()
+        interrupts.clear()
         signal.signal(signal.SIGTERM, _raise_terminated)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, _raise_interrupted)
         sys.unraisablehook = _redeliver_interrupts
 
 
@@ -84,10 +107,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"motion2video {args.command}: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as err:  # SIGINT (Ctrl-C) or SIGTERM: outputs and temporary files are gone
+        _finished.set()
+        interrupts.clear()
         terminated = isinstance(err, Terminated)
         print(f"motion2video {args.command}: {'terminated (SIGTERM)' if terminated else 'interrupted (SIGINT)'}; "
               "no partial output left", file=sys.stderr)
         return 143 if terminated else 130
+    finally:
+        _finished.set()  # a signal sent again from now on would kill the interpreter as it exits
 
 
 if __name__ == "__main__":

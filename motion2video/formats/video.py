@@ -41,6 +41,7 @@ import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 
+from motion2video.core import interrupts
 from motion2video.core.errors import InputError
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
@@ -339,6 +340,7 @@ class VideoWriter:
         """Encode one (H, W, 3) frame or a (t, H, W, 3) chunk of uint8 RGB frames (all the same size)."""
         if self._tmp is None:
             raise RuntimeError("VideoWriter.write outside its with-block")
+        interrupts.raise_pending()  # a Ctrl-C / SIGTERM a finaliser swallowed stops the encode here
         clip, _ = _clip_or_image(frames)
         if self._sink is None:
             self.height, self.width = clip.shape[1:3]
