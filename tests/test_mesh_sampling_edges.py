@@ -479,8 +479,10 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
     """A future of the demo (mtvae-add-dlow, sample 2 at +41: the body turned sideways, the near forearm against the
     waist) on the demo's reference. Its target mesh showed skin and shirt vertices interleaved over the forearm: 366
     shown vertices had a shown vertex of another surface within a pixel, and the generated frame had a dotted grid
-    of skin and shirt there. With the front surface kept, 25. In the reference the rule only hides vertices (the thigh
-    under a hanging hand), never shows one the depth test hid."""
+    of skin and shirt there. With the front surface kept, 25. Since the elbow and wrist are moved out of the torso
+    before posing (renderers.collision; the mocap's forearm crossed the belly of this wider body), 154 without the
+    rule and 3 with it. In the reference the rule only hides vertices (the thigh under a hanging hand), never shows
+    one the depth test hid."""
     import renderers.mesh as mesh
 
     turned = np.array([[0.53, 0.57, 0.872], [0.56, 0.502, 0.872], [0.676, 0.582, 0.49], [0.503, 0.483, 0.089],
@@ -496,6 +498,6 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
     _, kept = fitted_reference(ROOT / "demo_inputs" / "reference_body.png", **motion)
     monkeypatch.setattr(mesh, "behind_a_touching_surface", lambda uv, seen, behind, rest: np.zeros(len(uv), bool))
     _, both = fitted_reference(ROOT / "demo_inputs" / "reference_body.png", **motion)
-    assert interleaved(both) > 250 and interleaved(kept) < 60  # 366 and 25 (2026-11-26)
+    assert interleaved(both) > 100 and interleaved(kept) < 20  # 154 and 3 (366 and 25 with the forearm in the belly)
     hidden_in_reference = both.reference.visible & ~kept.reference.visible
     assert not (kept.reference.visible & ~both.reference.visible).any() and hidden_in_reference.sum() > 20
