@@ -7,8 +7,8 @@ pose solver (:func:`renderers.body.pose_anny_from_joints`) follows bone directio
 joints are moved first: each elbow and wrist that falls inside the torso, modelled as Anny's own cross-sections
 (an ellipse per height between the pelvis and the thorax, grown by the forearm's radius), is moved out along the
 cross-section's radius to its outline. Then the forearm, continued by the hand past the wrist (the pose solver has
-no hand joint), turns about the elbow, a few times, towards where its deepest point inside is pushed out. Everything else is
-left as it is; an arm outside the torso never moves.
+no hand joint), turns about the elbow, a few times, towards where its deepest point inside is pushed out.
+Everything else is left as it is; an arm outside the torso never moves.
 
 Pure functions of arrays; the shape comes from the rest mesh of the phenotype (:func:`torso_shape`).
 """
@@ -116,7 +116,8 @@ def arms_clear_of_torso(joints: np.ndarray, rest: anny_model.AnnyRest, *, scale:
     """(T, 17, 3) canonical joints with every elbow and wrist moved out of the torso of Anny's ``rest`` shape
     (:func:`push_out_of_torso`; ``scale`` the joints' size over Anny's rest size, ``radius`` the arm's at rest).
     The elbow first, then the wrist, then the forearm turned about the elbow (its length kept) while a point of
-    it or of the hand (:data:`ARM_SAMPLES` of the reach to :data:`HAND_LENGTH_M` past the wrist) is inside. Shoulders, legs and the spine never move."""
+    it or of the hand (:data:`ARM_SAMPLES` of the reach to :data:`HAND_LENGTH_M` past the wrist) is inside.
+    Shoulders, legs and the spine never move."""
     out = np.array(joints, np.float64, copy=True)
     torso = torso_shape(rest)
     grown = radius * scale
