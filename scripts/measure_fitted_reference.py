@@ -108,7 +108,7 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: s
         # other frames stand in for the clip
         posed = np.concatenate([lifted[None], np.asarray(motion.joints[1:], np.float64)]) if with_clip else lifted[None]
         track = mesh_frames.render_mesh_track(posed, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
-                                              size=camera.width)
+                                              size=camera.width, clear_arms=np.arange(len(posed)) > 0)
         person, rest = person_found(out, mask), anny_model.anny_rest({})
         uv, shown = mesh_frames.reference_sampling(  # as synthesize does (stages.mesh_frames.mesh_video)
             track.uv[0], track.visible[0], track.masks[0], person, rest=rest, edge_px=rule, align=face == "aligned")

@@ -98,3 +98,23 @@ def test_a_forearm_across_the_belly_no_longer_sinks_into_the_posed_mesh(rest):
     # 170 of 241 forearm and 470 of 1,438 hand vertices inside before, none after (2026-11-26)
     assert inside(joints, fore) > 0.5 * fore.sum() and inside(joints, hand) > 0.25 * hand.sum()
     assert inside(cleared, fore) < 0.05 * fore.sum() and inside(cleared, hand) < 0.05 * hand.sum()
+
+
+def test_render_mesh_track_moves_the_arms_only_in_the_frames_it_is_told(rest):
+    """synthesize poses the reference picture's own pose and the motion together: the picture's arms are where
+    they are pictured (frame 0 left alone), the motion's are moved out of the torso."""
+    from motion2video.core.camera import fit_camera
+    from motion2video.stages.mesh_frames import render_mesh_track
+
+    joints = rest.joints17[None].copy()
+    pelvis, spine, lateral, front = body_axes(joints)
+    joints[0, J["right_wrist"]] = pelvis[0] + 0.45 * spine[0] - 0.03 * lateral[0]  # a wrist in the belly
+    both = np.concatenate([joints, joints])
+    camera = fit_camera(both.reshape(-1, 3), 96, 96, margin=0.3)
+    track = render_mesh_track(both, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)), size=96,
+                              clear_arms=np.array([False, True]))
+    alone = render_mesh_track(joints, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)), size=96,
+                              clear_arms=False)
+    np.testing.assert_array_equal(track.uv[0], alone.uv[0])
+    hand = anny_model.hand_vertices("R")
+    assert np.median(np.linalg.norm(track.uv[1][hand] - track.uv[0][hand], axis=1)) > 1.0  # pixels at 96

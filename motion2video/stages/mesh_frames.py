@@ -121,11 +121,12 @@ def camera_covering(camera, scales: np.ndarray, shifts: np.ndarray, size: int):
 
 
 def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
-                      size: int, progress=None, clear_arms: bool = True) -> MeshTrack:
+                      size: int, progress=None, clear_arms: bool | np.ndarray = True) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
-    With ``clear_arms``, elbows and wrists that fall inside the torso are moved out of it first
-    (``renderers.collision``): a mocap actor's arms pass where this person's fitted, often wider, body is. Where two
+    In the frames ``clear_arms`` picks (True: all; or (N,) bool), elbows and wrists that fall inside the torso are
+    moved out of it first (``renderers.collision``): a mocap actor's arms pass where this person's fitted, often
+    wider, body is. A pictured person's own pose (a reference, a video's frames) is left as it is. Where two
     surfaces of the body meet in a frame (a forearm held against the waist, a hand beside a thigh), only the front
     one counts as shown (``renderers.mesh.behind_a_touching_surface``).
 
@@ -155,9 +156,11 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     shifts = shifts - scales[:, None] * pad  # the widened camera's pixels are the given camera's + pad
     shape = anny_model.anny_rest(phenotype)
     joints = np.asarray(joints, np.float64)
-    if clear_arms:  # the arms out of the torso first, at the size pose_anny_from_joints fits
+    clear = np.broadcast_to(np.asarray(clear_arms, bool), (n,))
+    if clear.any():  # the arms out of the torso first, at the size pose_anny_from_joints fits
         scale = float(np.median(body_size(joints)) / body_size(shape.joints17))
-        joints = arms_clear_of_torso(joints, shape, scale=scale)
+        joints = joints.copy()
+        joints[clear] = arms_clear_of_torso(joints[clear], shape, scale=scale)
     pose = pose_anny_from_joints(joints, phenotype=phenotype)
     faces = anny_model.triangles()
     rest = shape.vertices
@@ -255,7 +258,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
             phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
                                      person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
-                             transform=to_crop, size=model_size)
+                             transform=to_crop, size=model_size, clear_arms=np.arange(len(world) + 1) > 0)
     from renderers import anny_model
 
     rest = anny_model.anny_rest(phenotype)
@@ -581,7 +584,7 @@ def fit_width(joints: np.ndarray, *, camera, transform: tuple, size: int, person
     for weight in (None, *WEIGHT_GRID):  # None: the given phenotype as it is
         candidate = dict(phenotype or {}) if weight is None else {**(phenotype or {}), "weight": weight}
         sil = render_mesh_track(np.asarray(joints, np.float64)[None], phenotype=candidate, camera=camera,
-                                transform=transform, size=size).masks[0]
+                                transform=transform, size=size, clear_arms=False).masks[0]
         iou = float((sil & mask).sum() / max(1, (sil | mask).sum()))
         if iou > best_iou + (0.0 if weight is None else WIDTH_FIT_MARGIN):  # another width must cover it better
             best, best_iou = candidate, iou
