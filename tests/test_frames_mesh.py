@@ -307,10 +307,11 @@ def test_width_fit_finds_a_stocky_body():
 
     joints = load_motion(ROOT / "demo_inputs" / "cmu_walk.npz").joints[:1].astype(np.float64)
     camera = fit_camera(joints, 96, 96)
+    # the pictured person: their own pose, arms where they are (fit_width renders it so)
     stocky = render_mesh_track(joints, phenotype={"weight": 0.9}, camera=camera, transform=(1.0, np.zeros(2)),
-                               size=96).masks[0]
+                               size=96, clear_arms=False).masks[0]
     slim = render_mesh_track(joints, phenotype={"weight": 0.15}, camera=camera, transform=(1.0, np.zeros(2)),
-                             size=96).masks[0]
+                             size=96, clear_arms=False).masks[0]
     assert stocky.sum() > slim.sum() * 1.04  # a wider body (the height is fitted to the legs and torso)
     fitted, iou = fit_width(joints[0], camera=camera, transform=(1.0, np.zeros(2)), size=96, person_mask=stocky)
     assert fitted["weight"] == 0.9 and iou > 0.99
