@@ -107,6 +107,12 @@ def _chest_frame(j: np.ndarray) -> np.ndarray:
     return frame_from_axes(j[..., L_SHOULDER, :] - j[..., R_SHOULDER, :], mid - j[..., SPINE, :])
 
 
+def fitted_scale(joints: np.ndarray, rest: AnnyRest) -> float:
+    """The uniform size of Anny posed on (T, 17, 3) canonical ``joints``: the median over frames of their leg +
+    torso length (:func:`body_size`) over ``rest``'s."""
+    return float(np.median(body_size(joints)) / body_size(rest.joints17))
+
+
 def pose_anny_from_joints(
     joints: np.ndarray,
     *,
@@ -132,7 +138,7 @@ def pose_anny_from_joints(
     rest = anny_model.anny_rest(phenotype)
     scale = 1.0
     if fit_scale:
-        scale = float(np.median(body_size(j_world)) / body_size(rest.joints17))
+        scale = fitted_scale(j_world, rest)
         if not np.isfinite(scale) or scale <= 1e-3:
             raise ValueError(f"cannot fit Anny's size to these joints (scale {scale})")
     j = j_world / scale  # (T, 17, 3) in Anny's size

@@ -8,7 +8,7 @@ import pytest
 
 from motion2video.core.skeletons import H36M_17
 from renderers import anny_model
-from renderers.body import body_size, pose_anny_from_joints, posed_vertices
+from renderers.body import fitted_scale, pose_anny_from_joints, posed_vertices
 from renderers.collision import ARM_RADIUS_M, arms_clear_of_torso, body_axes, push_out_of_torso, torso_shape
 
 J = {name: i for i, name in enumerate(H36M_17.joints)}
@@ -56,7 +56,7 @@ def test_real_walks_move_the_arms_little_and_nothing_else(rest, mocap_dir):
     from motion2video.formats.io import load_motion
 
     joints = np.asarray(load_motion(mocap_dir / "cmu" / "02_01.bvh").joints, np.float64)
-    scale = float(np.median(body_size(joints)) / body_size(rest.joints17))
+    scale = fitted_scale(joints, rest)
     out = arms_clear_of_torso(joints, rest, scale=scale)
     others = [i for i in range(17) if i not in ARMS]
     np.testing.assert_array_equal(out[:, others], joints[:, others])

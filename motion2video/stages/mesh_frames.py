@@ -145,7 +145,7 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
 
     from motion2video.core.camera import project
     from renderers import anny_model
-    from renderers.body import body_size, pose_anny_from_joints, posed_vertices
+    from renderers.body import fitted_scale, pose_anny_from_joints, posed_vertices
     from renderers.collision import arms_clear_of_torso
     from renderers.mesh import MeshRenderer, vertex_visibility
 
@@ -158,7 +158,7 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     joints = np.asarray(joints, np.float64)
     clear = np.broadcast_to(np.asarray(clear_arms, bool), (n,))
     if clear.any():  # the arms out of the torso first, at the size pose_anny_from_joints fits
-        scale = float(np.median(body_size(joints)) / body_size(shape.joints17))
+        scale = fitted_scale(joints, shape)
         joints = joints.copy()
         joints[clear] = arms_clear_of_torso(joints[clear], shape, scale=scale)
     pose = pose_anny_from_joints(joints, phenotype=phenotype)
