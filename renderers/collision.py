@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motion2video.core.skeletons import H36M_17
+from motion2video.core.rotations import frame_from_axes
+from motion2video.core.skeletons import L_ELBOW, L_HIP, L_WRIST, PELVIS, R_ELBOW, R_HIP, R_WRIST, THORAX
 from renderers import anny_model
 
 TORSO_BONES = ("root", "pelvis.L", "pelvis.R", "spine05", "spine04", "spine03", "spine02", "spine01")
@@ -28,8 +29,7 @@ ARM_RADIUS_M = 0.04  # Anny's forearm radius at rest (90th percentile of its ver
 HAND_LENGTH_M = 0.16  # how far Anny's hand reaches past the wrist along the forearm (90th percentile of its vertices)
 HAND_STEPS = 8  # turns of the forearm about the elbow that bring its deepest point out of the torso
 ARM_SAMPLES = (0.25, 0.5, 0.75, 1.0)  # points on elbow -> the hand's end (fractions of that reach) kept out
-_J = {name: i for i, name in enumerate(H36M_17.joints)}
-ARM_JOINTS = (("left_elbow", "left_wrist"), ("right_elbow", "right_wrist"))
+ARM_JOINTS = ((L_ELBOW, L_WRIST), (R_ELBOW, R_WRIST))
 
 
 @dataclass(frozen=True)
@@ -54,13 +54,10 @@ def body_axes(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     (..., 3), and the unit lateral (left hip minus right hip, made orthogonal to the spine) and front-back
     (spine x lateral) axes (..., 3)."""
     j = np.asarray(joints, np.float64)
-    pelvis = j[..., _J["pelvis"], :]
-    spine = j[..., _J["thorax"], :] - pelvis
-    up = spine / np.linalg.norm(spine, axis=-1, keepdims=True)
-    lateral = j[..., _J["left_hip"], :] - j[..., _J["right_hip"], :]
-    lateral = lateral - up * np.sum(lateral * up, axis=-1, keepdims=True)
-    lateral /= np.linalg.norm(lateral, axis=-1, keepdims=True)
-    return pelvis, spine, lateral, np.cross(up, lateral)
+    pelvis = j[..., PELVIS, :]
+    spine = j[..., THORAX, :] - pelvis
+    frame = frame_from_axes(spine, j[..., L_HIP, :] - j[..., R_HIP, :])  # columns: spine, lateral x spine, lateral
+    return pelvis, spine, frame[..., 2], -frame[..., 1]
 
 
 def torso_shape(rest: anny_model.AnnyRest) -> TorsoShape:
@@ -121,8 +118,7 @@ def arms_clear_of_torso(joints: np.ndarray, rest: anny_model.AnnyRest, *, scale:
     out = np.array(joints, np.float64, copy=True)
     torso = torso_shape(rest)
     grown = radius * scale
-    for elbow, wrist in ARM_JOINTS:
-        e, w = _J[elbow], _J[wrist]
+    for e, w in ARM_JOINTS:
         for i in (e, w):
             out[:, i] = push_out_of_torso(out[:, i], out, torso, scale=scale, radius=grown)
         forearm = np.linalg.norm(out[:, w] - out[:, e], axis=-1, keepdims=True)  # (T, 1)

@@ -6,13 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motion2video.core.skeletons import H36M_17
+from motion2video.core.skeletons import L_ELBOW, L_WRIST, R_ELBOW, R_WRIST
 from renderers import anny_model
 from renderers.body import fitted_scale, pose_anny_from_joints, posed_vertices
 from renderers.collision import ARM_RADIUS_M, arms_clear_of_torso, body_axes, push_out_of_torso, torso_shape
 
-J = {name: i for i, name in enumerate(H36M_17.joints)}
-ARMS = [J["left_elbow"], J["left_wrist"], J["right_elbow"], J["right_wrist"]]
+ARMS = [L_ELBOW, L_WRIST, R_ELBOW, R_WRIST]
 
 
 @pytest.fixture(scope="module")
@@ -78,9 +77,9 @@ def test_a_forearm_across_the_belly_no_longer_sinks_into_the_posed_mesh(rest):
     pelvis, spine, lateral, front = body_axes(joints)
     elbow = pelvis[0] + 0.55 * spine[0] - 0.17 * lateral[0] + torso.centre[5] * front[0]
     belly = pelvis[0] + 0.35 * spine[0] + torso.centre[3] * front[0]
-    forearm = np.linalg.norm(rest.joints17[J["right_wrist"]] - rest.joints17[J["right_elbow"]])
-    joints[0, J["right_elbow"]] = elbow
-    joints[0, J["right_wrist"]] = elbow + forearm * (belly - elbow) / np.linalg.norm(belly - elbow)
+    forearm = np.linalg.norm(rest.joints17[R_WRIST] - rest.joints17[R_ELBOW])
+    joints[0, R_ELBOW] = elbow
+    joints[0, R_WRIST] = elbow + forearm * (belly - elbow) / np.linalg.norm(belly - elbow)
     names, dominant = anny_model.bone_names(), anny_model.dominant_bones()
     fore = np.isin(dominant, [names.index("lowerarm01.R"), names.index("lowerarm02.R")])
     hand = np.isin(dominant, [i for i, n in enumerate(names) if n == "wrist.R" or n.startswith("finger")
@@ -108,7 +107,7 @@ def test_render_mesh_track_moves_the_arms_only_in_the_frames_it_is_told(rest):
 
     joints = rest.joints17[None].copy()
     pelvis, spine, lateral, front = body_axes(joints)
-    joints[0, J["right_wrist"]] = pelvis[0] + 0.45 * spine[0] - 0.03 * lateral[0]  # a wrist in the belly
+    joints[0, R_WRIST] = pelvis[0] + 0.45 * spine[0] - 0.03 * lateral[0]  # a wrist in the belly
     both = np.concatenate([joints, joints])
     camera = fit_camera(both.reshape(-1, 3), 96, 96, margin=0.3)
     track = render_mesh_track(both, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)), size=96,
