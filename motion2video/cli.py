@@ -107,8 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"motion2video {args.command}: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as err:  # SIGINT (Ctrl-C) or SIGTERM: outputs and temporary files are gone
-        _finished.set()
-        interrupts.clear()
+        _finished.set()  # before the message: a re-sent signal from here on is not sent
         terminated = isinstance(err, Terminated)
         print(f"motion2video {args.command}: {'terminated (SIGTERM)' if terminated else 'interrupted (SIGINT)'}; "
               "no partial output left", file=sys.stderr)
