@@ -64,8 +64,9 @@ def main() -> None:
     truth = pairs.tgt_images.astype(np.float64) / 255.0
     generated = run_generator(net, pairs).astype(np.float64) / 255.0
     squared = ((generated - truth) ** 2).mean(-1)
-    print(f"person pixels not covered: {(person & ~given).sum() / person.sum():.1%}, carrying "
-          f"{squared[person & ~given].sum() / squared[person].sum():.0%} of the generator's squared error in the person")
+    uncovered = person & ~given
+    print(f"person pixels not covered: {uncovered.sum() / person.sum():.1%}, carrying "
+          f"{squared[uncovered].sum() / squared[person].sum():.0%} of the generator's squared error in the person")
     ref_person = np.repeat(pairs.ref_masks[:1] > 0.5, len(person), axis=0)
     stray = given & ~person & ~ref_person
     copy = run_baseline("copy-reference", pairs.ref_images, pairs.ref_points, pairs.tgt_points).astype(np.float64)
