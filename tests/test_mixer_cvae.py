@@ -83,11 +83,33 @@ def test_gradients_reach_every_parameter() -> None:
     assert not missing, missing
 
 
-def test_the_latent_carries_which_of_two_futures() -> None:
+def test_the_prior_is_standard_normal_unless_learned() -> None:
+    obs, _ = _batch()
+    prior, pooled = _tiny().condition_posterior(obs)
+    assert torch.equal(prior.mu, torch.zeros(3, 4)) and torch.equal(prior.logvar, torch.zeros(3, 4))
+    assert pooled.shape == (3, 16)
+    learned = _tiny(learned_prior=True)
+    with torch.no_grad():
+        learned.prior_head[1].bias.copy_(torch.tensor([5.0, 5.0, 5.0, 5.0, -12.0, -12.0, -12.0, -12.0]))
+        learned.prior_head[1].weight.zero_()
+    prior, _ = learned.condition_posterior(obs)
+    assert torch.allclose(prior.mu, torch.full((3, 4), 5.0))
+    with torch.no_grad():
+        learned.head.weight.normal_(0.0, 0.5)
+    learned.eval()
+    a, b = _sample(learned, obs, k=2, horizon=7, seed=1), _sample(learned, obs, k=2, horizon=7, seed=2)
+    assert torch.allclose(a, b, atol=2e-2)  # sigma = exp(-6): every sample decodes about z = 5
+    z = torch.full((3, 4), 5.0)
+    assert torch.allclose(a[:, 0], learned.decode(obs, z, horizon=7), atol=2e-2)
+
+
+@pytest.mark.parametrize("learned_prior", [False, True])
+def test_the_latent_carries_which_of_two_futures(learned_prior: bool) -> None:
     """One context, two futures (up or down): decoded from the recognition model's mean the future is the right
     one, and prior samples land near both."""
     torch.manual_seed(0)
-    model = build_model("mixer-cvae", {**TINY, "hidden_dim": 32, "kl_weight": 0.01, "kl_anneal_steps": 50})
+    model = build_model("mixer-cvae", {**TINY, "hidden_dim": 32, "kl_weight": 0.01, "kl_anneal_steps": 50,
+                                       "learned_prior": learned_prior})
     obs = torch.zeros(2, 5, F)
     t = torch.linspace(0.1, 1.0, 7)[:, None].expand(7, F)
     fut = torch.stack([t, -t])  # (2, 7, F)

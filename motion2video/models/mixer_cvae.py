@@ -21,10 +21,16 @@ c_pad = D (pad(obs) - x_T)  (Nc, F). The true window [obs, future] - x_T gives c
 Loss on a batch (per-frame error = Euclidean norm over the F features scaled by ``feature_scale``: metres, as
 ``evaluate`` measures, when it holds the training set's standard deviations, as ``motion2video train`` sets it):
 the mean per-frame error of the decoded future + ``fde_weight`` x its final-frame error + ``observed_weight`` x
-the mean per-frame error of the decoded observed frames, + w(step) x KL(q || N(0, I)) with w rising linearly to
+the mean per-frame error of the decoded observed frames, + w(step) x KL(q || p) with w rising linearly to
 ``kl_weight`` over ``kl_anneal_steps``, + ``stats_weight`` x the liveliness error of a prior sample's future
 (:func:`~motion2video.models.blocks.motion_stats_error`: mean absolute velocity and acceleration against the
 truth's, so that prior samples move like real motion).
+
+The prior p: N(0, I), or with ``learned_prior`` a condition-dependent Gaussian p(z | obs) = N(mu_c, sigma_c^2)
+read from the context tokens (mean over tokens, a linear head), trained by that same KL term (the CVAE of Sohn et
+al. 2015, the idea of LCP-VAE): with a weak KL weight the posteriors of one context sit in a small part of
+N(0, I), and a learned prior samples there. ``condition_posterior(obs)`` gives it (N(0, I) without one), which is
+how DLow finds it: its maps then work in the prior's standardised coordinates.
 
 Horizons longer than ``future`` are decoded in chunks, each chunk continuing from its own last ``observed``
 frames with the same z; a future passed to ``encode`` is cut or padded (last frame repeated) to ``future``
@@ -39,7 +45,9 @@ import torch
 from torch import nn
 
 from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput, check_sequences, register_model
-from motion2video.models.blocks import kl_std_normal, linear_ramp, motion_stats_error, randn, reparameterize
+from motion2video.models.blocks import (
+    kl_diag_gaussians, kl_std_normal, linear_ramp, motion_stats_error, randn, reparameterize,
+)
 from motion2video.models.mixer import MixerBlock, dct_basis, fit_context, pad_with_last
 
 
@@ -62,6 +70,7 @@ class MixerCVAEConfig:
     fde_weight: float = 0.5
     observed_weight: float = 0.1
     stats_weight: float = 0.0
+    learned_prior: bool = False
     # Per-feature scale of the errors (F numbers; the training set's standard deviations, filled in by
     # :func:`motion2video.models.training.train_model`): errors then are metres. Empty: normalised units.
     feature_scale: list = field(default_factory=list)
@@ -103,6 +112,7 @@ class MixerCVAE(LatentSampler, nn.Module):
         self.embed_true = nn.Linear(c.feature_dim, C)
         self.encoder = blocks(c.encoder_blocks)
         self.posterior_head = nn.Sequential(nn.LayerNorm(C), nn.Linear(C, 2 * c.latent_dim))
+        self.prior_head = nn.Sequential(nn.LayerNorm(C), nn.Linear(C, 2 * c.latent_dim)) if c.learned_prior else None
         self.decoder = blocks(c.decoder_blocks)
         self.film = nn.ModuleList([nn.Linear(c.latent_dim, 2 * C) for _ in range(c.decoder_blocks)])
         self.out_norm = nn.LayerNorm(C)
@@ -134,6 +144,14 @@ class MixerCVAE(LatentSampler, nn.Module):
         mu, logvar = self.posterior_head(g.mean(dim=1)).chunk(2, dim=-1)
         return LatentPosterior(mu=mu, logvar=logvar.clamp(-12.0, 8.0))
 
+    def _prior(self, h: torch.Tensor) -> LatentPosterior:
+        """p(z | obs) from the context tokens h (B, Nc, C): the learned prior, or N(0, I)."""
+        if self.prior_head is None:
+            zeros = h.new_zeros(h.shape[0], self.config.latent_dim)
+            return LatentPosterior(mu=zeros, logvar=zeros)
+        mu, logvar = self.prior_head(h.mean(dim=1)).chunk(2, dim=-1)
+        return LatentPosterior(mu=mu, logvar=logvar.clamp(-12.0, 8.0))
+
     def _window(self, h: torch.Tensor, c_pad: torch.Tensor, last: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
         """The decoded window (B, L, F) (observed part and future) for latents z (B, Z)."""
         for block, film in zip(self.decoder, self.film):
@@ -148,6 +166,12 @@ class MixerCVAE(LatentSampler, nn.Module):
         check_sequences(obs, future, feature_dim=self.config.feature_dim)
         h, _, last = self._context(obs)
         return self._posterior(h, obs, future, last)
+
+    def condition_posterior(self, obs: torch.Tensor) -> tuple[LatentPosterior, torch.Tensor]:
+        """The prior p(z | obs) (B, Z) (N(0, I) without ``learned_prior``) and the pooled context (B, C)."""
+        check_sequences(obs, None, feature_dim=self.config.feature_dim)
+        h, _, _ = self._context(obs)
+        return self._prior(h), h.mean(dim=1)
 
     def decode(self, obs: torch.Tensor, z: torch.Tensor, *, horizon: int) -> torch.Tensor:
         """The future of ``obs`` under latent z: obs (B, To, F), z (B, Z) -> (B, horizon, F)."""
@@ -176,10 +200,11 @@ class MixerCVAE(LatentSampler, nn.Module):
         recon = err.mean() + c.fde_weight * err[:, -1].mean()
         ctx = fit_context(obs, c.observed)
         past_err = ((past - ctx) * self.scale).pow(2).sum(-1).add(1e-8).sqrt().mean()
-        kl = kl_std_normal(post).mean()
+        prior = self._prior(h)
+        kl = kl_diag_gaussians(post, prior).mean() if self.prior_head is not None else kl_std_normal(post).mean()
         w = c.kl_weight * linear_ramp(step, length=c.kl_anneal_steps)
         if c.stats_weight > 0:  # a prior sample must move like real motion
-            z_prior = torch.randn_like(post.mu)
+            z_prior = reparameterize(prior, torch.randn_like(post.mu))
             prior_fut = self._window(h, c_pad, last, z_prior)[:, c.observed:]
             stats = motion_stats_error(prior_fut * self.scale, future * self.scale, last * self.scale)
         else:
@@ -191,8 +216,10 @@ class MixerCVAE(LatentSampler, nn.Module):
 
     def sample_rows(self, obs: torch.Tensor, num_samples: int, *, horizon: int,
                     generator: torch.Generator | None) -> torch.Tensor:
-        """z ~ N(0, I): (B*K, horizon, F), context-major (see :class:`~motion2video.models.base.LatentSampler`)."""
+        """z from the prior: (B*K, horizon, F), context-major (see :class:`~motion2video.models.base.LatentSampler`)."""
         B, K = obs.shape[0], num_samples
         obs_k = fit_context(obs, self.config.observed).repeat_interleave(K, dim=0)  # (B*K, To, F)
-        z = randn((B * K, self.config.latent_dim), like=obs, generator=generator)
+        prior, _ = self.condition_posterior(obs_k)
+        eps = randn((B * K, self.config.latent_dim), like=obs, generator=generator)
+        z = reparameterize(prior, eps)
         return self.decode(obs_k, z, horizon=horizon)
