@@ -30,7 +30,8 @@ The prior p: N(0, I), or with ``learned_prior`` a condition-dependent Gaussian p
 read from the context tokens (mean over tokens, a linear head), trained by that same KL term (the CVAE of Sohn et
 al. 2015, the idea of LCP-VAE): with a weak KL weight the posteriors of one context sit in a small part of
 N(0, I), and a learned prior samples there. ``condition_posterior(obs)`` gives it (N(0, I) without one), which is
-how DLow finds it: its maps then work in the prior's standardised coordinates.
+how DLow finds it: its maps then work in the prior's standardised coordinates. Measured (docs/results.md, "A
+decoder that draws held-out futures"): no better than N(0, I) under DLow, so it is off in the shipped model.
 
 Horizons longer than ``future`` are decoded in chunks, each chunk continuing from its own last ``observed``
 frames with the same z; a future passed to ``encode`` is cut or padded (last frame repeated) to ``future``
