@@ -31,6 +31,12 @@ def _sample(model, obs, *, k: int, horizon: int, seed: int) -> torch.Tensor:
     return model.sample(obs, num_samples=k, horizon=horizon, generator=torch.Generator().manual_seed(seed))
 
 
+def _two_futures() -> tuple[torch.Tensor, torch.Tensor]:
+    """One context (zeros, 5 frames) twice, with two equally likely futures (up or down): (2, 5, F), (2, 7, F)."""
+    t = torch.linspace(0.1, 1.0, 7)[:, None].expand(7, F)
+    return torch.zeros(2, 5, F), torch.stack([t, -t])
+
+
 def test_registered_stochastic_and_small() -> None:
     assert MODEL_REGISTRY["mixer-dct"].kind == "stochastic"
     n = sum(p.numel() for p in build_model("mixer-dct").parameters())
@@ -107,9 +113,7 @@ def test_best_of_k_training_fits_a_two_mode_future() -> None:
     """One context, two equally likely futures (up or down): best-of-K training puts samples on both."""
     torch.manual_seed(0)
     model = build_model("mixer-dct", {**TINY, "hidden_dim": 32, "train_samples": 6, "stats_weight": 0.0})
-    obs = torch.zeros(2, 5, F)
-    t = torch.linspace(0.1, 1.0, 7)[:, None].expand(7, F)
-    fut = torch.stack([t, -t])  # (2, 7, F)
+    obs, fut = _two_futures()
     opt = torch.optim.Adam(model.parameters(), lr=3e-3)
     for step in range(300):
         loss = model.loss(obs, fut, step=step)

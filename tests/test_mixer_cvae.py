@@ -3,14 +3,19 @@ decode) is what DLow samples, and its recognition model must carry the future in
 
 from __future__ import annotations
 
+import json
+
 import pytest
 import torch
 
 import motion2video.models  # noqa: F401  (importing registers the models)
+from motion2video.cli import main
 from motion2video.models.base import MODEL_REGISTRY, build_model
+from motion2video.models.checkpoint import load_model
 from motion2video.models.mixer_cvae import fit_future
+from tests.conftest import link_clips
+from tests.test_mixer import F, _batch, _sample, _two_futures
 
-F = 6
 TINY = {"feature_dim": F, "observed": 5, "future": 7, "num_coeffs": 8, "hidden_dim": 16, "context_blocks": 1,
         "encoder_blocks": 1, "decoder_blocks": 1, "latent_dim": 4}
 
@@ -18,15 +23,6 @@ TINY = {"feature_dim": F, "observed": 5, "future": 7, "num_coeffs": 8, "hidden_d
 def _tiny(**extra: object) -> torch.nn.Module:
     torch.manual_seed(0)
     return build_model("mixer-cvae", {**TINY, **extra})
-
-
-def _batch(b: int = 3, to: int = 5, tf: int = 7) -> tuple[torch.Tensor, torch.Tensor]:
-    g = torch.Generator().manual_seed(123)
-    return torch.randn(b, to, F, generator=g), torch.randn(b, tf, F, generator=g)
-
-
-def _sample(model, obs, *, k: int, horizon: int, seed: int) -> torch.Tensor:
-    return model.sample(obs, num_samples=k, horizon=horizon, generator=torch.Generator().manual_seed(seed))
 
 
 def test_registered_stochastic_and_small() -> None:
@@ -110,9 +106,7 @@ def test_the_latent_carries_which_of_two_futures(learned_prior: bool) -> None:
     torch.manual_seed(0)
     model = build_model("mixer-cvae", {**TINY, "hidden_dim": 32, "kl_weight": 0.01, "kl_anneal_steps": 50,
                                        "learned_prior": learned_prior})
-    obs = torch.zeros(2, 5, F)
-    t = torch.linspace(0.1, 1.0, 7)[:, None].expand(7, F)
-    fut = torch.stack([t, -t])  # (2, 7, F)
+    obs, fut = _two_futures()
     opt = torch.optim.Adam(model.parameters(), lr=3e-3)
     for step in range(400):
         loss = model.loss(obs, fut, step=step)
@@ -132,12 +126,6 @@ def test_the_latent_carries_which_of_two_futures(learned_prior: bool) -> None:
 def test_dlow_samples_a_trained_mixer_cvae_through_the_cli(tmp_path, mocap_dir):
     """The shipped recipe in small: mixer-cvae trained with the training set's feature scales, DLow trained on
     it as its frozen base, both reloaded and sampled."""
-    import json
-
-    from motion2video.cli import main
-    from motion2video.models.checkpoint import load_model
-    from tests.conftest import link_clips
-
     data = link_clips(tmp_path / "mocap", mocap_dir, ("cmu/131_01.bvh", "cmu/01_01.bvh", "cmu/13_10.bvh"))
     base, dlow = tmp_path / "base.safetensors", tmp_path / "base-dlow.safetensors"
     train = {"batch_size": 4, "checkpoint_every": 5, "val_every": 5, "val_windows": 8}

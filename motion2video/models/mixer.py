@@ -83,14 +83,21 @@ class MixerDCTConfig:
     feature_scale: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        if self.feature_scale and len(self.feature_scale) != self.feature_dim:
-            raise ValueError(f"feature_scale needs {self.feature_dim} numbers, got {len(self.feature_scale)}")
-        if self.observed < 2 or self.future < 1:
-            raise ValueError(f"need observed >= 2 and future >= 1, got {self.observed}, {self.future}")
-        if not 1 <= self.num_coeffs <= self.observed + self.future:
-            raise ValueError(f"num_coeffs must be in [1, observed + future], got {self.num_coeffs}")
+        check_window_config(self)
         if self.train_samples < 1 or self.noise_dim < 1 or self.hidden_dim < 1:
             raise ValueError("train_samples, noise_dim and hidden_dim must be >= 1")
+
+
+def check_window_config(config) -> None:
+    """The checks every anchored-DCT config shares (``feature_dim``, ``observed``, ``future``, ``num_coeffs``,
+    ``feature_scale``): raise ValueError on the first that fails."""
+    c = config
+    if c.feature_scale and len(c.feature_scale) != c.feature_dim:
+        raise ValueError(f"feature_scale needs {c.feature_dim} numbers, got {len(c.feature_scale)}")
+    if c.observed < 2 or c.future < 1:
+        raise ValueError(f"need observed >= 2 and future >= 1, got {c.observed}, {c.future}")
+    if not 1 <= c.num_coeffs <= c.observed + c.future:
+        raise ValueError(f"num_coeffs must be in [1, observed + future], got {c.num_coeffs}")
 
 
 def dct_basis(length: int, count: int) -> torch.Tensor:
@@ -113,6 +120,16 @@ def fit_context(obs: torch.Tensor, length: int) -> torch.Tensor:
     if obs.shape[1] >= length:
         return obs[:, obs.shape[1] - length:]
     return torch.cat([obs[:, :1].expand(-1, length - obs.shape[1], -1), obs], dim=1)
+
+
+def anchored_coefficients(obs: torch.Tensor, basis: torch.Tensor, *, observed: int, future: int
+                          ) -> tuple[torch.Tensor, torch.Tensor]:
+    """obs (B, To, F) -> (DCT coefficients (B, Nc, F) of the last ``observed`` frames padded with the last one to
+    ``observed + future`` frames, minus that anchor; the anchor x_T (B, F)); ``basis`` (Nc, observed + future)."""
+    ctx = fit_context(obs, observed)
+    last = ctx[:, -1]  # (B, F)
+    window = pad_with_last(ctx, future) - last[:, None]  # (B, L, F)
+    return torch.einsum("kl,blf->bkf", basis, window), last
 
 
 def pairwise_similarity(futures: torch.Tensor, *, scale: float) -> torch.Tensor:
@@ -176,10 +193,7 @@ class MixerDCT(LatentSampler, nn.Module):
 
     def coefficients(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """obs (B, To, F) -> (DCT coefficients (B, Nc, F) of the padded window minus its anchor, anchor (B, F))."""
-        ctx = fit_context(obs, self.config.observed)
-        last = ctx[:, -1]  # (B, F)
-        window = pad_with_last(ctx, self.config.future) - last[:, None]  # (B, L, F)
-        return torch.einsum("kl,blf->bkf", self.basis, window), last
+        return anchored_coefficients(obs, self.basis, observed=self.config.observed, future=self.config.future)
 
     def windows(self, obs: torch.Tensor, noise: torch.Tensor) -> torch.Tensor:
         """The predicted padded windows (B, K, L, F) (anchor added back) for noises (B, K, Z)."""

@@ -49,7 +49,7 @@ from motion2video.models.base import LatentPosterior, LatentSampler, LossOutput,
 from motion2video.models.blocks import (
     kl_diag_gaussians, kl_std_normal, linear_ramp, motion_stats_error, randn, reparameterize,
 )
-from motion2video.models.mixer import MixerBlock, dct_basis, fit_context, pad_with_last
+from motion2video.models.mixer import MixerBlock, anchored_coefficients, check_window_config, dct_basis, fit_context
 
 
 @dataclass(frozen=True)
@@ -77,12 +77,7 @@ class MixerCVAEConfig:
     feature_scale: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        if self.feature_scale and len(self.feature_scale) != self.feature_dim:
-            raise ValueError(f"feature_scale needs {self.feature_dim} numbers, got {len(self.feature_scale)}")
-        if self.observed < 2 or self.future < 1:
-            raise ValueError(f"need observed >= 2 and future >= 1, got {self.observed}, {self.future}")
-        if not 1 <= self.num_coeffs <= self.observed + self.future:
-            raise ValueError(f"num_coeffs must be in [1, observed + future], got {self.num_coeffs}")
+        check_window_config(self)
         if min(self.hidden_dim, self.latent_dim, self.context_blocks, self.decoder_blocks) < 1:
             raise ValueError("hidden_dim, latent_dim, context_blocks and decoder_blocks must be >= 1")
 
@@ -126,9 +121,7 @@ class MixerCVAE(LatentSampler, nn.Module):
 
     def _context(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """obs (B, To, F) -> (h (B, Nc, C), c_pad (B, Nc, F), the anchor x_T (B, F))."""
-        ctx = fit_context(obs, self.config.observed)
-        last = ctx[:, -1]
-        c_pad = torch.einsum("kl,blf->bkf", self.basis, pad_with_last(ctx, self.config.future) - last[:, None])
+        c_pad, last = anchored_coefficients(obs, self.basis, observed=self.config.observed, future=self.config.future)
         h = self.embed(c_pad) + self.position
         for block in self.context:
             h = block(h)
