@@ -37,21 +37,17 @@ from motion2video.models.checkpoint import WEIGHTS_DIR, baseline_bundle, load_mo
 from motion2video.data.dataset import (  # noqa: E402
     DEFAULT_MOCAP,
     MULTIMODAL_SOURCE,
-    DatasetConfig,
     WindowSet,
     build_dataset,
-    decode_samples,
 )
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
 from motion2video.stages.sampling import sample_futures  # noqa: E402
 from motion2video.models.baselines import BASELINES  # noqa: E402
-from motion2video.models.training import TrainConfig, train_model  # noqa: E402
 
 BEGIN, END = "<!-- issue8-models:begin -->", "<!-- issue8-models:end -->"
 NEW = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior")
 OLD = ("mtvae-add", "lcpvae", "behavior")
 OLD_REV = "805c753"  # the last commit whose motion2video/weights held the 72-clip (5-minute) models
-MM_CONFIG = DatasetConfig(speed=0.0)  # benchmark clips are exactly one window long
 SHEET_CLIPS = (("cmu/07_01.bvh", "walk", 20), ("cmu/131_03.bvh", "hop", 40), ("acrnn/indian_04.bvh", "Indian dance", 600))
 TARGETS = "best ADE <= 0.62x, best FDE <= 0.50x, every stochastic ADE <= 0.75x zero-velocity, APD > 1.5 m"
 
@@ -277,43 +273,20 @@ def lcp_diagnosis(old: Path, new: Path, windows: WindowSet, record: dict, *, sam
 def known_answer_section(weights: Path, runs: Path, record: dict, *, steps: int, dlow_steps: int,
                          samples: int = 10) -> str:
     """mtvae-add and lcpvae (shipped configs) and DLow on the benchmark's mtvae-add: coverage / precision."""
-    from motion2video.data.multimodal import MultimodalBenchmark, score_futures
+    from measure_known_answer import MM_CONFIG, score, train_with_dlow  # scripts/ is on sys.path when run
 
     ds = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG)
     test = ds.windows("test")
-    runs.mkdir(parents=True, exist_ok=True)
     trained = {}
     for name in ("mtvae-add", "lcpvae"):
-        out = runs / f"mm-{name}-{steps}.safetensors"
-        if not out.is_file():
-            cfg = {k: v for k, v in load_model(weights / f"{name}.safetensors").meta.config.items() if k != "feature_dim"}
-            train_model(model_name=name, model_config=cfg, dataset=ds, out=out, progress=False,
-                        config=TrainConfig(steps=steps, batch_size=64, checkpoint_every=steps, val_every=0, seed=0))
-        trained[name] = out
-    dlow_cfg = json.loads(json.dumps(load_model(weights / "mtvae-add-dlow.safetensors").meta.config))
-    for name in ("mtvae-add", "lcpvae"):
-        out = runs / f"mm-{name}-{steps}-dlow{samples}-{dlow_steps}.safetensors"
-        if not out.is_file():
-            base = load_model(trained[name])
-            cfg = {**dlow_cfg, "base_model": name, "num_samples": samples,  # K maps for the K it is scored with
-                   "base_config": {k: v for k, v in base.meta.config.items() if k != "feature_dim"}}
-            cfg.pop("feature_dim", None)
-            state = {"base." + k: v for k, v in base.model.state_dict().items()}
-            ds_b = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG, split=base.meta.split, stats=base.stats)
-            train_model(model_name="dlow", model_config=cfg, dataset=ds_b, out=out, progress=False, init_state=state,
-                        config=TrainConfig(steps=dlow_steps, batch_size=16, lr=5e-4, checkpoint_every=dlow_steps,
-                                           val_every=0, seed=0))
-        trained[f"{name} + dlow"] = out
-    bench = MultimodalBenchmark(observed_frames=MM_CONFIG.observed, future_frames=MM_CONFIG.future, fps=MM_CONFIG.fps)
+        base, dlow = train_with_dlow(name, load_model(weights / f"{name}.safetensors").meta.config, runs,
+                                     steps=steps, dlow_steps=dlow_steps, samples=samples)
+        trained[name], trained[f"{name} + dlow"] = base, dlow
     rows = []
-    for name, path in trained.items():
-        b = load_model(path)
-        s = sample_futures(b.model, test.obs, num_samples=samples, horizon=MM_CONFIG.future, seed=0)
-        world = decode_samples(s, config=MM_CONFIG, stats=b.stats, frame=test.frames)
-        sc = score_futures(world, list(test.labels), benchmark=bench)
-        record.setdefault("known_answer", {})[name] = {"coverage": sc.coverage, "precision": sc.precision,
-                                                       "distribution_tv": sc.distribution_tv}
-        rows.append([name, sc.coverage, sc.precision, sc.distribution_tv])
+    for name in ("mtvae-add", "lcpvae", "mtvae-add + dlow", "lcpvae + dlow"):
+        sc = score(trained[name], test, samples)
+        record.setdefault("known_answer", {})[name] = sc
+        rows.append([name, sc["coverage"], sc["precision"], sc["distribution_tv"]])
     return "\n".join([
         "### Known-answer multimodal benchmark (shipped configs)",
         "",
