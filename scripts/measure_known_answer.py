@@ -9,8 +9,9 @@ mode's known next modes) with the shipped checkpoint's config and ``--steps`` st
 with the shipped ``mtvae-add-dlow`` config and K = 10 maps (``--dlow-steps``, batch 16); both are scored with K = 10
 samples per test sequence: coverage (share of valid modes hit by a sample), precision (share of samples in a valid
 mode) and TV (total variation between sampled and true mode frequencies). ``scripts/make_results_corpus.py``'s
-table for mtvae-add and lcpvae is made with the same two functions (:func:`train_with_dlow`, :func:`score`). A model whose loss is in metres
-(``feature_scale``, mixer-cvae) gets this dataset's scales, as ``motion2video train`` gives them.
+table for mtvae-add and lcpvae is made with the same two functions (:func:`train_with_dlow`, :func:`score`). A
+model whose loss is in metres (``feature_scale``, mixer-cvae) gets this dataset's scales, as ``motion2video train``
+gives them.
 About 14 minutes on one thread for mixer-cvae (2026-11-27).
 """
 
