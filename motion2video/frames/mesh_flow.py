@@ -120,24 +120,35 @@ def touching_other_part(uv: np.ndarray, seen: np.ndarray, *, radius_px: float | 
     Returns:
         (V,) bool, a subset of ``seen``.
     """
-    from scipy.spatial import cKDTree
-
     from renderers import anny_model
 
     radius_px = DOUBT_RADIUS_PX if radius_px is None else radius_px
     apart = DOUBT_APART_M if apart is None else apart
-    out = np.zeros(len(uv), bool)
-    shown = np.flatnonzero(seen)
-    if len(shown) < 2 or apart <= 0:
-        return out
-    pairs = cKDTree(np.asarray(uv, np.float64)[shown]).query_pairs(radius_px, output_type="ndarray")
-    if len(pairs) == 0:
-        return out
+    if apart <= 0:
+        return np.zeros(len(uv), bool)
+    a, b = shown_pairs(uv, seen, radius_px)
     rest = anny_model.anny_rest().vertices
-    a, b = shown[pairs[:, 0]], shown[pairs[:, 1]]
-    far = np.linalg.norm(rest[a] - rest[b], axis=1) > apart
-    out[a[far]] = True
-    out[b[far]] = True
+    return in_pairs(len(uv), a, b, np.linalg.norm(rest[a] - rest[b], axis=1) > apart)
+
+
+def shown_pairs(uv: np.ndarray, seen: np.ndarray, radius_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of shown vertices within ``radius_px`` pixels of each other in the picture (a KD-tree from
+    SciPy): uv (V, 2), seen (V,) bool -> vertex ids a (P,), b (P,) int64 (empty with fewer than two shown)."""
+    from scipy.spatial import cKDTree
+
+    shown = np.flatnonzero(seen)
+    if len(shown) < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    pairs = cKDTree(np.asarray(uv, np.float64)[shown]).query_pairs(radius_px, output_type="ndarray")
+    pairs = pairs.reshape(-1, 2)
+    return shown[pairs[:, 0]], shown[pairs[:, 1]]
+
+
+def in_pairs(count: int, a: np.ndarray, b: np.ndarray, chosen: np.ndarray) -> np.ndarray:
+    """(count,) bool: the vertices that are either end of a chosen pair (a, b (P,) vertex ids; chosen (P,) bool)."""
+    out = np.zeros(count, bool)
+    out[a[chosen]] = True
+    out[b[chosen]] = True
     return out
 
 
@@ -225,19 +236,10 @@ def interior_sources(ref_uv: np.ndarray, sources: np.ndarray, seen: np.ndarray, 
     """
     from renderers.anny_model import SHOES, TOP, TROUSERS
 
-    from scipy.spatial import cKDTree
-
-    shown = np.flatnonzero(seen)
-    if len(sources) == 0 or len(shown) < 2:
+    if len(sources) == 0 or np.count_nonzero(seen) < 2:
         return sources
-    uv = np.asarray(ref_uv, np.float64)
-    pairs = cKDTree(uv[shown]).query_pairs(radius_px, output_type="ndarray")
-    edge = np.zeros(len(uv), bool)
-    if len(pairs):
-        a, b = shown[pairs[:, 0]], shown[pairs[:, 1]]
-        other = regions[a] != regions[b]
-        edge[a[other]] = True
-        edge[b[other]] = True
+    a, b = shown_pairs(ref_uv, seen, radius_px)
+    edge = in_pairs(len(ref_uv), a, b, regions[a] != regions[b])
     keep = ~edge[sources] | ~np.isin(regions[sources], (TOP, TROUSERS, SHOES))
     for r in np.unique(regions[sources]):
         mine = regions[sources] == r
