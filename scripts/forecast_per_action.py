@@ -5,11 +5,11 @@ the checkpoint's split and statistics, 16-frame stride, K samples, seed 0, root-
 best-of-K ADE / FDE per action and their ratios to zero-velocity, the macro average of the ratios over actions,
 the pooled numbers, the first future frame's best-of-K error, APD and the velocity / acceleration ratios.
 
-    python scripts/forecast_per_action.py --model motion2video/weights/mixer-dct.safetensors \
-        --data ../shared/data/mocap --json out/mixer-dct.per_action.json
+    python scripts/forecast_per_action.py --model mixer-cvae-dlow --data ../shared/data/mocap \
+        --json out/mixer-cvae-dlow.per_action.json
 
 (``motion2video evaluate --json`` gets ``per_action`` / ``macro`` of its own in issue 24, item 1; this script
-is what the mixer-dct card's per-action table was computed with.)
+is what the card of mixer-dct, shipped until 2026-11-27, computed its per-action table with.)
 """
 
 from __future__ import annotations

@@ -10,9 +10,9 @@
 # exact commands). Two lanes side by side, one torch thread each. Measured on the shared 2-core machine
 # (2026-11-25, wall time per model, training + held-out evaluation + card): lane A mtvae-add 4000 steps 14 min,
 # mtvae-add-dlow 600 steps 7 min, behavior 4000 steps 14 min; lane B lcpvae 3000 steps 7 min, mtvae-add-2d
-# 2500 steps 8 min, mtvae-add-face 1200 steps about 5 min. About 35 minutes in all; mixer-dct (issue 24, lane B)
-# adds 6000 steps, 39 min (measured alone beside other people's trainings, 2026-11-25); mixer-cvae
-# and mixer-cvae-dlow (lane B) add 21 + 8 min (2026-11-27). Logs and evaluation JSON go
+# 2500 steps 8 min, mtvae-add-face 1200 steps about 5 min. About 35 minutes in all; mixer-cvae
+# and mixer-cvae-dlow (issue 24, lane B) add 21 + 8 min (2026-11-27). (mixer-dct, retired on 2026-11-27, was trained
+# here until then; its command is in its card in git history, commit 696e72f.) Logs and evaluation JSON go
 # to out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
 # Afterwards: python scripts/make_results_corpus.py (docs/results.md, issue 8).
 set -euo pipefail
@@ -24,7 +24,7 @@ FACE=${FACE:-../shared/data/face}
 WEIGHTS=${WEIGHTS:-motion2video/weights}
 LOGS=${LOGS:-out/train_shipped}
 STEPS_SCALE=${STEPS_SCALE:-1}
-ONLY=${ONLY:-"mtvae-add mtvae-add-dlow mtvae-add-2d mtvae-add-face lcpvae behavior mixer-dct mixer-cvae mixer-cvae-dlow"}
+ONLY=${ONLY:-"mtvae-add mtvae-add-dlow mtvae-add-2d mtvae-add-face lcpvae behavior mixer-cvae mixer-cvae-dlow"}
 export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 mkdir -p "$WEIGHTS" "$LOGS"
 
@@ -40,12 +40,7 @@ TRAIN='"train": {"batch_size": 64, "lr": 0.001, "checkpoint_every": 500, "val_ev
 # LCP-VAE: a wide learned prior (cs_kl_weight, see models/lcpvae.py) and a short teacher-forcing phase
 # (sampling decodes free-running; a long teacher-forced phase left the validation loss 8x above training).
 LCP='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128, "cs_kl_weight": 4.0, "teacher_forcing_steps": 300, "motion_stats_weight": 60.0}'
-# mixer-dct (issue 24, models/mixer.py): DCT of the window padded with the last observed pose, an MLP-mixer,
-# best-of-8 noise sampler with early-frame, diversity and liveliness terms; windows drawn with weight
-# action_share^-0.5. Its budget is time, not steps (max_minutes 55: the schedule anneals by whichever of the 6000
-# steps and the 55 minutes is further along), so the step count depends on the machine's load.
-MIXER='"model": {"context_blocks": 6, "sample_blocks": 2, "train_samples": 8, "stats_weight": 0.02, "diversity_weight": 0.5}, "data": {"held_out": "corpus", "balance_actions": 0.5}, "train": {"batch_size": 32, "lr": 0.002, "checkpoint_every": 250, "val_every": 500, "max_minutes": 55}'
-# mixer-cvae (issue 24, models/mixer_cvae.py): a CVAE whose decoder is mixer-dct's DCT + MLP-mixer, KL weight 0.01,
+# mixer-cvae (issue 24, models/mixer_cvae.py): a CVAE whose decoder is the DCT + MLP-mixer of models/mixer.py, KL weight 0.01,
 # a liveliness term on prior samples; 21 min on one thread beside another run (2026-11-27). DLow samples it.
 MIXER_CVAE='"model": {"kl_weight": 0.01, "stats_weight": 1.0}, "data": {"held_out": "corpus"}, "train": {"batch_size": 64, "lr": 0.002, "checkpoint_every": 1000, "val_every": 1000}'
 # DLow on top of the trained mtvae-add: K = 50 affine maps of one noise, the base model frozen.
@@ -83,7 +78,6 @@ lane_b() {
   train_one lcpvae lcpvae "$MOCAP" 3000 "{$LCP, $BODY_DATA, $TRAIN}"
   train_one mtvae-add-2d mtvae-add "$MOCAP" 2500 "{$MTVAE_BODY, $BODY_DATA, $TRAIN}" --layout body2d
   train_one mtvae-add-face mtvae-add "$FACE" 1200 "{$MTVAE, $TRAIN}" --layout face
-  train_one mixer-dct mixer-dct "$MOCAP" 6000 "{$MIXER}"
   train_one mixer-cvae mixer-cvae "$MOCAP" 6000 "{$MIXER_CVAE}"
   train_one mixer-cvae-dlow dlow "$MOCAP" 600 "{$DLOW}" --base "$WEIGHTS/mixer-cvae.safetensors"
 }

@@ -35,7 +35,6 @@ shipped motion models (model cards in motion2video/weights/NAME.md):
   mixer-cvae-dlow 3D body: DLow over a CVAE with a DCT + MLP-mixer decoder (issue 24; not better than
                   mtvae-add-dlow on the macro average)
   mixer-cvae      3D body: that CVAE, sampled from its prior
-  mixer-dct       3D body: DCT + MLP-mixer forecaster (issue 24; worse than mixer-cvae-dlow on every action)
   mtvae-add-2d    2D keypoints in a virtual camera
   mtvae-add-face  ARKit face coefficients + head pose
 """
