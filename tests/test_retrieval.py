@@ -8,7 +8,9 @@ import pytest
 import torch
 
 from motion2video.data.dataset import DatasetConfig, build_dataset
-from motion2video.evaluation.retrieval import RetrievalConfig, RetrievedFutures, match_descriptor
+from motion2video.evaluation.retrieval import (RetrievalConfig, RetrievedFutures, match_descriptor, posterior_means,
+                                               retrieved_latent_futures)
+from motion2video.models.base import build_model
 from motion2video.stages.sampling import sample_futures
 
 
@@ -57,3 +59,31 @@ def test_retrieved_futures_continue_the_query_and_are_real_motion(walks):
     assert np.median(nearest_gap) < 0.1
     with pytest.raises(ValueError, match="frames"):
         net.sample(torch.from_numpy(queries.obs[:1]), num_samples=1, horizon=db.future.shape[1] + 1)
+
+
+def test_retrieved_latents_decode_the_nearest_windows_latents(walks):
+    """A latent model's futures from retrieved latents (scripts/measure_decoder_ceiling.py): a database window asks
+    for K futures and the first is its own future as the decoder draws it from its own posterior mean; the others
+    are the decoder's futures of the same past under the other retrieved windows' latents (an untrained model: its
+    zero-initialised head draws the same future for every latent, so the latents are compared, not the futures)."""
+    db, queries, stats = walks
+    horizon = db.future.shape[1]
+    torch.manual_seed(0)
+    model = build_model("mixer-cvae", {"feature_dim": db.raw.shape[2], "observed": db.observed, "future": horizon,
+                                       "num_coeffs": 8, "hidden_dim": 16, "context_blocks": 1, "encoder_blocks": 1,
+                                       "decoder_blocks": 1, "latent_dim": 4}).eval()
+    net = make(db, stats)
+    latents = posterior_means(model, db.features, observed=db.observed, batch_size=64)
+    assert latents.shape == (len(db), 4)
+    i = len(db) // 2
+    out = retrieved_latent_futures(model, net, latents, db.obs[i:i + 2], num_samples=3, horizon=horizon)
+    assert out.shape == (2, 3, horizon, db.raw.shape[2]) and out.dtype == np.float32
+    rows = net.nearest(match_descriptor(db.raw[i:i + 1], observed=db.observed, config=net.config)[0], 3)
+    past = torch.from_numpy(db.obs[i:i + 1]).repeat(3, 1, 1)
+    with torch.no_grad():
+        expected = model.decode(past, latents[torch.from_numpy(rows)], horizon=horizon).numpy()
+    assert rows[0] == i
+    np.testing.assert_allclose(out[0], expected, atol=1e-5)
+    assert not torch.allclose(latents[rows[0]], latents[rows[1]])  # each retrieved window lends its own latent
+    short = retrieved_latent_futures(model, net, latents, queries.obs[:1], num_samples=2, horizon=10)
+    assert short.shape == (1, 2, 10, db.raw.shape[2])

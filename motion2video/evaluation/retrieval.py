@@ -107,3 +107,38 @@ class RetrievedFutures(nn.Module):
             offset = raw[b, -1] - self.windows[rows, self.observed - 1]  # (K, F)
             out[b] = futures + fade[None] * offset[:, None]
         return torch.from_numpy(self.stats.normalize(out)).float()
+
+
+@torch.no_grad()
+def posterior_means(model: nn.Module, windows: np.ndarray, *, observed: int, batch_size: int = 512) -> torch.Tensor:
+    """(M, Z) the recognition model's mean latent of each (M, L, F) normalised window (its first ``observed``
+    frames the past, the rest the future)."""
+    x = torch.from_numpy(np.ascontiguousarray(windows, np.float32))
+    return torch.cat([model.encode(b[:, :observed], b[:, observed:]).mu for b in x.split(batch_size)])
+
+
+@torch.no_grad()
+def retrieved_latent_futures(model: nn.Module, database: RetrievedFutures, latents: torch.Tensor, obs: np.ndarray,
+                             *, num_samples: int, horizon: int) -> np.ndarray:
+    """A latent model's futures decoded from real latents: for each observed window, the recognition model's mean
+    latents of the K database windows whose last observed frames are nearest (:meth:`RetrievedFutures.nearest`),
+    decoded from the window's own observed frames.
+
+    It asks whether a sampler could do better by drawing the latents that the training futures of similar moments
+    have, instead of learning a map from noise (``scripts/measure_decoder_ceiling.py``).
+
+    Args:
+        model: a latent model with ``decode`` (its latents ``latents``, from :func:`posterior_means`).
+        database: the training windows and their matching keys; latents: (M, Z), one per database window.
+        obs: (N, To, F) normalised observed windows in the database's normalisation.
+    Returns:
+        (N, K, horizon, F) normalised futures (float32).
+    """
+    raw = database.stats.denormalize(np.asarray(obs, np.float64))
+    queries = match_descriptor(raw, observed=raw.shape[1], config=database.config)
+    out = np.empty((len(obs), num_samples, horizon, obs.shape[2]), np.float32)
+    for i, query in enumerate(queries):
+        rows = np.resize(database.nearest(query, num_samples), num_samples)
+        past = torch.from_numpy(np.ascontiguousarray(obs[i:i + 1], np.float32)).repeat(num_samples, 1, 1)
+        out[i] = model.decode(past, latents[torch.from_numpy(rows)], horizon=horizon).numpy()
+    return out
