@@ -21,6 +21,9 @@ SPLITS = ("train", "test")
 # 2: person masks stored, patterned clothing, 24 backgrounds; 3: body control points on canonical skeleton
 # version 2 (core.skeletons.SKELETON_VERSION), so renders cached with the old joints are not reused
 DATA_VERSION = 3
+# Face splits with vertices: 2 = the head vertices' front-surface test at 1 cm (renderers.face.
+# FACE_VISIBILITY_TOLERANCE_M; it was 2.5 cm), so face correspondence cached before it is not reused.
+FACE_VISIBILITY_VERSION = 2
 
 
 def default_data_root() -> Path:
@@ -342,6 +345,8 @@ class DatasetSpec:
         fields = asdict(self)
         if not self.vertices:  # the key of a split without vertices is what it was before the field existed
             del fields["vertices"]
+        elif self.domain == "face":
+            fields["face_visibility"] = FACE_VISIBILITY_VERSION
         blob = json.dumps({**fields, "version": DATA_VERSION}, sort_keys=True).encode()
         return f"{self.domain}-{self.image_size}-{self.split}-{hashlib.sha1(blob).hexdigest()[:10]}"
 
