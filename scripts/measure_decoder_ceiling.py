@@ -40,8 +40,8 @@ from motion2video.data.dataset import DEFAULT_MOCAP, build_dataset  # noqa: E402
 from motion2video.data.windows import metric_vectors  # noqa: E402
 from motion2video.evaluation.forecasting import (EvalProtocol, dlow_metrics_per_window,  # noqa: E402
                                                  evaluate_bundles, posterior_futures)
-from motion2video.evaluation.retrieval import (RetrievalConfig, RetrievedFutures, posterior_means,  # noqa: E402
-                                               retrieved_latent_futures)
+from motion2video.evaluation.retrieval import (posterior_means, retrieved_latent_futures,  # noqa: E402
+                                               training_database)
 from motion2video.evaluation.per_action import group_by_action, macro_average, per_action_means  # noqa: E402
 from motion2video.models.checkpoint import baseline_bundle, load_model  # noqa: E402
 from motion2video.stages.sampling import continue_observed  # noqa: E402
@@ -91,9 +91,7 @@ def main(argv: list[str] | None = None) -> int:
             return ratios(per_action_means(dlow_metrics_per_window(pred, gt, last, threshold=threshold), actions), zero)
 
         train = dataset.windows("train", stride=args.db_stride)
-        clips = {c: i for i, c in enumerate(sorted(set(train.clip_names)))}
-        database = RetrievedFutures(train.raw, np.array([clips[c] for c in train.clip_names]), train.starts,
-                                    observed=train.observed, stats=bundle.stats, config=RetrievalConfig())
+        database = training_database(train, bundle.stats)
         latents = posterior_means(decoder, train.features, observed=train.observed)
         rows = {
             "posterior mean": score(posterior_futures(decoder, windows.obs, windows.future, num_samples=1, seed=0,

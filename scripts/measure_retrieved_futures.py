@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT))
 from motion2video.core.atomic import write_json  # noqa: E402
 from motion2video.data.dataset import DEFAULT_MOCAP, build_dataset  # noqa: E402
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
-from motion2video.evaluation.retrieval import RetrievalConfig, RetrievedFutures  # noqa: E402
+from motion2video.evaluation.retrieval import RetrievalConfig, training_database  # noqa: E402
 from motion2video.evaluation.transfer import sample_realism  # noqa: E402
 from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_model  # noqa: E402
 
@@ -39,10 +39,7 @@ LABEL = "retrieved futures"
 
 def retrieval_bundle(model: ModelBundle, dataset, *, db_stride: int) -> ModelBundle:
     """The retrieval sampler over the training windows of ``dataset``, in ``model``'s normalisation."""
-    train = dataset.windows("train", stride=db_stride)
-    clips = {name: i for i, name in enumerate(sorted(set(train.clip_names)))}
-    net = RetrievedFutures(train.raw, np.array([clips[c] for c in train.clip_names]), train.starts,
-                           observed=train.observed, stats=model.stats, config=RetrievalConfig())
+    net = training_database(dataset.windows("train", stride=db_stride), model.stats)
     return ModelBundle(model=net, stats=model.stats, meta=replace(model.meta, model=LABEL), path=None)
 
 

@@ -109,10 +109,19 @@ class RetrievedFutures(nn.Module):
         return torch.from_numpy(self.stats.normalize(out)).float()
 
 
+def training_database(train, stats: NormStats, config: RetrievalConfig = RetrievalConfig()) -> RetrievedFutures:
+    """The retrieval database of a split's training windows (a :class:`motion2video.data.dataset.WindowSet`), in the
+    normalisation ``stats``; windows of one clip share an id, so that the K retrieved keep apart in it."""
+    clips = {name: i for i, name in enumerate(sorted(set(train.clip_names)))}
+    return RetrievedFutures(train.raw, np.array([clips[c] for c in train.clip_names]), train.starts,
+                            observed=train.observed, stats=stats, config=config)
+
+
 @torch.no_grad()
 def posterior_means(model: nn.Module, windows: np.ndarray, *, observed: int, batch_size: int = 512) -> torch.Tensor:
     """(M, Z) the recognition model's mean latent of each (M, L, F) normalised window (its first ``observed``
     frames the past, the rest the future)."""
+    model.eval()
     x = torch.from_numpy(np.ascontiguousarray(windows, np.float32))
     return torch.cat([model.encode(b[:, :observed], b[:, observed:]).mu for b in x.split(batch_size)])
 
@@ -134,6 +143,7 @@ def retrieved_latent_futures(model: nn.Module, database: RetrievedFutures, laten
     Returns:
         (N, K, horizon, F) normalised futures (float32).
     """
+    model.eval()
     raw = database.stats.denormalize(np.asarray(obs, np.float64))
     queries = match_descriptor(raw, observed=raw.shape[1], config=database.config)
     out = np.empty((len(obs), num_samples, horizon, obs.shape[2]), np.float32)
