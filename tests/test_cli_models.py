@@ -178,6 +178,9 @@ def test_bad_input_gets_one_line_and_exit_code_2(trained, small_data, mocap_dir,
                                   capsys, video)
     assert "shorter than the observed" in _fails(
         ["sample", "--model", str(trained), short, "--samples", "2", "-o", str(video)], capsys, video)
+    # a shipped name whose weights were retired says so, and what to use instead
+    retired = _fails(["sample", "--model", "mixer-dct", clip, "--samples", "2", "-o", str(video)], capsys, video)
+    assert "retired" in retired and "mixer-cvae-dlow" in retired and "696e72f" in retired
     assert "--samples" in _fails(["sample", "--model", str(trained), clip, "--samples", "0", "-o", str(video)],
                                  capsys, video)
     # evaluate

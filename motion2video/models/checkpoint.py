@@ -146,6 +146,13 @@ def config_dict(config) -> dict:
     return asdict(config)
 
 
+# Shipped names whose weights were removed, and what to use instead (a user's command line may still name them).
+RETIRED = {
+    "mixer-dct": "retired on 2026-11-27: mixer-cvae-dlow is better on every action; the weights and their card are "
+                 "in git history at 696e72f, and `motion2video train --model mixer-dct` still trains one",
+}
+
+
 def shipped_names() -> list[str]:
     """Names of the checkpoints shipped in ``motion2video/weights``."""
     if not WEIGHTS_DIR.is_dir():
@@ -169,6 +176,8 @@ def resolve_checkpoint(path_or_name: str | Path) -> Path:
             return shipped
     if path.exists():
         raise InputError("is not a checkpoint file", path)
+    if text in RETIRED:
+        raise InputError(f"this shipped model was {RETIRED[text]}", path_or_name)
     known = shipped_names()
     hint = f"shipped models: {', '.join(known)}" if known else "no models are shipped in motion2video/weights yet"
     raise InputError(f"no such checkpoint file or shipped model name ({hint})", path_or_name)
