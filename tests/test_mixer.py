@@ -99,13 +99,18 @@ def test_sampling_is_seeded_batched_and_diverse() -> None:
     assert (a[:, 0] - a[:, 1]).abs().max() > 1e-3  # different noises, different futures
 
 
+def _without_gradient(model: torch.nn.Module) -> list[str]:
+    """Names of the parameters that the last backward pass left without a gradient (None or all zero)."""
+    return [n for n, p in model.named_parameters() if p.grad is None or not torch.any(p.grad != 0)]
+
+
 def test_gradients_reach_every_parameter() -> None:
     model = _tiny(diversity_weight=1.0)
     with torch.no_grad():
         model.head.weight.normal_(0.0, 0.1)
     obs, fut = _batch()
     model.loss(obs, fut, step=0).total.backward()
-    missing = [n for n, p in model.named_parameters() if p.grad is None or not torch.any(p.grad != 0)]
+    missing = _without_gradient(model)
     assert not missing, missing
 
 

@@ -14,7 +14,7 @@ from motion2video.models.base import MODEL_REGISTRY, build_model
 from motion2video.models.checkpoint import load_model
 from motion2video.models.mixer_cvae import fit_future
 from tests.conftest import link_clips
-from tests.test_mixer import F, _batch, _sample, _two_futures
+from tests.test_mixer import F, _batch, _sample, _two_futures, _without_gradient
 
 TINY = {"feature_dim": F, "observed": 5, "future": 7, "num_coeffs": 8, "hidden_dim": 16, "context_blocks": 1,
         "encoder_blocks": 1, "decoder_blocks": 1, "latent_dim": 4}
@@ -75,7 +75,7 @@ def test_gradients_reach_every_parameter() -> None:
         model.head.weight.normal_(0.0, 0.1)
     obs, fut = _batch()
     model.loss(obs, fut, step=500).total.backward()
-    missing = [n for n, p in model.named_parameters() if p.grad is None or not torch.any(p.grad != 0)]
+    missing = _without_gradient(model)
     assert not missing, missing
 
 
