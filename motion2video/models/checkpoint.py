@@ -21,6 +21,7 @@ import re
 from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
 
+import numpy as np
 import torch
 from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
@@ -257,3 +258,47 @@ def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats |
                           version=__version__,
                           skeleton_version=SKELETON_VERSION if data_config.feature_layout.is_body else None)
     return ModelBundle(model=model, stats=stats, meta=meta, path=None)
+
+
+def compose_mixture(bundles: list[ModelBundle]) -> ModelBundle:
+    """A :mod:`~motion2video.models.mixture` of trained samplers, their weights copied in (nothing is trained).
+
+    Args:
+        bundles: two or more loaded stochastic models with the same feature layout, windows, normalisation
+            statistics and split (the mixture's checkpoint records them once); future k comes from bundle k mod C.
+    Returns:
+        The mixture as a bundle (eval mode, ``path`` None), ready for :func:`save_checkpoint`.
+    Raises:
+        InputError: fewer than two bundles, a baseline or deterministic model, or components that disagree.
+    """
+    if len(bundles) < 2:
+        raise InputError(f"a mixture needs at least two models, got {len(bundles)}")
+    first = bundles[0]
+    for b in bundles:
+        where = b.path or b.label
+        if b.kind != "stochastic" or b.name == "mixture":
+            raise InputError(f"a mixture's component must be a trained stochastic model, not {b.kind} {b.name!r}",
+                             where)
+        if b.data_config.to_dict() != first.data_config.to_dict():
+            raise InputError(f"its windows or feature layout differ from {first.label}'s", where)
+        if not (np.array_equal(b.stats.mean, first.stats.mean) and np.array_equal(b.stats.std, first.stats.std)):
+            raise InputError(f"its normalisation statistics differ from {first.label}'s", where)
+        same_split = (b.meta.split is None) == (first.meta.split is None) and (
+            b.meta.split is None or b.meta.split.to_dict() == first.meta.split.to_dict())
+        if not same_split:
+            raise InputError(f"it was trained on another split than {first.label}", where)
+        if b.meta.skeleton_version != first.meta.skeleton_version:
+            raise InputError(f"its canonical skeleton version differs from {first.label}'s", where)
+    components = [{"name": b.label, "model": b.name, "config": b.meta.config} for b in bundles]
+    model = build_model("mixture", {"feature_dim": first.layout.num_features, "components": components})
+    for part, b in zip(model.components, bundles):
+        part.load_state_dict(b.model.state_dict(), strict=True)
+    model.eval()
+    meta = CheckpointMeta(model="mixture", kind="stochastic", config=config_dict(model.config),
+                          data_config=first.data_config, stats=first.stats, split=first.meta.split,
+                          skeleton=first.meta.skeleton, version=__version__, data_summary=first.meta.data_summary,
+                          training={"steps": 0, "composed_from": [
+                              {"name": b.label, "model": b.name, "steps": b.meta.training.get("steps"),
+                               "wall_time_s": b.meta.training.get("wall_time_s")} for b in bundles]},
+                          skeleton_version=first.meta.skeleton_version)
+    return ModelBundle(model=model, stats=first.stats, meta=meta, path=None)
