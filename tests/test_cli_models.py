@@ -260,4 +260,16 @@ def test_sample_help_lists_every_shipped_motion_model_and_names_the_best(capsys)
     motion = [n for n in shipped_names() if not n.startswith("frames-")]
     assert motion and all(f"  {name} " in listed for name in motion), motion
     first = listed.strip().splitlines()[1].split()
-    assert first[0] == "mtvae-add-dlow" and "best" in " ".join(first)
+    assert first[0] == "mixture-dlow" and "best" in " ".join(first)
+
+
+def test_every_shipped_weight_file_has_a_model_card_and_stays_under_30_mb():
+    """The house rule for motion2video/weights: plain files under 30 MB, each with a card saying how it was made."""
+    from motion2video.models.checkpoint import WEIGHTS_DIR
+
+    files = sorted(p for p in WEIGHTS_DIR.iterdir() if p.suffix in (".safetensors", ".tflite"))
+    assert len(files) >= 10
+    for path in files:
+        assert path.stat().st_size < 30 * 2**20, path.name
+        card = {"pose_detection": "blazepose", "pose_landmark_full": "blazepose"}.get(path.stem, path.stem)
+        assert (WEIGHTS_DIR / f"{card}.md").is_file(), f"{path.name} has no model card"

@@ -28,7 +28,9 @@ Every cell of the grid plays the observed frames framed in green, then one sampl
 --model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip.
 
 shipped motion models (model cards in motion2video/weights/NAME.md):
-  mtvae-add-dlow  3D body: the best sampler (lowest best-of-50 error on every action, docs/results.md)
+  mixture-dlow    3D body: the best sampler (lowest best-of-50 error on every held-out action, docs/results.md):
+                  its futures come in turn from mtvae-add-dlow and mixer-cvae-dlow
+  mtvae-add-dlow  3D body: DLow over MT-VAE (the best sampler of one decoder)
   mtvae-add       3D body: MT-VAE, the model mtvae-add-dlow samples from
   lcpvae          3D body: LCP-VAE, a learned condition-dependent prior
   behavior        3D body: the behaviour model (flow samples; transfer re-enacts with it)
