@@ -28,8 +28,8 @@ Every cell of the grid plays the observed frames framed in green, then one sampl
 --model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip.
 
 shipped motion models (model cards in motion2video/weights/NAME.md):
-  mixture-dlow    3D body: the best sampler (lowest best-of-50 error on every held-out action, docs/results.md):
-                  its futures come in turn from mtvae-add-dlow and mixer-cvae-dlow
+  mixture-dlow    3D body: the best sampler (lowest best-of-50 error over actions, held out and validation,
+                  docs/results.md): its futures come in turn from mtvae-add-dlow and mixer-cvae-dlow
   mtvae-add-dlow  3D body: DLow over MT-VAE (the best sampler of one decoder)
   mtvae-add       3D body: MT-VAE, the model mtvae-add-dlow samples from
   lcpvae          3D body: LCP-VAE, a learned condition-dependent prior
