@@ -7,8 +7,9 @@ is itself a conditional generative model, and its K futures cover what either co
 (docs/results.md, "Two samplers in one").
 
 Sampling: future k comes from component ``k mod C`` (so the first C futures show every component, and K = 50
-gives each of two components 25). Each component draws its own futures with its own rule (a DLow component
-gives its first ceil(K / C) maps of one shared noise); all components share one ``generator``, in order.
+gives each of two components 25). Component c draws its K_c futures (K_c = how many k < K have k mod C = c,
+:meth:`Mixture.counts`) with its own rule (a DLow component: its first K_c maps of one shared noise); the components
+draw in order from one ``generator``.
 
 Nothing is trained: the components' weights are copied in, under ``components.<c>.``, so a mixture checkpoint
 is self-contained (``python scripts/make_mixture.py``). The components must share the feature layout, the
