@@ -71,15 +71,11 @@ def liveliness(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, s
     from motion2video.models.checkpoint import load_model
     from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
 
-    import numpy as np
-
     out = {}
     dataset = stats = None
     for label, path in checkpoints:
         bundle = load_model(path)
-        same = stats is not None and np.array_equal(stats.mean, bundle.stats.mean) and \
-            np.array_equal(stats.std, bundle.stats.std)
-        if not same:  # the windows normalised with this checkpoint's own statistics
+        if stats is None or not stats.same_as(bundle.stats):  # windows normalised with this checkpoint's statistics
             stats = bundle.stats
             dataset = checkpoint_dataset(mocap, bundle)
             test = dataset.windows("test", stride=stride)

@@ -249,6 +249,10 @@ class NormStats:
     def denormalize(self, x: np.ndarray) -> np.ndarray:
         return np.asarray(x, np.float64) * self.std + self.mean
 
+    def same_as(self, other: "NormStats") -> bool:
+        """Whether ``other`` holds exactly the same means and standard deviations (the same normalisation)."""
+        return self is other or (np.array_equal(self.mean, other.mean) and np.array_equal(self.std, other.std))
+
     def to_dict(self) -> dict:
         return {"mean": [float(v) for v in self.mean], "std": [float(v) for v in self.std]}
 

@@ -226,8 +226,7 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
             return metric_vectors(own.denormalize(samples_norm), layout)
 
         def renorm(x: np.ndarray, own=own) -> np.ndarray:
-            same = own is stats or (np.array_equal(own.mean, stats.mean) and np.array_equal(own.std, stats.std))
-            return x if same else own.normalize(stats.denormalize(x))
+            return x if own.same_as(stats) else own.normalize(stats.denormalize(x))
 
         samples = sample_futures(bundle.model, renorm(windows.obs), num_samples=protocol.samples,
                                  horizon=horizon, seed=protocol.seed, batch_size=protocol.batch_size,

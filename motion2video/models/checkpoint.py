@@ -21,7 +21,6 @@ import re
 from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
 
-import numpy as np
 import torch
 from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
@@ -260,6 +259,11 @@ def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats |
     return ModelBundle(model=model, stats=stats, meta=meta, path=None)
 
 
+def split_record(bundle: ModelBundle) -> dict | None:
+    """The recorded train / val / test clip lists of a bundle's checkpoint (None when it records no split)."""
+    return None if bundle.meta.split is None else bundle.meta.split.to_dict()
+
+
 def compose_mixture(bundles: list[ModelBundle]) -> ModelBundle:
     """A :mod:`~motion2video.models.mixture` of trained samplers, their weights copied in (nothing is trained).
 
@@ -281,11 +285,9 @@ def compose_mixture(bundles: list[ModelBundle]) -> ModelBundle:
                              where)
         if b.data_config.to_dict() != first.data_config.to_dict():
             raise InputError(f"its windows or feature layout differ from {first.label}'s", where)
-        if not (np.array_equal(b.stats.mean, first.stats.mean) and np.array_equal(b.stats.std, first.stats.std)):
+        if not b.stats.same_as(first.stats):
             raise InputError(f"its normalisation statistics differ from {first.label}'s", where)
-        same_split = (b.meta.split is None) == (first.meta.split is None) and (
-            b.meta.split is None or b.meta.split.to_dict() == first.meta.split.to_dict())
-        if not same_split:
+        if split_record(b) != split_record(first):
             raise InputError(f"it was trained on another split than {first.label}", where)
         if b.meta.skeleton_version != first.meta.skeleton_version:
             raise InputError(f"its canonical skeleton version differs from {first.label}'s", where)
