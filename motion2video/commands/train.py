@@ -136,8 +136,9 @@ def run(args: argparse.Namespace) -> int:
     if MODEL_REGISTRY[args.model].kind == "baseline":
         raise InputError(f"{args.model!r} is a baseline: it has no parameters to train")
     if args.model == "mixture":
-        raise InputError("a mixture is composed from trained samplers, not trained: "
-                         "python scripts/make_mixture.py MODEL MODEL -o OUT.safetensors")
+        from motion2video.models.mixture import NOT_TRAINED
+
+        raise InputError(NOT_TRAINED)
     if not Path(args.output).name.endswith(".safetensors"):
         raise InputError("the output must be a .safetensors file", args.output)
     if args.steps is not None:

@@ -25,6 +25,9 @@ from torch import nn
 
 from motion2video.models.base import LatentSampler, LossOutput, build_model, register_model
 
+NOT_TRAINED = ("a mixture is composed from trained samplers, not trained: "
+               "python scripts/make_mixture.py MODEL MODEL -o OUT.safetensors")
+
 
 @dataclass(frozen=True)
 class MixtureConfig:
@@ -41,16 +44,11 @@ class Mixture(LatentSampler, nn.Module):
         super().__init__()
         if len(config.components) < 2:
             raise ValueError(f"a mixture needs at least two components, got {len(config.components)}")
+        if any(c["model"] == "mixture" for c in config.components):
+            raise ValueError("a mixture's component cannot be a mixture")
         self.config = config
-        built = []
-        for c in config.components:
-            if c["model"] == "mixture":
-                raise ValueError("a mixture's component cannot be a mixture")
-            model = build_model(c["model"], {**c["config"], "feature_dim": config.feature_dim})
-            for p in model.parameters():
-                p.requires_grad_(False)
-            built.append(model)
-        self.components = nn.ModuleList(built)
+        self.components = nn.ModuleList(build_model(c["model"], {**c["config"], "feature_dim": config.feature_dim})
+                                        for c in config.components)
 
     @property
     def names(self) -> list[str]:
@@ -58,8 +56,7 @@ class Mixture(LatentSampler, nn.Module):
         return [c["name"] for c in self.config.components]
 
     def loss(self, obs: torch.Tensor, future: torch.Tensor, *, step: int) -> LossOutput:
-        raise ValueError("a mixture is composed from trained samplers, not trained: "
-                         "python scripts/make_mixture.py NAME NAME -o OUT")
+        raise ValueError(NOT_TRAINED)
 
     def counts(self, num_samples: int) -> list[int]:
         """How many of ``num_samples`` futures each component draws (future k from component k mod C)."""
