@@ -5,8 +5,8 @@
 Writes, from the committed ``demo_inputs/`` (and one photo of ``../shared`` when it is there):
 
 - ``out/futures_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``cmu_walk.npz`` (a real CMU walk)
-  sampled by ``mixture-dlow`` (the best sampler: futures 1, 3, 5 from ``mtvae-add-dlow``, 2 and 4 from
-  ``mixer-cvae-dlow``), turned into 256 px frames of ``reference_body.png`` by
+  sampled by ``mixture-periodic`` (the best sampler: futures 1 and 4 from ``mtvae-add-dlow``, 2 and 5 from
+  ``mixer-cvae-dlow``, 3 from ``mirror-periodic``, the walk's own steps repeated), turned into 256 px frames of ``reference_body.png`` by
   ``frames-body-mesh-256`` (the
   reference person moved through a fitted body mesh);
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
@@ -37,7 +37,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 DEMO_INPUTS = REPO / "demo_inputs"
 WEIGHTS = REPO / "motion2video" / "weights"
-BODY = dict(motion_model="mixture-dlow", frame_model="frames-body-mesh-256", clip="cmu_walk.npz",
+BODY = dict(motion_model="mixture-periodic", frame_model="frames-body-mesh-256", clip="cmu_walk.npz",
             reference="reference_body.png", start=24)
 FACE = dict(motion_model="mtvae-add-face", frame_model="frames-face-mesh-128", clip="smile.npz",
             reference="reference_face.png", start=0)
@@ -48,13 +48,13 @@ MESH_SIZE = 256
 # A real photo as the reference (issue 23): the skier of ../shared/data/photos/skier.jpg (one person, full body, on
 # plain snow), her pose estimated (no pose file), the photo cut to a square around her (--crop-person: the
 # 640x425 photo would otherwise be padded to a square) and generated at 256 px. Two futures of the CMU walk by the
-# best sampler (mixture-dlow: one of each component), the second of which turns her sideways. The mesh generator
+# best sampler (mixture-periodic: one of each DLow component), the second of which turns her sideways. The mesh generator
 # draws her (frames-body-mesh-256): the keypoint warp (frames-body-128) tore her legs and jacket into fragments in
 # such a turn; the mesh generator keeps her whole, with grey patches on her trousers, a noisy jacket and red patches
 # on the side of her face (docs/results.md, issue 22). The other photos were tried: man_by_truck.jpg and
 # three_walking.jpg keep their faces, their forearms break into specks when they swing.
 SHARED_PHOTOS = REPO.parent / "shared" / "data" / "photos"
-PHOTO = dict(motion_model="mixture-dlow", frame_model="frames-body-mesh-256", clip="cmu_walk.npz", photo="skier.jpg",
+PHOTO = dict(motion_model="mixture-periodic", frame_model="frames-body-mesh-256", clip="cmu_walk.npz", photo="skier.jpg",
              start=24, samples=2, size=256, crop_person=True)
 TRANSFER = dict(motion_model="behavior", frame_model="frames-body-mesh-256", behavior="cmu_jump.npz",
                 behavior_start=0, target="wave.npz", target_frame=0, reference="reference_body.png", fit_view=True)

@@ -14,8 +14,9 @@
 # and mixer-cvae-dlow (issue 24, lane B) add 21 + 8 min (2026-11-27). (mixer-dct, retired on 2026-11-27, was trained
 # here until then; its command is in its card in git history, commit 696e72f.) Logs and evaluation JSON go
 # to out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
-# Last, mixture-dlow (the best sampler) is composed from the two DLow samplers (nothing trained, seconds); its
-# card, motion2video/weights/mixture-dlow.md, is written by hand from the evaluation printed to its log.
+# Last, the mixtures are composed (nothing trained, seconds): mixture-dlow from the two DLow samplers, and
+# mixture-periodic (the best sampler) from them and the mirror-periodic rule; their cards,
+# motion2video/weights/mixture-*.md, are written by hand from the evaluations printed to their logs.
 # Afterwards: python scripts/make_results_corpus.py (docs/results.md, issue 8).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,7 +27,7 @@ FACE=${FACE:-../shared/data/face}
 WEIGHTS=${WEIGHTS:-motion2video/weights}
 LOGS=${LOGS:-out/train_shipped}
 STEPS_SCALE=${STEPS_SCALE:-1}
-ONLY=${ONLY:-"mtvae-add mtvae-add-dlow mtvae-add-2d mtvae-add-face lcpvae behavior mixer-cvae mixer-cvae-dlow mixture-dlow"}
+ONLY=${ONLY:-"mtvae-add mtvae-add-dlow mtvae-add-2d mtvae-add-face lcpvae behavior mixer-cvae mixer-cvae-dlow mixture-dlow mixture-periodic"}
 export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 mkdir -p "$WEIGHTS" "$LOGS"
 
@@ -98,6 +99,16 @@ case " $ONLY " in *" mixture-dlow "*)
         --model "$WEIGHTS/mtvae-add-dlow.safetensors" --model "$WEIGHTS/mixer-cvae-dlow.safetensors" --data "$MOCAP" \
         --samples 50 --json "$LOGS/mixture-dlow.eval.json" >> "$LOGS/mixture-dlow.log" 2>&1 || status=1
     echo "[$(date +%T)] mixture-dlow composed (status $status)"
+  fi ;;
+esac
+case " $ONLY " in *" mixture-periodic "*)
+  if [ $status -eq 0 ]; then
+    "$PY" scripts/make_mixture.py "$WEIGHTS/mtvae-add-dlow.safetensors" "$WEIGHTS/mixer-cvae-dlow.safetensors" \
+        mirror-periodic --shares 19,19,12 -o "$WEIGHTS/mixture-periodic.safetensors" > "$LOGS/mixture-periodic.log" 2>&1 || status=1
+    "$PY" -m motion2video.cli evaluate --model "$WEIGHTS/mixture-periodic.safetensors" \
+        --model "$WEIGHTS/mixture-dlow.safetensors" --data "$MOCAP" \
+        --samples 50 --json "$LOGS/mixture-periodic.eval.json" >> "$LOGS/mixture-periodic.log" 2>&1 || status=1
+    echo "[$(date +%T)] mixture-periodic composed (status $status)"
   fi ;;
 esac
 echo "all done in $(( (SECONDS - start) / 60 )) min (status $status); logs in $LOGS"

@@ -260,7 +260,7 @@ def test_sample_help_lists_every_shipped_motion_model_and_names_the_best(capsys)
     motion = [n for n in shipped_names() if not n.startswith("frames-")]
     assert motion and all(f"  {name} " in listed for name in motion), motion
     first = listed.strip().splitlines()[1].split()
-    assert first[0] == "mixture-dlow" and "best" in " ".join(first)
+    assert first[0] == "mixture-periodic" and "best" in " ".join(first)
 
 
 def test_every_shipped_weight_file_has_a_model_card_and_stays_under_30_mb():

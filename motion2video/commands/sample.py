@@ -25,11 +25,15 @@ examples:
   motion2video sample --model zero-velocity ../shared/data/mocap/cmu/08_01.bvh --samples 1 -o out/zv.mp4
 
 Every cell of the grid plays the observed frames framed in green, then one sampled future framed in red.
---model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip.
+--model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip, and
+mirror-periodic for a 3D body clip (the observed motion repeated every half-period, mirrored; one half-period per
+future, spread over 0.32-0.64 s).
 
 shipped motion models (model cards in motion2video/weights/NAME.md):
-  mixture-dlow    3D body: the best sampler (lowest best-of-50 error over actions, held out and validation,
-                  docs/results.md): its futures come in turn from mtvae-add-dlow and mixer-cvae-dlow
+  mixture-periodic 3D body: the best sampler (lowest best-of-50 error over actions, held out and validation,
+                  docs/results.md): its futures come from mtvae-add-dlow, mixer-cvae-dlow and mirror-periodic
+                  (38%, 38%, 24%; with 5 futures the third is mirror-periodic's, the walk's own steps)
+  mixture-dlow    3D body: the previous best, mtvae-add-dlow's and mixer-cvae-dlow's futures in turn
   mtvae-add-dlow  3D body: DLow over MT-VAE (the best sampler of one decoder)
   mtvae-add       3D body: MT-VAE, the model mtvae-add-dlow samples from
   lcpvae          3D body: LCP-VAE, a learned condition-dependent prior
@@ -69,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.stages.sampling import forecast
     from motion2video.apps.sample import iter_forecast, load_clip_for, save_forecast_npz
     from motion2video.models.baselines import BASELINES
+    from motion2video.models.periodic import RULES
     from motion2video.stages.video import check_cell_size
     from motion2video.formats.video import VideoWriter
 
@@ -76,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     check_at_least("--samples", args.samples)
     check_cell_size(args.size)
     out = check_video_and_npz(args.output, args.npz)
-    if args.model in BASELINES:
+    if args.model in BASELINES + RULES:
         bundle = baseline_bundle(args.model, DatasetConfig())
     else:
         bundle = load_model(args.model)

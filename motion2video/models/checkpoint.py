@@ -252,6 +252,8 @@ def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats |
     num = data_config.feature_layout.num_features
     model = build_model(name, {"feature_dim": num}).eval()
     stats = stats or NormStats.identity(num)
+    if hasattr(model, "use_stats"):  # a rule that needs metres (mirror-periodic), not an affine extrapolation
+        model.use_stats(stats.mean, stats.std)
     meta = CheckpointMeta(model=name, kind="baseline", config=config_dict(model.config), data_config=data_config,
                           stats=stats, split=None, skeleton="h36m-17" if data_config.feature_layout.is_body else None,
                           version=__version__,
@@ -264,12 +266,14 @@ def split_record(bundle: ModelBundle) -> dict | None:
     return None if bundle.meta.split is None else bundle.meta.split.to_dict()
 
 
-def compose_mixture(bundles: list[ModelBundle]) -> ModelBundle:
+def compose_mixture(bundles: list[ModelBundle], shares: list[float] | None = None) -> ModelBundle:
     """A :mod:`~motion2video.models.mixture` of trained samplers, their weights copied in (nothing is trained).
 
     Args:
         bundles: two or more loaded stochastic models with the same feature layout, windows, normalisation
-            statistics and split (the mixture's checkpoint records them once); future k comes from bundle k mod C.
+            statistics and split (the mixture's checkpoint records them once), or multi-future rules
+            (``mirror-periodic``, from :func:`baseline_bundle` with the first bundle's statistics).
+        shares: one positive weight per bundle (None: equal shares, future k from bundle k mod C).
     Returns:
         The mixture as a bundle (eval mode, ``path`` None), ready for :func:`save_checkpoint`.
     Raises:
@@ -277,22 +281,29 @@ def compose_mixture(bundles: list[ModelBundle]) -> ModelBundle:
     """
     if len(bundles) < 2:
         raise InputError(f"a mixture needs at least two models, got {len(bundles)}")
+    if shares is not None and (len(shares) != len(bundles) or min(shares) <= 0):
+        raise InputError(f"a mixture needs one positive share per model ({len(bundles)}), got {list(shares)}")
     first = bundles[0]
+    if first.kind != "stochastic":
+        raise InputError(f"a mixture's first component must be a trained stochastic model, not {first.kind} "
+                         f"{first.name!r}", first.path or first.label)
     for b in bundles:
         where = b.path or b.label
-        if b.kind != "stochastic" or b.name == "mixture":
-            raise InputError(f"a mixture's component must be a trained stochastic model, not {b.kind} {b.name!r}",
-                             where)
+        rule = b.kind == "baseline" and getattr(b.model, "multi_future", False)
+        if not (b.kind == "stochastic" or rule) or b.name == "mixture":
+            raise InputError(f"a mixture's component must be a trained stochastic model or a multi-future rule, "
+                             f"not {b.kind} {b.name!r}", where)
         if b.data_config.to_dict() != first.data_config.to_dict():
             raise InputError(f"its windows or feature layout differ from {first.label}'s", where)
         if not b.stats.same_as(first.stats):
             raise InputError(f"its normalisation statistics differ from {first.label}'s", where)
-        if split_record(b) != split_record(first):
+        if not rule and split_record(b) != split_record(first):  # a rule learned nothing from any split
             raise InputError(f"it was trained on another split than {first.label}", where)
         if b.meta.skeleton_version != first.meta.skeleton_version:
             raise InputError(f"its canonical skeleton version differs from {first.label}'s", where)
     components = [{"name": b.label, "model": b.name, "config": b.meta.config} for b in bundles]
-    model = build_model("mixture", {"feature_dim": first.layout.num_features, "components": components})
+    model = build_model("mixture", {"feature_dim": first.layout.num_features, "components": components,
+                                    "shares": tuple(shares or ())})
     for part, b in zip(model.components, bundles):
         part.load_state_dict(b.model.state_dict(), strict=True)
     model.eval()
