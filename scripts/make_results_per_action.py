@@ -40,7 +40,7 @@ from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  
 BEGIN, END = "<!-- issue24-per-action:begin -->", "<!-- issue24-per-action:end -->"
 OLD_REV = "805c753"  # the last commit whose motion2video/weights held the 72-clip (5-minute) models
 OLD = ("mtvae-add", "lcpvae", "behavior")
-SHIPPED = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior", "mixer-cvae-dlow", "mixture-dlow")
+SHIPPED = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior", "mixer-cvae-dlow", "mixture-dlow", "mixture-periodic")
 BASELINE = "zero-velocity"
 
 
