@@ -1,10 +1,12 @@
-"""``mixture``: futures drawn in turn from several trained samplers of the same windows (issue 24).
+"""``mixture``: futures drawn in turn from several trained samplers (and multi-future rules) of the same windows
+(issue 24).
 
 Why: the two best body samplers fail in different places. ``mtvae-add-dlow`` (recurrent decoder) is the better
 one on dances and getting up; ``mixer-cvae-dlow`` (anchored DCT mixer decoder) keeps a walker walking, where the
 recurrent one slows to a shuffle. A mixture with equal weights, p(future | obs) = sum_c w_c p_c(future | obs),
 is itself a conditional generative model, and its K futures cover what either covers
-(docs/results.md, "Two samplers in one").
+(docs/results.md, "Two samplers in one"). ``mixture-periodic`` adds the ``mirror-periodic`` rule, which keeps a
+walker's gait, at a share of 12 in 50 (docs/results.md, "Walks that keep their step").
 
 Sampling: with equal shares (the default), future k comes from component ``k mod C`` (so the first C futures show
 every component, and K = 50 gives each of two components 25). With ``shares`` w_c, future k comes from the
@@ -14,9 +16,10 @@ shares (:meth:`Mixture.order`). Component c draws its K_c futures (:meth:`Mixtur
 component: its first K_c maps of one shared noise; ``mirror-periodic``: K_c half-periods); the components draw in
 order from one ``generator``.
 
-Nothing is trained: the components' weights (and a rule's statistics) are copied in, under ``components.<c>.``, so a mixture checkpoint
-is self-contained (``python scripts/make_mixture.py``). The components must share the feature layout, the
-windows and the normalisation statistics (those of the checkpoint), so their features are the same numbers.
+Nothing is trained: the components' weights (and a rule's statistics) are copied in, under ``components.<c>.``,
+so a mixture checkpoint is self-contained (``python scripts/make_mixture.py``). The components must share the
+feature layout, the windows and the normalisation statistics (those of the checkpoint), so their features are the
+same numbers.
 """
 
 from __future__ import annotations

@@ -57,7 +57,7 @@ class PeriodicConfig:
     decay_frames: float = 16.0
 
 
-def feature_mirror(num_joints: int = 17) -> tuple[np.ndarray, np.ndarray]:
+def feature_mirror() -> tuple[np.ndarray, np.ndarray]:
     """The left/right mirror of body3d features as a permutation and a sign: ``mirrored = x[..., perm] * sign``.
 
     Returns:
@@ -66,7 +66,7 @@ def feature_mirror(num_joints: int = 17) -> tuple[np.ndarray, np.ndarray]:
     """
     joints = H36M_17.mirror_permutation()[1:] - 1  # the 16 non-root joints, in feature order
     perm = np.concatenate([(3 * joints[:, None] + np.arange(3)).ravel(), np.arange(48, 51)])
-    sign = np.tile([-1.0, 1.0, 1.0], num_joints)
+    sign = np.tile([-1.0, 1.0, 1.0], H36M_17.num_joints)  # 16 joints, then the root
     return perm, sign
 
 
@@ -83,12 +83,12 @@ def repeat_mirrored(obs: torch.Tensor, taus: np.ndarray, horizon: int, perm: tor
     half-period in ``taus`` (K,), before the continuation shift.
 
     Joints repeat as positions; the root's x, y are summed from repeated steps, its height repeats as a position.
+    The step into the first observed frame is unknown and taken to be the next one (read only at tau = To).
     """
     batch, observed, feat = obs.shape
     if float(np.max(taus)) > observed or float(np.min(taus)) < 1.0:
         raise ValueError(f"half-periods must lie in [1, {observed}] observed frames, got {taus.min()}..{taus.max()}")
-    steps = torch.zeros_like(obs)  # (B, To, F): the root's x, y as steps, all else as positions
-    steps[..., :] = obs
+    steps = obs.clone()  # (B, To, F): the root's x, y as steps, all else as positions
     steps[:, 1:, 48:50] = obs[:, 1:, 48:50] - obs[:, :-1, 48:50]
     steps[:, 0, 48:50] = steps[:, 1, 48:50]
     out = []
