@@ -66,6 +66,19 @@ def test_an_exactly_periodic_motion_is_continued_exactly(tau):
     np.testing.assert_allclose(got, x[16:], atol=1e-9)
 
 
+def test_a_fractional_half_period_reads_between_frames():
+    """Known answer of the interpolation: with tau = 11.25 the first future frame is the mirror of 0.75 x frame 5
+    + 0.25 x frame 4 (16 - 11.25 = 4.75), and the next one reads frames 5 and 6."""
+    x = _periodic_window(11, seed=3)
+    obs = torch.from_numpy(x[None, :16])
+    perm, sign = (torch.from_numpy(a) for a in feature_mirror())
+    got = repeat_mirrored(obs, np.array([11.25]), 3, perm, sign)[0, 0].numpy()
+    joints = slice(0, 48)  # the root's x, y are summed from steps: compare the joints and the height
+    np.testing.assert_allclose(got[0, joints], _mirror(0.75 * x[5] + 0.25 * x[4])[joints], atol=1e-9)
+    np.testing.assert_allclose(got[1, joints], _mirror(0.75 * x[6] + 0.25 * x[5])[joints], atol=1e-9)
+    np.testing.assert_allclose(got[0, 50], 0.75 * x[5, 50] + 0.25 * x[4, 50], atol=1e-9)
+
+
 def test_half_periods_spread_over_the_range():
     cfg = build_model("mirror-periodic").config
     assert list(half_periods(cfg, 9)) == [8, 9, 10, 11, 12, 13, 14, 15, 16]
