@@ -16,7 +16,7 @@ from motion2video.core.errors import InputError
 from motion2video.data.windows import body_window_features
 from motion2video.models.base import build_model
 from motion2video.models.checkpoint import baseline_bundle, compose_mixture, load_model, save_checkpoint
-from motion2video.models.periodic import feature_mirror, half_periods, repeat_mirrored
+from motion2video.models.periodic import feature_mirror, fitted_half_period, half_periods, repeat_mirrored
 
 REPO = Path(__file__).resolve().parents[1]
 WALK = REPO / "demo_inputs" / "cmu_walk.npz"  # CMU 07_04, a slow walk (0.95 m/s), 90 frames
@@ -77,6 +77,21 @@ def test_a_fractional_half_period_reads_between_frames():
     np.testing.assert_allclose(got[0, joints], _mirror(0.75 * x[5] + 0.25 * x[4])[joints], atol=1e-9)
     np.testing.assert_allclose(got[1, joints], _mirror(0.75 * x[6] + 0.25 * x[5])[joints], atol=1e-9)
     np.testing.assert_allclose(got[0, 50], 0.75 * x[5, 50] + 0.25 * x[4, 50], atol=1e-9)
+
+
+@pytest.mark.parametrize("tau", [9, 13])
+def test_one_future_takes_the_half_period_that_fits_the_observed_frames(tau):
+    """Known answer: for motion that repeats mirrored every tau frames the fit finds tau, and a single future of the
+    rule is that repetition (through the module, identity statistics, no smoothing)."""
+    x = _periodic_window(tau, seed=1)
+    cfg = build_model("mirror-periodic").config
+    assert fitted_half_period(x[:16], cfg) == tau
+    rule = build_model("mirror-periodic", {"smooth_frames": 0.0})
+    one = rule.sample(torch.from_numpy(x[None, :16]), num_samples=1, horizon=48)[0, 0].numpy()
+    perm, sign = (torch.from_numpy(a) for a in feature_mirror())
+    exact = repeat_mirrored(torch.from_numpy(x[None, :16]), np.array([float(tau)]), 48, perm, sign)[0, 0].numpy()
+    shift = (2 * x[15] - x[14]) - exact[0]  # the continuation shift, fading over 16 frames
+    np.testing.assert_allclose(one, exact + shift * np.exp(-np.arange(48) / 16.0)[:, None], atol=1e-9)
 
 
 def test_half_periods_spread_over_the_range():

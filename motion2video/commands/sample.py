@@ -27,7 +27,7 @@ examples:
 Every cell of the grid plays the observed frames framed in green, then one sampled future framed in red.
 --model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip, and
 mirror-periodic for a 3D body clip (the observed motion repeated every half-period, mirrored; one half-period per
-future, spread over 0.32-0.64 s).
+future, spread over 0.32-0.64 s; --samples 1 takes the one that best fits the observed frames).
 
 shipped motion models (model cards in motion2video/weights/NAME.md):
   mixture-periodic 3D body: the best sampler (lowest best-of-50 error over actions, held out and validation,

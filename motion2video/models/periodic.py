@@ -15,8 +15,9 @@ walker keeps travelling at the observed pace), its height repeats as it is. Wher
 observed frames before it) spreads those jumps, which raw gave the futures 2.3 times the truth's acceleration.
 
 The half-period is not known: future k takes the k-th of K half-periods spread evenly over
-[``min_half_period``, ``max_half_period``] (K = 1: the middle one). Fitting tau on the observed frames was measured
-and picked worse futures than spreading (docs/results.md, "Walks that keep their step"). Like the learned models'
+[``min_half_period``, ``max_half_period``], which covers what a best-of-K measure rewards. A single future (K = 1)
+takes the whole half-period that best fits the observed frames instead (:func:`fitted_half_period`), the closer one
+future on held-out walks (docs/results.md, "Walks that keep their step"). Like the learned models'
 futures (:func:`motion2video.stages.sampling.continue_observed`), each future is then shifted to start at the last
 observed frame plus the last observed step, the shift fading over ``decay_frames``.
 
@@ -75,6 +76,24 @@ def half_periods(config: PeriodicConfig, count: int) -> np.ndarray:
     if count == 1:
         return np.array([0.5 * (config.min_half_period + config.max_half_period)])
     return np.linspace(config.min_half_period, config.max_half_period, count)
+
+
+def fitted_half_period(joints: np.ndarray, config: PeriodicConfig) -> float:
+    """The whole half-period in the configured range, short enough to be checked on the observed frames (at most
+    To - 1), whose mirror best repeats them: argmin over tau of the mean over t in [tau, To) of
+    |x_t - mirror(x_{t - tau})| over the root-relative joints. The middle of the range when none can be checked.
+
+    Args:
+        joints: (To, 51) un-normalised body3d features of the observed frames.
+    """
+    perm, sign = feature_mirror()
+    x = np.asarray(joints, np.float64)
+    rel = slice(0, 48)
+    lo, hi = int(np.ceil(config.min_half_period)), min(int(np.floor(config.max_half_period)), len(x) - 1)
+    if lo > hi:
+        return float(half_periods(config, 1)[0])
+    errors = [np.linalg.norm(x[tau:, rel] - (x[:-tau, perm] * sign)[:, rel], axis=1).mean() for tau in range(lo, hi + 1)]
+    return float(lo + int(np.argmin(errors)))
 
 
 def repeat_mirrored(obs: torch.Tensor, taus: np.ndarray, horizon: int, perm: torch.Tensor,
@@ -155,8 +174,13 @@ class MirrorPeriodic(nn.Module):
         if obs.shape[1] < 2:
             raise ValueError("mirror-periodic needs at least two observed frames")
         metres = obs.double() * self.std.double() + self.mean.double()
-        taus = np.clip(half_periods(self.config, num_samples), 1.0, obs.shape[1])
-        futures = repeat_mirrored(metres, taus, horizon, self.perm, self.sign.double())  # (B, K, horizon, F)
+        sign = self.sign.double()
+        if num_samples == 1:  # one future: each window's own best-fitting half-period
+            futures = torch.cat([repeat_mirrored(m[None], np.array([fitted_half_period(m.numpy(), self.config)]),
+                                                 horizon, self.perm, sign) for m in metres])
+        else:
+            taus = np.clip(half_periods(self.config, num_samples), 1.0, obs.shape[1])
+            futures = repeat_mirrored(metres, taus, horizon, self.perm, sign)  # (B, K, horizon, F)
         if self.config.smooth_frames > 0:
             futures = smooth_seams(metres, futures, self.config.smooth_frames)
         target = 2.0 * metres[:, -1] - metres[:, -2]  # (B, F): the last observed step continued
