@@ -1,8 +1,9 @@
 """``mirror-periodic``: futures that repeat the observed motion every half gait cycle, mirrored (issue 24).
 
 A walk or a run is periodic, and its second half-cycle is the first one mirrored: the left leg does what the right
-leg did half a cycle before. The 16 observed frames (0.64 s at 25 fps) hold more than half a gait cycle
-(0.6-1.3 s for a run to a slow walk), so the future can be read off the past:
+leg did half a cycle before. The 16 observed frames (0.64 s at 25 fps) hold more than half a gait cycle of most
+runs and walks (cycles of 0.6-1.3 s; the slowest walks take longer, docs/results.md), so the future can be read off
+the past:
 
     x_t = mirror(x_{t - tau}),   t = To, ..., To + horizon - 1,
 
@@ -40,7 +41,7 @@ from torch import nn
 from motion2video.core.skeletons import H36M_17
 from motion2video.models.base import LossOutput, check_sample_args, check_sequences, register_model
 
-RULES = ("mirror-periodic",)  # the multi-future rules `sample --model` and `make_mixture.py` take by name
+RULES = ("mirror-periodic",)  # the multi-future rules `sample --model` takes by name, beside the baselines
 BODY3D_FEATURES = 51  # 16 root-relative joints x 3, then the root (x, y, z)
 NOT_TRAINED = "mirror-periodic is a rule with no parameters: there is nothing to train"
 
