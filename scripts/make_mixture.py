@@ -37,10 +37,15 @@ def parse_shares(text: str | None, count: int) -> list[float] | None:
     return shares
 
 
-def load_component(name: str, first):
-    """A shipped name or checkpoint path; a rule's name (a registered baseline) in ``first``'s windows and stats."""
+def is_rule(name: str) -> bool:
+    """Whether ``name`` is a registered model without weights (a baseline or a multi-future rule)."""
     entry = MODEL_REGISTRY.get(name)
-    if entry is not None and entry.kind == "baseline" and first is not None:
+    return entry is not None and entry.kind == "baseline"
+
+
+def load_component(name: str, first):
+    """A shipped name or checkpoint path; a rule's name in ``first``'s windows and normalisation statistics."""
+    if is_rule(name):
         return baseline_bundle(name, first.data_config, stats=first.stats)
     return load_model(name)
 
@@ -55,6 +60,9 @@ def main(argv: list[str] | None = None) -> int:
         if not args.output.endswith(".safetensors"):
             raise InputError("the output must end in .safetensors", args.output)
         shares = parse_shares(args.shares, len(args.models))
+        if is_rule(args.models[0]):
+            raise InputError("the first model must be a trained sampler: a rule takes its windows and statistics",
+                             args.models[0])
         bundles = [load_model(args.models[0])]
         bundles += [load_component(m, bundles[0]) for m in args.models[1:]]
         mixture = compose_mixture(bundles, shares)

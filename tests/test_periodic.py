@@ -199,3 +199,4 @@ def test_bad_mixes_are_refused_in_one_line(tmp_path):
         assert run.returncode == 2, run.stderr
         assert len(run.stderr.strip().splitlines()) == 1 and "Traceback" not in run.stderr
         assert not out.exists()
+    assert "first model must be a trained sampler" in run.stderr  # the last case: a rule first
