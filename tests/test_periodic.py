@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import torch
 
+from motion2video.cli import main
 from motion2video.core.errors import InputError
 from motion2video.data.windows import body_window_features
 from motion2video.models.base import build_model
@@ -19,6 +20,7 @@ from motion2video.models.checkpoint import baseline_bundle, compose_mixture, loa
 from motion2video.models.periodic import feature_mirror, fitted_half_period, half_periods, repeat_mirrored
 
 REPO = Path(__file__).resolve().parents[1]
+MOCAP = REPO.parent / "shared" / "data" / "mocap"
 WALK = REPO / "demo_inputs" / "cmu_walk.npz"  # CMU 07_04, a slow walk (0.95 m/s), 90 frames
 PARTS = ("mtvae-add-dlow", "mixer-cvae-dlow", "mirror-periodic")
 SHARES = (19, 19, 12)
@@ -200,3 +202,23 @@ def test_bad_mixes_are_refused_in_one_line(tmp_path):
         assert len(run.stderr.strip().splitlines()) == 1 and "Traceback" not in run.stderr
         assert not out.exists()
     assert "first model must be a trained sampler" in run.stderr  # the last case: a rule first
+
+
+def test_evaluate_scores_the_rule_in_the_trained_models_windows(tmp_path, capsys):
+    """``evaluate --model M --model mirror-periodic``: the rule gets its rows (pooled, macro, per action) on M's
+    windows; alone, or beside a face model, it is refused in one line with exit 2."""
+    out = tmp_path / "eval.json"
+    assert main(["evaluate", "--model", "mtvae-add-dlow", "--model", "mirror-periodic", "--data", str(MOCAP),
+                 "--samples", "5", "--stride", "48", "--json", str(out)]) == 0
+    import json
+
+    result = json.loads(out.read_text())
+    assert "mirror-periodic" in result["results"] and "mirror-periodic" in result["macro"]
+    walk = result["per_action"]["mirror-periodic"]["walk"]
+    assert walk["ade"] < result["per_action"]["zero-velocity"]["walk"]["ade"]  # it walks on
+    capsys.readouterr()
+    assert main(["evaluate", "--model", "mirror-periodic", "--data", str(MOCAP)]) == 2
+    assert "name a trained model too" in capsys.readouterr().err
+    face = REPO.parent / "shared" / "data" / "face" / "livelinkface" / "S07-001.csv"
+    assert main(["evaluate", "--model", "mtvae-add-face", "--model", "mirror-periodic", "--data", str(face)]) == 2
+    assert "3D body motion" in capsys.readouterr().err

@@ -29,6 +29,7 @@ examples:
       --plot out/ade_per_frame.png
   motion2video evaluate --model runs/cvae.safetensors --data ../shared/data/mocap/cmu/13_10.bvh
   motion2video evaluate --model mtvae-add-face --data ../shared/data/face/livelinkface/S07-001.csv
+  motion2video evaluate --model mixture-periodic --model mirror-periodic --data ../shared/data/mocap
 
 Windows: every (observed + future)-frame window, --stride frames apart, of the clips of --split: by default
 the checkpoint's held-out test clips plus any clip it has never seen whose subject it did not train or
@@ -41,7 +42,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "evaluate", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, action="append",
                    help="checkpoint path or shipped model name; repeat to compare models on the same windows "
-                   "(they must share the layout and data settings; the first one's split picks the windows)")
+                   "(they must share the layout and data settings; the first one's split picks the windows); "
+                   "mirror-periodic, a rule with no weights, is scored in the first trained model's windows and "
+                   "statistics (3D body models)")
     p.add_argument("--data", required=True, help="BVH folder or motion file (face models: .csv / .npz captures)")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("--samples", type=int, default=50, help="K futures per window (default 50)")
@@ -70,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2video.data.dataset import build_dataset
     from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
     from motion2video.models.baselines import BASELINES
+    from motion2video.models.periodic import RULES
 
     set_threads(args.threads)
     check_at_least("--samples", args.samples)
@@ -80,7 +84,12 @@ def run(args: argparse.Namespace) -> int:
             Path(target).parent.mkdir(parents=True, exist_ok=True)
     if args.plot is not None and not args.plot.lower().endswith(".png"):
         raise InputError("--plot writes a .png file", args.plot)
-    models = [load_model(name) for name in args.model]
+    rules = [name for name in args.model if name in RULES]
+    learned = [name for name in args.model if name not in RULES]
+    if not learned:
+        raise InputError(f"{rules[0]} is a rule: name a trained model too, whose windows, statistics and split it "
+                         "is scored on")
+    models = [load_model(name) for name in learned]
     bundle = models[0]
     for other in models[1:]:
         if other.data_config != bundle.data_config:
@@ -90,6 +99,9 @@ def run(args: argparse.Namespace) -> int:
     if len(set(names)) != len(names):
         raise InputError(f"two models share the name {names!r}: give checkpoints with distinct file names")
     cfg = bundle.data_config
+    if rules and cfg.feature_layout.kind != "body3d":
+        raise InputError(f"{rules[0]} works on 3D body motion, not the {cfg.feature_layout.kind} layout of "
+                         f"{bundle.label}")
     dataset = build_dataset(args.data, cfg, split=bundle.meta.split, stats=bundle.stats,
                             recorded_only=args.recorded_only, character=args.character)
     windows = dataset.windows(args.split, stride=args.stride)
@@ -98,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"no clip of the {args.split} split is long enough: a window needs {cfg.length} frames "
                          f"at {cfg.fps:g} fps ({cfg.observed} observed + {cfg.future} future), the longest has "
                          f"{longest}", args.data)
-    bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in BASELINES]
+    bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in tuple(rules) + BASELINES]
     protocol = EvalProtocol(samples=args.samples, stride=args.stride, split=args.split, seed=args.seed,
                             rigid_bones=args.rigid_bones, continue_motion=not args.raw_futures)
     val = dataset.windows("val", stride=args.stride) if args.extended else None
