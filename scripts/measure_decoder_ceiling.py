@@ -42,19 +42,11 @@ from motion2video.evaluation.forecasting import (EvalProtocol, dlow_metrics_per_
                                                  evaluate_bundles, posterior_futures)
 from motion2video.evaluation.retrieval import (posterior_means, retrieved_latent_futures,  # noqa: E402
                                                training_database)
-from motion2video.evaluation.per_action import group_by_action, macro_average, per_action_means  # noqa: E402
+from motion2video.evaluation.per_action import group_by_action, per_action_means, ratios_to  # noqa: E402
 from motion2video.models.checkpoint import baseline_bundle, load_model  # noqa: E402
 from motion2video.stages.sampling import continue_observed  # noqa: E402
 
 SAMPLES = 50
-
-
-def ratios(per_action: dict[str, dict[str, float]], zero: dict[str, dict[str, float]]) -> dict[str, list[float]]:
-    """action -> [ADE, FDE] ratio to zero-velocity (``per_action`` as :func:`per_action_means` gives it), plus
-    ``macro``, the unweighted mean over actions."""
-    rows = {a: {"ade": r["ade"] / zero[a]["ade"], "fde": r["fde"] / zero[a]["fde"]} for a, r in per_action.items()}
-    macro = macro_average(rows)
-    return {**{a: [r["ade"], r["fde"]] for a, r in rows.items()}, "macro": [macro["ade"], macro["fde"]]}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -88,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
 
         def score(normalised: np.ndarray) -> dict[str, list[float]]:
             pred = metric_vectors(bundle.stats.denormalize(continue_observed(normalised, windows.obs)), layout)
-            return ratios(per_action_means(dlow_metrics_per_window(pred, gt, last, threshold=threshold), actions), zero)
+            return ratios_to(per_action_means(dlow_metrics_per_window(pred, gt, last, threshold=threshold), actions), zero)
 
         train = dataset.windows("train", stride=args.db_stride)
         database = training_database(train, bundle.stats)
@@ -100,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
                                                                       num_samples=SAMPLES, seed=0)),
             f"nearest training latents, best of {SAMPLES}": score(retrieved_latent_futures(
                 decoder, database, latents, windows.obs, num_samples=SAMPLES, horizon=windows.future.shape[1])),
-            f"sampled, best of {SAMPLES}": ratios(scored.per_action[bundle.label], zero),
+            f"sampled, best of {SAMPLES}": ratios_to(scored.per_action[bundle.label], zero),
         }
         counts = {a: int(len(idx)) for a, idx in actions.items()}
         report[bundle.label] = {"rows": rows, "windows": counts, "apd": scored.results[bundle.label]["apd"]}

@@ -22,7 +22,6 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -30,6 +29,7 @@ sys.path.insert(0, str(ROOT))
 from motion2video.core.atomic import write_json  # noqa: E402
 from motion2video.data.dataset import DEFAULT_MOCAP, build_dataset  # noqa: E402
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
+from motion2video.evaluation.per_action import ratios_to  # noqa: E402
 from motion2video.evaluation.retrieval import RetrievalConfig, training_database  # noqa: E402
 from motion2video.evaluation.transfer import sample_realism  # noqa: E402
 from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_model  # noqa: E402
@@ -62,11 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     bundles = [retrieved, model, baseline_bundle("zero-velocity", cfg, stats=model.stats)]
     result = evaluate_bundles(bundles, windows, protocol=EvalProtocol(samples=50, stride=16))
     zero = result.per_action["zero-velocity"]
-    ratios: dict[str, dict[str, list[float]]] = {}
-    for label in (LABEL, model.label):
-        ratios[label] = {a: [row["ade"] / zero[a]["ade"], row["fde"] / zero[a]["fde"]]
-                         for a, row in result.per_action[label].items()}
-        ratios[label]["macro"] = [float(np.mean([v[i] for v in ratios[label].values()])) for i in (0, 1)]
+    ratios = {label: ratios_to(result.per_action[label], zero) for label in (LABEL, model.label)}
     actions = list(result.per_action[LABEL])
     print(f"\n{len(windows)} held-out windows, best of 50, ADE / FDE ratio to zero-velocity")
     print("| action (windows) | " + " | ".join(ratios) + " |")

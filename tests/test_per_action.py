@@ -18,6 +18,7 @@ from motion2video.evaluation.per_action import (
     group_by_action,
     macro_average,
     per_action_means,
+    ratios_to,
     window_weighted_average,
 )
 from motion2video.formats.mocap import load_mocap
@@ -95,3 +96,13 @@ def test_evaluate_reports_per_action_and_macro_on_real_clips(labelled):
     text = result.per_action_table()
     assert all(f"{a} ({n}) zero-velocity" in text for a, n in counts.items())
     assert "walk" in result.to_json()["per_action"]["zero-velocity"]
+
+
+def test_ratios_to_divides_per_action_and_averages_the_ratios_unweighted():
+    """Known answer: two actions of very different window counts count once each in the macro ratio."""
+    model = {"walk": {"ade": 0.3, "fde": 0.2, "windows": 40}, "jump": {"ade": 0.9, "fde": 1.2, "windows": 2}}
+    zero = {"walk": {"ade": 0.6, "fde": 0.8, "windows": 40}, "jump": {"ade": 1.0, "fde": 1.0, "windows": 2}}
+    got = ratios_to(model, zero)
+    assert got["walk"] == pytest.approx([0.5, 0.25]) and got["jump"] == pytest.approx([0.9, 1.2])
+    assert got["macro"] == pytest.approx([0.7, 0.725])
+    assert list(got) == ["walk", "jump", "macro"]

@@ -5,7 +5,8 @@ Pure functions on per-window metric arrays: :func:`group_by_action` gives each a
 action is the window's clip label, :func:`motion2video.data.corpus.action_class` of the manifest's action
 column), :func:`per_action_means` averages per-window metrics within each action, :func:`macro_average` is the
 unweighted mean over actions and :func:`window_weighted_average` the mean weighted by window counts (which
-equals the pooled mean over all windows for any per-window metric).
+equals the pooled mean over all windows for any per-window metric); :func:`ratios_to` divides a model's per-action
+ADE and FDE by a baseline's (zero-velocity, in the issue's tables).
 """
 
 from __future__ import annotations
@@ -72,3 +73,13 @@ def window_weighted_average(per_action: dict[str, dict[str, float]]) -> dict[str
         w = np.array([row[COUNT_KEY] for row in rows], np.float64)
         out[k] = float(np.sum(w * np.array([row[k] for row in rows])) / w.sum())
     return out
+
+
+def ratios_to(per_action: dict[str, dict[str, float]], reference: dict[str, dict[str, float]]) -> dict[str, list[float]]:
+    """action -> [ADE, FDE] of ``per_action`` divided by ``reference``'s for the same action, plus ``macro``: the
+    unweighted mean of those ratios over actions. Both as :func:`per_action_means` gives them (``reference`` the
+    zero-velocity baseline's in the issue-24 tables)."""
+    rows = {a: {"ade": r["ade"] / reference[a]["ade"], "fde": r["fde"] / reference[a]["fde"]}
+            for a, r in per_action.items()}
+    macro = macro_average(rows)
+    return {**{a: [r["ade"], r["fde"]] for a, r in rows.items()}, "macro": [macro["ade"], macro["fde"]]}
