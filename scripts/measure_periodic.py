@@ -23,7 +23,6 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -31,7 +30,7 @@ sys.path.insert(0, str(ROOT))
 from motion2video.core.atomic import write_json  # noqa: E402
 from motion2video.data.dataset import DEFAULT_MOCAP, build_dataset  # noqa: E402
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  # noqa: E402
-from motion2video.models.base import build_model  # noqa: E402
+from motion2video.evaluation.per_action import ratios_to  # noqa: E402
 from motion2video.models.checkpoint import ModelBundle, baseline_bundle, compose_mixture, load_model  # noqa: E402
 
 PARTS = ("mtvae-add-dlow", "mixer-cvae-dlow")
@@ -43,9 +42,8 @@ CHOSEN = (12, 8.0, 16.0)
 
 def rule(first: ModelBundle, label: str, **config) -> ModelBundle:
     """``mirror-periodic`` with ``config`` in ``first``'s windows and statistics, labelled ``label``."""
-    bundle = baseline_bundle("mirror-periodic", first.data_config, stats=first.stats)
-    model = build_model("mirror-periodic", config).use_stats(first.stats.mean, first.stats.std).eval()
-    return replace(bundle, model=model, meta=replace(bundle.meta, model=label, config=dict(model.config.__dict__)))
+    bundle = baseline_bundle("mirror-periodic", first.data_config, stats=first.stats, config=config)
+    return replace(bundle, meta=replace(bundle.meta, model=label))
 
 
 def mixture(parts: list[ModelBundle], label: str, kp: int, lo: float, hi: float, smooth: float = 1.5) -> ModelBundle:
@@ -59,18 +57,11 @@ def mixture(parts: list[ModelBundle], label: str, kp: int, lo: float, hi: float,
     return replace(mix, meta=replace(mix.meta, model=label))
 
 
-def ratios(result, label: str) -> dict[str, list[float]]:
-    """action -> [ADE, FDE] ratio to zero-velocity, plus ``macro``."""
-    zero = result.per_action["zero-velocity"]
-    rows = {a: [r["ade"] / zero[a]["ade"], r["fde"] / zero[a]["fde"]] for a, r in result.per_action[label].items()}
-    rows["macro"] = [float(np.mean([v[i] for v in rows.values()])) for i in (0, 1)]
-    return rows
-
-
 def score(bundles: list[ModelBundle], windows, samples: int = SAMPLES) -> dict[str, dict]:
     zero = baseline_bundle("zero-velocity", bundles[0].data_config, stats=bundles[0].stats)
     result = evaluate_bundles(bundles + [zero], windows, protocol=EvalProtocol(samples=samples, stride=16))
-    return {b.label: {"ratios": ratios(result, b.label),
+    zero_rows = result.per_action["zero-velocity"]
+    return {b.label: {"ratios": ratios_to(result.per_action[b.label], zero_rows),
                       "velocity_ratio": result.results[b.label]["velocity_ratio"],
                       "acceleration_ratio": result.results[b.label]["acceleration_ratio"]} for b in bundles}
 

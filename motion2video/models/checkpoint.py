@@ -34,6 +34,7 @@ from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_ver
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
 from motion2video.models.base import MODEL_REGISTRY, build_model
+from motion2video.models.periodic import RULES
 
 FORMAT = "motion2video-motion"
 WEIGHTS_DIR = Path(__file__).resolve().parents[1] / "weights"
@@ -243,14 +244,16 @@ def load_model(path_or_name: str | Path, *, device: str | torch.device = "cpu") 
     return ModelBundle(model=model, stats=meta.stats, meta=meta, path=path)
 
 
-def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats | None = None) -> ModelBundle:
+def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats | None = None,
+                    config: dict | None = None) -> ModelBundle:
     """A baseline (no weights) as a bundle for ``data_config``'s layout (identity stats unless given;
-    baselines are exact under any affine normalisation)."""
+    baselines are exact under any affine normalisation); ``config``: its config fields other than the feature
+    count (a rule's, such as mirror-periodic's half-periods; None: the defaults)."""
     entry = MODEL_REGISTRY.get(name)
     if entry is None or entry.kind != "baseline":
         raise InputError(f"{name!r} is not a baseline")
     num = data_config.feature_layout.num_features
-    model = build_model(name, {"feature_dim": num}).eval()
+    model = build_model(name, {**(config or {}), "feature_dim": num}).eval()
     stats = stats or NormStats.identity(num)
     if hasattr(model, "use_stats"):  # a rule that needs metres (mirror-periodic), not an affine extrapolation
         model.use_stats(stats.mean, stats.std)
@@ -289,7 +292,7 @@ def compose_mixture(bundles: list[ModelBundle], shares: list[float] | None = Non
                          f"{first.name!r}", first.path or first.label)
     for b in bundles:
         where = b.path or b.label
-        rule = b.kind == "baseline" and getattr(b.model, "multi_future", False)
+        rule = b.kind == "baseline" and b.name in RULES
         if not (b.kind == "stochastic" or rule) or b.name == "mixture":
             raise InputError(f"a mixture's component must be a trained stochastic model or a multi-future rule, "
                              f"not {b.kind} {b.name!r}", where)

@@ -41,7 +41,9 @@ from torch import nn
 from motion2video.core.skeletons import H36M_17
 from motion2video.models.base import LossOutput, check_sample_args, check_sequences, register_model
 
-RULES = ("mirror-periodic",)  # the multi-future rules `sample --model` takes by name, beside the baselines
+# The multi-future rules: `sample` and `evaluate` take them by name beside the baselines, and a mixture may draw
+# some of its futures from them (checkpoint.compose_mixture).
+RULES = ("mirror-periodic",)
 BODY3D_FEATURES = 51  # 16 root-relative joints x 3, then the root (x, y, z)
 NOT_TRAINED = "mirror-periodic is a rule with no parameters: there is nothing to train"
 
@@ -140,7 +142,6 @@ class MirrorPeriodic(nn.Module):
     """K futures, each the observed motion repeated every half-period, mirrored (module docstring)."""
 
     is_baseline = True  # its futures already continue the observed motion (stages.sampling leaves them)
-    multi_future = True  # K different futures: a mixture may draw some of its futures from it
 
     def __init__(self, config: PeriodicConfig) -> None:
         super().__init__()
