@@ -102,6 +102,77 @@ def test_dense_flow_of_a_shifted_grid_is_the_shift():
     assert np.all(mf.visibility[mask & seen] > 0.98) and np.all(mf.visibility[mask & (centres[..., 0] - shift[0] < 9)] < 0.02)
 
 
+def test_barycentric_weights_of_corners_centroid_and_outside_points():
+    from motion2video.frames.mesh_flow import barycentric
+
+    tri = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 2.0]])
+    points = np.array([[0.0, 0.0], [4.0, 0.0], [4 / 3, 2 / 3], [2.0, 1.0], [-1.0, 0.0]])
+    w = barycentric(points, np.repeat(tri[None], len(points), axis=0))
+    np.testing.assert_allclose(w[0], [1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(w[1], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(w[2], [1 / 3, 1 / 3, 1 / 3], atol=1e-12)
+    np.testing.assert_allclose(w[3], [0, 0.5, 0.5], atol=1e-12)  # the middle of the long edge
+    np.testing.assert_allclose(w[4], [1, 0, 0], atol=1e-12)  # outside: clipped to the nearest corner's side
+    flat = barycentric(np.zeros((1, 2)), np.zeros((1, 3, 2)))  # a degenerate triangle
+    np.testing.assert_allclose(flat, [[1 / 3, 1 / 3, 1 / 3]])
+
+
+def test_triangle_flow_of_an_affine_motion_is_exact():
+    """A grid mesh whose reference is an affine map of the target (a stretch, a shear and a shift; 3 px between
+    vertices): read from the triangles, every pixel inside the mesh gets the map exactly, which the nearest
+    vertices' weighted mean does not (it is exact only at the vertices)."""
+    from motion2video.frames.mesh_flow import MeshFlow, triangle_flow, triangle_map
+
+    ys, xs = np.mgrid[0:11, 0:11]
+    tgt_uv = np.stack([xs.ravel() * 3.0 + 2.0, ys.ravel() * 3.0 + 2.0], axis=1)  # (121, 2)
+    a, b = np.array([[1.5, 0.4], [0.0, 0.8]]), np.array([-3.0, 5.0])
+    ref_uv = tgt_uv @ a.T + b
+    quads = (ys[:-1, :-1] * 11 + xs[:-1, :-1]).ravel()
+    triangles = np.concatenate([np.stack([quads, quads + 1, quads + 12], 1), np.stack([quads, quads + 12, quads + 11], 1)])
+    which = triangle_map(tgt_uv, triangles, (40, 40))
+    inside = np.zeros((40, 40), bool)
+    inside[2:32, 2:32] = True  # pixel centres 2.5 .. 31.5 lie in the grid's square 2 .. 32
+    assert np.all(which[inside] >= 0) and np.all(which[~inside] == -1)  # exactly the centres inside
+    visible = np.ones(len(tgt_uv), bool)
+    near = dense_flow(ref_uv, visible, tgt_uv, visible, inside, complete=False)
+    exact = identity_flow(40, 40) @ a.T + b
+    read = triangle_flow(MeshFlow(near.flow, near.visibility, inside), ref_uv, visible, tgt_uv, visible, triangles)
+    np.testing.assert_allclose(read.flow[inside], exact[inside], atol=1e-4)
+    assert np.abs(near.flow[inside] - exact[inside]).max() > 0.3
+    np.testing.assert_allclose(read.visibility[inside], 1.0)
+    with_option = dense_flow(ref_uv, visible, tgt_uv, visible, inside, complete=False, triangles=triangles)
+    np.testing.assert_allclose(with_option.flow, read.flow)
+
+
+def test_an_opening_jaw_read_from_the_triangles_warps_closer_to_the_truth():
+    """Real face renders (Anny's head mesh, pyrender): the neutral face warped along its correspondence to the same
+    face with the jaw open. Read from the target's triangles, the lower face lands closer to the render of the open
+    jaw than read from the nearest vertices, which alternate between the two sides of the jaw's crease (the dashes
+    the face generator drew along the jaw: docs/results.md, issue 22)."""
+    import cv2
+
+    from motion2video.core.motion import ARKIT_NAMES, FaceMotion
+    from motion2video.frames.mesh_flow import mesh_triangles
+    from renderers.face import FaceRenderer, FaceStyle
+
+    params = np.zeros((2, 58), np.float32)
+    params[1, ARKIT_NAMES.index("jawOpen")] = 0.6
+    out = FaceRenderer(FaceStyle(size=(128, 128))).render_with_masks(FaceMotion(params, 25.0), vertices=True)
+    ref, truth, sil = out.frames[0], out.frames[1].astype(np.float64), out.masks[1]
+    rows = np.nonzero(sil.any(axis=1))[0]
+    lower = sil.copy()
+    lower[: rows.min() + int(0.6 * (rows.max() - rows.min()))] = False  # the lower 40% of the head
+
+    def lower_psnr(triangles) -> float:
+        flow = dense_flow(out.vertex_uv[0], out.vertex_visible[0], out.vertex_uv[1], out.vertex_visible[1], sil,
+                          image=ref, triangles=triangles).flow - 0.5
+        warped = cv2.remap(ref, flow[..., 0], flow[..., 1], cv2.INTER_LINEAR).astype(np.float64)
+        return float(10 * np.log10(255.0 ** 2 / ((warped - truth) ** 2)[lower].mean()))
+
+    vertices, triangles = lower_psnr(None), lower_psnr(mesh_triangles())
+    assert triangles > vertices + 0.2, (vertices, triangles)  # 23.46 -> 23.82 dB (2026-11-27)
+
+
 def test_extend_flow_continues_the_surface_into_a_band():
     from motion2video.frames.mesh_flow import MeshFlow, extend_flow
 

@@ -225,8 +225,9 @@ def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | 
     Returns:
         flow (B, h, w, 2) float32 reference pixels, visibility (B, h, w) float32.
     """
-    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow, transform_uv
+    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow, mesh_triangles, transform_uv
 
+    triangles = mesh_triangles()  # the flow is read from the target's triangles where they show whole
     flows, vis = [], []
     for k, (s, r, t) in enumerate(np.asarray(index, np.int64)):
         f = bool(flip[k]) if flip is not None else False
@@ -234,7 +235,7 @@ def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | 
         ref_uv = transform_uv(seqs.vertex_uv[s, r], size=seqs.image_size, flip=f, origin=origin)
         tgt_uv = transform_uv(seqs.vertex_uv[s, t], size=seqs.image_size, flip=f, origin=origin)
         mf = dense_flow(ref_uv, seqs.vertex_visible[s, r], tgt_uv, seqs.vertex_visible[s, t], tgt_masks[k],
-                        image=None if ref_images is None else ref_images[k])
+                        image=None if ref_images is None else ref_images[k], triangles=triangles)
         mf = extend_flow(mf, band_width(seqs.image_size))
         flows.append(mf.flow)
         vis.append(mf.visibility)

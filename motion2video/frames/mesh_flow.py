@@ -15,6 +15,14 @@ one's (a fold: averaging would land between the two surfaces); the weights of th
 visibility give the visibility map. At 128 px a body shows about one visible vertex per pixel, so the interpolation
 error is below a pixel away from occlusion edges.
 
+Since 2026-11-27 the generators read the flow from the target's triangles where they can (``triangles``: each pixel
+whose centre lies in a triangle with all three corners shown takes the barycentric mix of their reference pixels,
+:func:`triangle_flow`), which is exact for a surface that moves affinely within a triangle, where the nearest
+vertices' weighted mean is exact only at the vertices. Triangles that join surface points the reference shows far
+apart are left to the vertices, by the same fold rule (:func:`across_a_fold`). Where the chin's underside meets the
+neck, the nearest-vertex rule alternated pixel by pixel between the two sides of the reference's jaw crease and drew
+the jaw line as a row of dashes; a triangle joins them smoothly.
+
 Pixel coordinates follow :func:`motion2video.core.camera.project`: x right, y down, pixel centres at
 integer + 0.5.
 """
@@ -296,9 +304,110 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
     return uv
 
 
+@lru_cache(maxsize=1)
+def mesh_triangles() -> np.ndarray:
+    """(F, 3) int64 Anny's triangles, the ones :func:`dense_flow` reads a face's flow from."""
+    from renderers import anny_model
+
+    return np.ascontiguousarray(anny_model.triangles(), dtype=np.int64)
+
+
+def triangle_map(uv: np.ndarray, triangles: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """(H, W) int64: which of ``triangles`` (F, 3) holds each pixel centre of an image of ``shape``, -1 where none
+    does; ``uv`` (V, 2) the corners' pixels. A centre on an edge shared by two triangles goes to either (both give
+    the same barycentric mix there); where triangles overlap the later one wins (the callers pass only triangles of
+    the front surface, which overlap at most along an outline).
+
+    Rasterised here rather than with OpenCV's polygon fill, which also draws pixels whose centres lie up to a
+    pixel outside the triangle: read from the wrong triangle, such a pixel's flow is off by up to a pixel. Each
+    triangle's candidate pixels are the centres in its bounding box, tested by their barycentric weights,
+    vectorised over the triangles whose boxes have the same size.
+    """
+    h, w = shape
+    ids = np.full(shape, -1, np.int64)
+    corners = np.asarray(uv, np.float64)[np.asarray(triangles, np.int64)]  # (F, 3, 2)
+    x0 = np.ceil(corners[..., 0].min(axis=1) - 0.5).astype(np.int64)  # first pixel whose centre is inside the box
+    y0 = np.ceil(corners[..., 1].min(axis=1) - 0.5).astype(np.int64)
+    x1 = np.floor(corners[..., 0].max(axis=1) - 0.5).astype(np.int64)
+    y1 = np.floor(corners[..., 1].max(axis=1) - 0.5).astype(np.int64)
+    x0, y0, x1, y1 = np.maximum(x0, 0), np.maximum(y0, 0), np.minimum(x1, w - 1), np.minimum(y1, h - 1)
+    bw, bh = x1 - x0 + 1, y1 - y0 + 1
+    drawn = np.flatnonzero((bw > 0) & (bh > 0))
+    for size_w, size_h in sorted(set(zip(bw[drawn].tolist(), bh[drawn].tolist()))):
+        group = drawn[(bw[drawn] == size_w) & (bh[drawn] == size_h)]  # (G,)
+        dy, dx = np.mgrid[0:size_h, 0:size_w]
+        px = x0[group, None] + dx.ravel()[None]  # (G, C) candidate pixels
+        py = y0[group, None] + dy.ravel()[None]
+        weights = _barycentric_raw(np.stack([px + 0.5, py + 0.5], axis=-1).reshape(-1, 2),
+                                   np.repeat(corners[group], px.shape[1], axis=0))
+        inside = (weights >= -1e-9).all(axis=1).reshape(px.shape)
+        g = np.broadcast_to(group[:, None], px.shape)
+        ids[py[inside], px[inside]] = g[inside]
+    return ids
+
+
+def _barycentric_raw(points: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """(M, 3) barycentric weights of ``points`` (M, 2) in ``corners`` (M, 3, 2), unclipped (negative outside);
+    -inf for a degenerate triangle, which holds no point."""
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    e1, e2, d = b - a, c - a, points - a
+    det = e1[:, 0] * e2[:, 1] - e2[:, 0] * e1[:, 1]
+    ok = np.abs(det) > 1e-9
+    safe = np.where(ok, det, 1.0)
+    w1 = (d[:, 0] * e2[:, 1] - e2[:, 0] * d[:, 1]) / safe
+    w2 = (e1[:, 0] * d[:, 1] - d[:, 0] * e1[:, 1]) / safe
+    out = np.stack([1.0 - w1 - w2, w1, w2], axis=1)
+    out[~ok] = -np.inf
+    return out
+
+
+def barycentric(points: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """(M, 3) barycentric weights of ``points`` (M, 2) in the triangles ``corners`` (M, 3, 2), clipped to [0, 1]
+    and summing to 1 (a point just outside its triangle takes a mix of the nearest corners; a degenerate triangle
+    weights its corners equally)."""
+    raw = _barycentric_raw(points, corners)
+    flat = ~np.isfinite(raw).all(axis=1)
+    w = np.clip(np.where(flat[:, None], 1.0 / 3.0, raw), 0.0, 1.0)
+    return w / np.maximum(w.sum(axis=1, keepdims=True), 1e-12)
+
+
+def across_a_fold(ref: np.ndarray, tgt: np.ndarray, height: int) -> np.ndarray:
+    """(F,) bool: triangles whose corners lie further apart in the reference (F, 3, 2) than in the target (F, 3, 2)
+    allows: their longest edge beyond AGREE_PX (at 128 px) and beyond AGREE_STRETCH times the target's longest
+    edge, the rule that keeps :func:`dense_flow`'s neighbours from averaging across a fold. Such a triangle joins
+    surface points the reference shows far apart (a hidden back completed from two sides), and reading it would
+    sample the picture along the line between them."""
+    def longest(c: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(c - c[:, [1, 2, 0]], axis=-1).max(axis=1)
+
+    return longest(ref) > np.maximum(AGREE_PX * height / 128, AGREE_STRETCH * longest(tgt))
+
+
+def triangle_flow(mesh: MeshFlow, ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray,
+                  tgt_visible: np.ndarray, triangles: np.ndarray) -> MeshFlow:
+    """``mesh`` with its silhouette pixels that lie in a triangle the target shows whole (all three corners
+    visible) and that does not join a fold (:func:`across_a_fold`) re-read from that triangle: flow and visibility
+    are the barycentric mix of its corners' reference pixels (``ref_uv``, already completed) and reference
+    visibility. Other pixels keep ``mesh``'s values."""
+    shown = np.asarray(tgt_visible, bool)
+    front = triangles[shown[triangles].all(axis=1)]
+    tgt, ref = np.asarray(tgt_uv, np.float64), np.asarray(ref_uv, np.float64)
+    front = front[~across_a_fold(ref[front], tgt[front], mesh.silhouette.shape[0])]
+    if len(front) == 0:
+        return mesh
+    which = triangle_map(tgt, front, mesh.silhouette.shape)
+    ys, xs = np.nonzero(mesh.silhouette & (which >= 0))
+    tri = front[which[ys, xs]]  # (M, 3) vertex ids
+    weights = barycentric(np.stack([xs + 0.5, ys + 0.5], axis=1), tgt[tri])
+    flow, visibility = mesh.flow.copy(), mesh.visibility.copy()
+    flow[ys, xs] = (weights[..., None] * ref[tri]).sum(axis=1)
+    visibility[ys, xs] = (weights * np.asarray(ref_visible, np.float64)[tri]).sum(axis=1)
+    return MeshFlow(flow, visibility, mesh.silhouette)
+
+
 def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray,
                silhouette: np.ndarray, *, neighbours: int = NEIGHBOURS, complete: bool = True,
-               image: np.ndarray | None = None) -> MeshFlow:
+               image: np.ndarray | None = None, triangles: np.ndarray | None = None) -> MeshFlow:
     """The backward flow target -> reference of one pair.
 
     Args:
@@ -310,6 +419,8 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
             point along the surface is (:func:`complete_reference_uv`; their visibility stays 0). Off, they
             sample their own (occluded) reference pixel, as the models before 2026-11-25 evening were trained.
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv``, for the completion's colour test.
+        triangles: (F, 3) the mesh's triangles (:func:`mesh_triangles`): pixels inside a triangle the target shows
+            whole are read from it (:func:`triangle_flow`; the face generator's flow), the rest from the vertices.
     Returns:
         The :class:`MeshFlow`; with no visible target vertex, the identity flow and zero visibility.
     """
@@ -339,7 +450,10 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
     ys, xs = np.nonzero(silhouette)
     flow[ys, xs] = (weight[..., None] * ref).sum(axis=1)
     visibility[ys, xs] = (weight * np.asarray(ref_visible, np.float64)[vert]).sum(axis=1)
-    return MeshFlow(flow, visibility, silhouette)
+    mesh = MeshFlow(flow, visibility, silhouette)
+    if triangles is not None:
+        mesh = triangle_flow(mesh, ref_uv, ref_visible, tgt_uv, tgt_visible, triangles)
+    return mesh
 
 
 def transform_uv(uv: np.ndarray, *, size: int, flip: bool = False, origin: tuple[float, float] = (0.0, 0.0)
@@ -400,8 +514,8 @@ def band_width(size: int) -> int:
 
 def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshTrack, rows, *,
                      margin: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """The correspondence from one reference to many target frames: :func:`dense_flow` carried into the band
-    (:func:`extend_flow`) for each of ``rows``.
+    """The correspondence from one reference to many target frames: :func:`dense_flow` (read from Anny's
+    triangles, :func:`mesh_triangles`) carried into the band (:func:`extend_flow`) for each of ``rows``.
 
     Args:
         ref_uv: (V, 2) the reference vertices' pixels, already completed (:func:`complete_reference_uv`: done once
@@ -415,5 +529,5 @@ def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshT
     width = band_width(targets.masks.shape[2])
     band = max(width, int(margin) + width // 2)
     flows = [extend_flow(dense_flow(ref_uv, ref_visible, targets.uv[r], targets.visible[r], targets.masks[r],
-                                    complete=False), band) for r in rows]
+                                    complete=False, triangles=mesh_triangles()), band) for r in rows]
     return np.stack([f.flow for f in flows]), np.stack([f.visibility for f in flows])
