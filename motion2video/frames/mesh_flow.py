@@ -377,10 +377,12 @@ def across_a_fold(ref: np.ndarray, tgt: np.ndarray, height: int) -> np.ndarray:
     edge, the rule that keeps :func:`dense_flow`'s neighbours from averaging across a fold. Such a triangle joins
     surface points the reference shows far apart (a hidden back completed from two sides), and reading it would
     sample the picture along the line between them."""
-    def longest(c: np.ndarray) -> np.ndarray:
-        return np.linalg.norm(c - c[:, [1, 2, 0]], axis=-1).max(axis=1)
+    def longest_squared(c: np.ndarray) -> np.ndarray:
+        edges = c - c[:, [1, 2, 0]]
+        return (edges * edges).sum(axis=-1).max(axis=1)
 
-    return longest(ref) > np.maximum(AGREE_PX * height / 128, AGREE_STRETCH * longest(tgt))
+    allowed = np.maximum(AGREE_PX * height / 128, AGREE_STRETCH * np.sqrt(longest_squared(tgt)))
+    return longest_squared(ref) > allowed * allowed
 
 
 def triangle_flow(mesh: MeshFlow, ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray,
