@@ -306,7 +306,8 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
 
 @lru_cache(maxsize=1)
 def mesh_triangles() -> np.ndarray:
-    """(F, 3) int64 Anny's triangles, the ones :func:`dense_flow` reads a face's flow from."""
+    """(F, 3) int64 Anny's triangles, which every mesh flow is read from (:func:`triangle_flow`): the training
+    pairs (:func:`motion2video.frames.data.pair_mesh_flows`) and :func:`flows_to_targets`."""
     from renderers import anny_model
 
     return np.ascontiguousarray(anny_model.triangles(), dtype=np.int64)
@@ -422,7 +423,8 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
             sample their own (occluded) reference pixel, as the models before 2026-11-25 evening were trained.
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv``, for the completion's colour test.
         triangles: (F, 3) the mesh's triangles (:func:`mesh_triangles`): pixels inside a triangle the target shows
-            whole are read from it (:func:`triangle_flow`; the face generator's flow), the rest from the vertices.
+            whole are read from it (:func:`triangle_flow`), the rest from the vertices; None: the vertices only
+            (the mesh flow before 2026-11-27).
     Returns:
         The :class:`MeshFlow`; with no visible target vertex, the identity flow and zero visibility.
     """
