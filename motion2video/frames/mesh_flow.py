@@ -386,26 +386,48 @@ def across_a_fold(ref: np.ndarray, tgt: np.ndarray, height: int) -> np.ndarray:
     return longest_squared(ref) > allowed * allowed
 
 
-def triangle_flow(mesh: MeshFlow, ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray,
-                  tgt_visible: np.ndarray, triangles: np.ndarray) -> MeshFlow:
-    """``mesh`` with its silhouette pixels that lie in a triangle the target shows whole (all three corners
-    visible) and that does not join a fold (:func:`across_a_fold`) re-read from that triangle: flow and visibility
-    are the barycentric mix of its corners' reference pixels (``ref_uv``, already completed) and reference
-    visibility. Other pixels keep ``mesh``'s values."""
+def triangle_pixels(ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, triangles: np.ndarray,
+                    silhouette: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The ``silhouette`` pixels read from a triangle: those whose centre lies in a triangle the target shows whole
+    (all three corners visible) that does not join a fold (:func:`across_a_fold`).
+
+    Returns:
+        ys, xs (M,) the pixels; tri (M, 3) the vertex ids of each pixel's triangle; weights (M, 3) the pixel
+        centre's barycentric weights in the target.
+    """
     shown = np.asarray(tgt_visible, bool)
     front = triangles[shown[triangles].all(axis=1)]
     tgt, ref = np.asarray(tgt_uv, np.float64), np.asarray(ref_uv, np.float64)
-    front = front[~across_a_fold(ref[front], tgt[front], mesh.silhouette.shape[0])]
+    front = front[~across_a_fold(ref[front], tgt[front], silhouette.shape[0])]
     if len(front) == 0:
-        return mesh
-    which = triangle_map(tgt, front, mesh.silhouette.shape)
-    ys, xs = np.nonzero(mesh.silhouette & (which >= 0))
-    tri = front[which[ys, xs]]  # (M, 3) vertex ids
-    weights = barycentric(np.stack([xs + 0.5, ys + 0.5], axis=1), tgt[tri])
+        empty = np.zeros(0, np.int64)
+        return empty, empty, np.zeros((0, 3), np.int64), np.zeros((0, 3))
+    which = triangle_map(tgt, front, silhouette.shape)
+    ys, xs = np.nonzero(silhouette & (which >= 0))
+    tri = front[which[ys, xs]]
+    return ys, xs, tri, barycentric(np.stack([xs + 0.5, ys + 0.5], axis=1), tgt[tri])
+
+
+def triangle_flow(mesh: MeshFlow, ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray,
+                  tgt_visible: np.ndarray, triangles: np.ndarray) -> MeshFlow:
+    """``mesh`` with its silhouette pixels that lie in a triangle the target shows whole (:func:`triangle_pixels`)
+    re-read from that triangle: flow and visibility are the barycentric mix of its corners' reference pixels
+    (``ref_uv``, already completed) and reference visibility. Other pixels keep ``mesh``'s values."""
+    ys, xs, tri, weights = triangle_pixels(ref_uv, tgt_uv, tgt_visible, triangles, mesh.silhouette)
     flow, visibility = mesh.flow.copy(), mesh.visibility.copy()
-    flow[ys, xs] = (weights[..., None] * ref[tri]).sum(axis=1)
-    visibility[ys, xs] = (weights * np.asarray(ref_visible, np.float64)[tri]).sum(axis=1)
+    _read_triangles(flow, visibility, (ys, xs, tri, weights), ref_uv, ref_visible)
     return MeshFlow(flow, visibility, mesh.silhouette)
+
+
+def _read_triangles(flow: np.ndarray, visibility: np.ndarray, read, ref_uv: np.ndarray,
+                    ref_visible: np.ndarray) -> None:
+    """Write the barycentric mix of the corners' reference pixels and visibility into the pixels of ``read`` (from
+    :func:`triangle_pixels`), in place."""
+    ys, xs, tri, weights = read
+    if len(ys) == 0:
+        return
+    flow[ys, xs] = (weights[..., None] * np.asarray(ref_uv, np.float64)[tri]).sum(axis=1)
+    visibility[ys, xs] = (weights * np.asarray(ref_visible, np.float64)[tri]).sum(axis=1)
 
 
 def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray,
@@ -423,7 +445,7 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
             sample their own (occluded) reference pixel, as the models before 2026-11-25 evening were trained.
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv``, for the completion's colour test.
         triangles: (F, 3) the mesh's triangles (:func:`mesh_triangles`): pixels inside a triangle the target shows
-            whole are read from it (:func:`triangle_flow`), the rest from the vertices; None: the vertices only
+            whole are read from it (:func:`triangle_pixels`), only the rest from the vertices; None: the vertices only
             (the mesh flow before 2026-11-27).
     Returns:
         The :class:`MeshFlow`; with no visible target vertex, the identity flow and zero visibility.
@@ -439,25 +461,30 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
     seen = np.flatnonzero(tgt_visible)
     if len(seen) == 0 or not silhouette.any():
         return MeshFlow(flow, visibility, silhouette)
-    k = min(neighbours, len(seen))
-    tree = cKDTree(np.asarray(tgt_uv, np.float64)[seen])
-    pix = pixel_centres(silhouette)
-    dist, idx = tree.query(pix, k=k)
-    dist, idx = dist.reshape(len(pix), k), idx.reshape(len(pix), k)
-    vert = seen[idx]  # (M, k) vertex ids, nearest first
-    ref = np.asarray(ref_uv, np.float64)[vert]  # (M, k, 2)
-    tgt = np.asarray(tgt_uv, np.float64)[vert]  # (M, k, 2)
-    allowed = np.maximum(AGREE_PX * h / 128, AGREE_STRETCH * np.linalg.norm(tgt - tgt[:, :1], axis=2))
-    agree = np.linalg.norm(ref - ref[:, :1], axis=2) <= allowed  # the nearest always agrees with itself
-    weight = agree / (dist ** 2 + WEIGHT_EPS_PX ** 2)  # (M, k)
-    weight /= weight.sum(axis=1, keepdims=True)
-    ys, xs = np.nonzero(silhouette)
-    flow[ys, xs] = (weight[..., None] * ref).sum(axis=1)
-    visibility[ys, xs] = (weight * np.asarray(ref_visible, np.float64)[vert]).sum(axis=1)
-    mesh = MeshFlow(flow, visibility, silhouette)
+    by_vertices = silhouette.copy()  # the pixels no triangle reads
+    read = None
     if triangles is not None:
-        mesh = triangle_flow(mesh, ref_uv, ref_visible, tgt_uv, tgt_visible, triangles)
-    return mesh
+        read = triangle_pixels(ref_uv, tgt_uv, tgt_visible, triangles, silhouette)
+        by_vertices[read[0], read[1]] = False
+    if by_vertices.any():
+        k = min(neighbours, len(seen))
+        tree = cKDTree(np.asarray(tgt_uv, np.float64)[seen])
+        pix = pixel_centres(by_vertices)
+        dist, idx = tree.query(pix, k=k)
+        dist, idx = dist.reshape(len(pix), k), idx.reshape(len(pix), k)
+        vert = seen[idx]  # (M, k) vertex ids, nearest first
+        ref = np.asarray(ref_uv, np.float64)[vert]  # (M, k, 2)
+        tgt = np.asarray(tgt_uv, np.float64)[vert]  # (M, k, 2)
+        allowed = np.maximum(AGREE_PX * h / 128, AGREE_STRETCH * np.linalg.norm(tgt - tgt[:, :1], axis=2))
+        agree = np.linalg.norm(ref - ref[:, :1], axis=2) <= allowed  # the nearest always agrees with itself
+        weight = agree / (dist ** 2 + WEIGHT_EPS_PX ** 2)  # (M, k)
+        weight /= weight.sum(axis=1, keepdims=True)
+        ys, xs = np.nonzero(by_vertices)
+        flow[ys, xs] = (weight[..., None] * ref).sum(axis=1)
+        visibility[ys, xs] = (weight * np.asarray(ref_visible, np.float64)[vert]).sum(axis=1)
+    if read is not None:
+        _read_triangles(flow, visibility, read, ref_uv, ref_visible)
+    return MeshFlow(flow, visibility, silhouette)
 
 
 def transform_uv(uv: np.ndarray, *, size: int, flip: bool = False, origin: tuple[float, float] = (0.0, 0.0)
