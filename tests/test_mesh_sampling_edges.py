@@ -138,6 +138,14 @@ def fitted_reference(path: Path, *, observed: np.ndarray | None = None, futures:
                                                                    reference=reference))
 
 
+def own_pixel(xy: np.ndarray, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """A stand-in for :func:`motion2video.frames.mesh_flow.bilinear_footprint`: the pixel each point lies in, four
+    times (the completion's colour test before 2026-11-27)."""
+    x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
+    y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
+    return np.repeat(y[:, None], 4, axis=1), np.repeat(x[:, None], 4, axis=1)
+
+
 def demo_walk() -> np.ndarray:
     """(T, 17, 3) the world joints of ``demo_inputs/cmu_walk.npz``, the walk ``make demo`` observes (frames 24..39)."""
     return np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
@@ -463,6 +471,7 @@ def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypa
     import motion2video.stages.mesh_frames as mesh_frames
 
     monkeypatch.setattr(mesh_frames, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
+    monkeypatch.setattr(mesh_flow, "bilinear_footprint", own_pixel)  # nor the footprint test (end of file)
 
     away = np.array([[0.53, 0.57, 0.87], [0.588, 0.583, 0.865], [0.608, 0.705, 0.476], [0.618, 0.576, 0.07],
                      [0.474, 0.57, 0.876], [0.45, 0.609, 0.505], [0.485, 0.428, 0.123], [0.511, 0.602, 1.09],
@@ -583,3 +592,69 @@ def test_the_demo_pictures_limbs_do_not_lend_their_grazing_sides_where_they_touc
     assert without[1] >= 8 and without[0] + without[1] >= 10  # 3 and 15 on 2026-11-27
     assert with_rule[0] == 0 and with_rule[1] <= 2  # 0 and 0
     assert 50 <= without[2] - with_rule[2] <= 400  # the rule hides few vertices (151 of 6,600)
+
+
+def test_bilinear_footprint_is_the_four_pixels_a_sample_reads():
+    from motion2video.frames.mesh_flow import bilinear_footprint
+
+    rows, cols = bilinear_footprint(np.array([[2.5, 3.5], [2.2, 3.9], [0.1, 0.1], [9.9, 9.9]]), 10, 10)
+    np.testing.assert_array_equal(cols[0], [2, 3, 2, 3])  # a pixel centre: its pixel and the next ones (weight 0)
+    np.testing.assert_array_equal(rows[0], [3, 3, 4, 4])
+    np.testing.assert_array_equal(cols[1], [1, 2, 1, 2])  # left of the centre of pixel 2: pixels 1 and 2
+    np.testing.assert_array_equal(rows[1], [3, 3, 4, 4])  # below the centre of row 3: rows 3 and 4
+    np.testing.assert_array_equal(cols[2], [0, 0, 0, 0])  # clipped at the borders
+    np.testing.assert_array_equal(rows[3], [9, 9, 9, 9])
+
+
+def test_a_completion_source_beside_another_colour_is_not_typical():
+    """Skin with a white gap at column 10: a source whose own pixel is skin but whose bilinear sample reads the gap
+    is no source; one whose sample stays on the skin is."""
+    from motion2video.frames.mesh_flow import typical_colour_sources
+
+    image = np.zeros((20, 20, 3), np.uint8)
+    image[:] = (220, 170, 140)
+    image[:, 10] = 255
+    ys = np.linspace(1.5, 18.5, 30)
+    uv = np.concatenate([np.stack([np.full(30, 9.3), ys], 1),  # own pixel 9, the sample reads 8 and 9
+                         np.stack([np.full(30, 9.8), ys], 1)])  # own pixel 9, the sample reads 9 and 10
+    regions = np.zeros(60, np.int64)
+    kept = typical_colour_sources(uv, np.arange(60), image, regions)
+    np.testing.assert_array_equal(kept, np.arange(30))
+    # too few typical footprints in a region: its sources are tested by their own pixel, as before
+    kept = typical_colour_sources(uv[20:], np.arange(40), image, regions[:40])
+    np.testing.assert_array_equal(kept, np.arange(40))
+
+
+def test_the_demo_pictures_hidden_forearms_sample_only_skin(monkeypatch):
+    """End to end on the demo's reference, as synthesize fits it: the fitted forearms are a pixel wider than the
+    pictured ones, so the forearm vertices along their outline lie on skin pixels whose neighbours are the shirt,
+    the trousers or the white gap by the waist. Completed from them, the hidden sides of the forearms drew white
+    and dark stripes when a future turned them to the camera (make demo's future 5 at +35 to +48). With the
+    footprint test, no hidden forearm vertex samples anything but skin."""
+    from renderers import anny_model
+
+    import motion2video.frames.mesh_flow as mesh_flow
+    from motion2video.frames.mesh_flow import bilinear_footprint, complete_reference_uv
+
+    names, dominant = anny_model.bone_names(), anny_model.dominant_bones()
+    forearms = np.array([names[b].startswith(("lowerarm", "wrist")) for b in dominant])
+    forearms &= anny_model.vertex_regions() == anny_model.SKIN
+    reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
+    x0, y0, side = video.crop
+    picture = reference.image[y0:y0 + side, x0:x0 + side]
+    uv, seen = video.reference.uv[0], video.reference.visible[0]
+    hidden = np.flatnonzero(~seen & forearms)
+
+    def not_skin() -> int:  # hidden forearm vertices whose bilinear sample reads a pixel that is not skin
+        done = complete_reference_uv(uv, seen, image=picture)
+        if video.uv_sources is not None:
+            done = done[video.uv_sources]
+        rows, cols = bilinear_footprint(done[hidden].astype(np.float64), side, side)
+        c = picture[rows, cols].astype(int)
+        skin = (c[..., 0] > 150) & (c[..., 0] - c[..., 2] > 40)
+        return int((~skin.all(axis=1)).sum())
+
+    with_footprint = not_skin()
+
+    monkeypatch.setattr(mesh_flow, "bilinear_footprint", own_pixel)
+    assert len(hidden) > 300 and not_skin() > 100 and with_footprint <= 5  # 404: 247 and 0 (2026-11-27)

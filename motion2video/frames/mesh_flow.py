@@ -189,16 +189,35 @@ def _nearest_sources(graph, sources: np.ndarray) -> np.ndarray:
 # colour lies within max(COLOUR_MIN, COLOUR_SPREAD x the median distance) of the region's median colour (RGB, 0-255):
 # the vertices along a region's outline show the arm, the neck or the background beside it in part, and they are the
 # nearest sources of the whole hidden side (27% of the demo person's hidden shirt vertices took a skin pixel from them).
+# Since 2026-11-27 every pixel of the source's bilinear footprint must be typical, not only the one it lies in.
 COLOUR_MIN = 60.0
 COLOUR_SPREAD = 3.0
 COLOUR_MIN_SOURCES = 20  # regions showing fewer vertices keep them all
 
 
+def bilinear_footprint(xy: np.ndarray, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The four pixels a bilinear sample at each of the (N, 2) points reads (pixel centres at integer + 0.5):
+    rows, cols (N, 4) int64, clipped to the image."""
+    x0 = np.floor(np.asarray(xy[:, 0], np.float64) - 0.5).astype(np.int64)
+    y0 = np.floor(np.asarray(xy[:, 1], np.float64) - 0.5).astype(np.int64)
+    cols = np.clip(np.stack([x0, x0 + 1, x0, x0 + 1], axis=1), 0, width - 1)
+    rows = np.clip(np.stack([y0, y0, y0 + 1, y0 + 1], axis=1), 0, height - 1)
+    return rows, cols
+
+
 def typical_colour_sources(ref_uv: np.ndarray, sources: np.ndarray, image: np.ndarray,
                            regions: np.ndarray) -> np.ndarray:
-    """The subset of ``sources`` (vertex ids) whose pixel in ``image`` has a colour typical of the vertex's region:
-    within max(COLOUR_MIN, COLOUR_SPREAD x median distance) of the region's median colour; a region with fewer than
-    COLOUR_MIN_SOURCES sources keeps them all.
+    """The subset of ``sources`` (vertex ids) whose colour in ``image`` is typical of the vertex's region: every
+    pixel a bilinear sample at it reads (:func:`bilinear_footprint`; the pixel it lies in is one of them) within
+    max(COLOUR_MIN, COLOUR_SPREAD x median distance) of the region's median colour (the median and the distances
+    over the pixels the sources lie in). A region with fewer than COLOUR_MIN_SOURCES sources keeps them all; one
+    with fewer than that whose footprint is typical keeps those whose own pixel is.
+
+    The footprint, because a hidden vertex is drawn by sampling the picture bilinearly where its source lies, and
+    the generator moves that sample by a pixel or so: a source whose own pixel was skin but whose neighbour was the
+    white gap between arm and waist or the trousers beside the wrist (the fitted forearm of the demo's reference a
+    pixel wider than the pictured one) drew the hidden side of the forearm striped white and dark when a future
+    turned it to the camera (`make demo`'s future 5 at +35 to +48).
 
     Args:
         ref_uv: (V, 2) reference pixels; sources: (S,) int vertex ids; image: (H, W, 3) the reference picture in
@@ -207,18 +226,25 @@ def typical_colour_sources(ref_uv: np.ndarray, sources: np.ndarray, image: np.nd
         (S',) int, in the order of ``sources``.
     """
     h, w = image.shape[:2]
+    picture = np.asarray(image, np.float64)[..., :3]
     xy = np.asarray(ref_uv, np.float64)[sources]
     inside = (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)  # outside a crop: no colour
+    sources, xy = sources[inside], xy[inside]
     x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
     y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
-    sources, colour = sources[inside], np.asarray(image, np.float64)[y[inside], x[inside], :3]
+    colour = picture[y, x]  # (S, 3)
+    rows, cols = bilinear_footprint(xy, h, w)
+    footprint = picture[rows, cols]  # (S, 4, 3)
     keep = np.ones(len(sources), bool)
     for r in np.unique(regions[sources]):
         idx = np.flatnonzero(regions[sources] == r)
         if len(idx) < COLOUR_MIN_SOURCES:
             continue
-        dist = np.linalg.norm(colour[idx] - np.median(colour[idx], axis=0), axis=1)
-        keep[idx] = dist <= max(COLOUR_MIN, COLOUR_SPREAD * float(np.median(dist)))
+        median = np.median(colour[idx], axis=0)
+        dist = np.linalg.norm(colour[idx] - median, axis=1)
+        limit = max(COLOUR_MIN, COLOUR_SPREAD * float(np.median(dist)))
+        whole = (np.linalg.norm(footprint[idx] - median, axis=2) <= limit).all(axis=1)  # its own pixel is one
+        keep[idx] = whole if whole.sum() >= COLOUR_MIN_SOURCES else dist <= limit
     return sources[keep]
 
 
