@@ -17,7 +17,7 @@ error is below a pixel away from occlusion edges.
 
 Since 2026-11-27 the generators read the flow from the target's triangles where they can (``triangles``: each pixel
 whose centre lies in a triangle with all three corners shown takes the barycentric mix of their reference pixels,
-:func:`triangle_flow`), which is exact for a surface that moves affinely within a triangle, where the nearest
+:func:`triangle_pixels`), which is exact for a surface that moves affinely within a triangle, where the nearest
 vertices' weighted mean is exact only at the vertices. Triangles that join surface points the reference shows far
 apart are left to the vertices, by the same fold rule (:func:`across_a_fold`). Where the chin's underside meets the
 neck, the nearest-vertex rule alternated pixel by pixel between the two sides of the reference's jaw crease and drew
@@ -332,7 +332,7 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
 
 @lru_cache(maxsize=1)
 def mesh_triangles() -> np.ndarray:
-    """(F, 3) int64 Anny's triangles, which every mesh flow is read from (:func:`triangle_flow`): the training
+    """(F, 3) int64 Anny's triangles, which every mesh flow is read from (:func:`dense_flow`): the training
     pairs (:func:`motion2video.frames.data.pair_mesh_flows`) and :func:`flows_to_targets`."""
     from renderers import anny_model
 
@@ -434,28 +434,6 @@ def triangle_pixels(ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndar
     return ys, xs, tri, barycentric(np.stack([xs + 0.5, ys + 0.5], axis=1), tgt[tri])
 
 
-def triangle_flow(mesh: MeshFlow, ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray,
-                  tgt_visible: np.ndarray, triangles: np.ndarray) -> MeshFlow:
-    """``mesh`` with its silhouette pixels that lie in a triangle the target shows whole (:func:`triangle_pixels`)
-    re-read from that triangle: flow and visibility are the barycentric mix of its corners' reference pixels
-    (``ref_uv``, already completed) and reference visibility. Other pixels keep ``mesh``'s values."""
-    ys, xs, tri, weights = triangle_pixels(ref_uv, tgt_uv, tgt_visible, triangles, mesh.silhouette)
-    flow, visibility = mesh.flow.copy(), mesh.visibility.copy()
-    _read_triangles(flow, visibility, (ys, xs, tri, weights), ref_uv, ref_visible)
-    return MeshFlow(flow, visibility, mesh.silhouette)
-
-
-def _read_triangles(flow: np.ndarray, visibility: np.ndarray, read, ref_uv: np.ndarray,
-                    ref_visible: np.ndarray) -> None:
-    """Write the barycentric mix of the corners' reference pixels and visibility into the pixels of ``read`` (from
-    :func:`triangle_pixels`), in place."""
-    ys, xs, tri, weights = read
-    if len(ys) == 0:
-        return
-    flow[ys, xs] = (weights[..., None] * np.asarray(ref_uv, np.float64)[tri]).sum(axis=1)
-    visibility[ys, xs] = (weights * np.asarray(ref_visible, np.float64)[tri]).sum(axis=1)
-
-
 def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray,
                silhouette: np.ndarray, *, neighbours: int = NEIGHBOURS, complete: bool = True,
                image: np.ndarray | None = None, triangles: np.ndarray | None = None) -> MeshFlow:
@@ -488,10 +466,11 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
     if len(seen) == 0 or not silhouette.any():
         return MeshFlow(flow, visibility, silhouette)
     by_vertices = silhouette.copy()  # the pixels no triangle reads
-    read = None
     if triangles is not None:
-        read = triangle_pixels(ref_uv, tgt_uv, tgt_visible, triangles, silhouette)
-        by_vertices[read[0], read[1]] = False
+        ty, tx, tri, bary = triangle_pixels(ref_uv, tgt_uv, tgt_visible, triangles, silhouette)
+        flow[ty, tx] = (bary[..., None] * np.asarray(ref_uv, np.float64)[tri]).sum(axis=1)
+        visibility[ty, tx] = (bary * np.asarray(ref_visible, np.float64)[tri]).sum(axis=1)
+        by_vertices[ty, tx] = False
     if by_vertices.any():
         k = min(neighbours, len(seen))
         tree = cKDTree(np.asarray(tgt_uv, np.float64)[seen])
@@ -508,8 +487,6 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
         ys, xs = np.nonzero(by_vertices)
         flow[ys, xs] = (weight[..., None] * ref).sum(axis=1)
         visibility[ys, xs] = (weight * np.asarray(ref_visible, np.float64)[vert]).sum(axis=1)
-    if read is not None:
-        _read_triangles(flow, visibility, read, ref_uv, ref_visible)
     return MeshFlow(flow, visibility, silhouette)
 
 
