@@ -202,3 +202,40 @@ def test_an_interrupt_sent_again_after_the_command_ended_is_not_sent():
         signal.signal(signal.SIGTERM, old_sigterm)
         sys.unraisablehook = old_hook
         interrupts.clear()
+
+
+def test_a_ctrl_c_while_the_encoder_starts_leaves_no_encoder_and_no_file(tmp_path, monkeypatch):
+    """In this process, no subprocess around it: a SIGINT that arrives just after the encoder process started,
+    before the writer had stored it, is held back until the writer has it. The writer then stops the encoder and
+    removes its temporary file. Without the hold, the encoder was left running, unknown to the writer, and wrote
+    the temporary file once its input closed (a ``.tmp.mp4`` a clean-clone ``make test`` left once)."""
+    import gc
+
+    from motion2video.formats import video
+
+    started = []
+    real_init = video._FFmpegProcess.__init__
+
+    def init_then_ctrl_c(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        started.append(self._proc)
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C now: the writer has not stored this encoder yet
+
+    monkeypatch.setattr(video._FFmpegProcess, "__init__", init_then_ctrl_c)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal (CI may ignore it)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with video.VideoWriter(tmp_path / "out.mp4", 25, encoder="ffmpeg") as writer:
+                for _ in range(20):
+                    writer.write(np.zeros((4, 32, 32, 3), np.uint8))
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    gc.collect()  # an encoder nobody holds sees its input close here
+    assert len(started) == 1
+    try:
+        code = started[0].wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        started[0].kill()
+        pytest.fail("the encoder was left running, unknown to the writer")
+    assert code == -signal.SIGKILL  # stopped by the writer (VideoWriter's close), not ended by its input
+    assert sorted(tmp_path.iterdir()) == []

@@ -28,10 +28,13 @@ All frames are RGB uint8: (T, H, W, 3) for clips, (H, W, 3) for images.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import signal
 import subprocess
 import tempfile
+import threading
 from fractions import Fraction
 from pathlib import Path
 from typing import Iterable, Iterator, Sequence
@@ -281,6 +284,29 @@ class _PyAVEncoder:
             pass  # closing after a failure: the temporary file is removed anyway
 
 
+@contextlib.contextmanager
+def _interrupts_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back for the block (in the main thread; elsewhere nothing changes): one that
+    arrives meanwhile is delivered, and raised, when the block ends.
+
+    :class:`VideoWriter` starts its encoder inside this block. A Ctrl-C that Python raised while
+    ``subprocess.Popen`` waited for the encoder to start, or before the writer had stored it, left an encoder the
+    writer did not know about: it could not stop it, and the encoder wrote the temporary file when its input
+    closed, after the writer had removed it (a ``.tmp.mp4`` left beside the output of an interrupted
+    ``synthesize``, seen once in a clean-clone ``make test``). The encoder inherits the held mask; it runs in its
+    own session and is stopped by SIGKILL (:meth:`_FFmpegProcess.close`) or by the end of its input, so it never
+    needs those two signals.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
 class VideoWriter:
     """A streaming, atomic video writer: frames go to an encoder as they come, the file appears on success.
 
@@ -344,10 +370,11 @@ class VideoWriter:
         clip, _ = _clip_or_image(frames)
         if self._sink is None:
             self.height, self.width = clip.shape[1:3]
-            if self.gif:
-                self._sink = self._open_sink(self.width, self.height)
-            else:
-                self._sink = self._open_sink(self.width + self.width % 2, self.height + self.height % 2)
+            with _interrupts_held():  # the encoder is ours before an interrupt can stop the command
+                if self.gif:
+                    self._sink = self._open_sink(self.width, self.height)
+                else:
+                    self._sink = self._open_sink(self.width + self.width % 2, self.height + self.height % 2)
         elif clip.shape[1:3] != (self.height, self.width):
             raise ValueError(f"frame size changed from {self.width}x{self.height} to {clip.shape[2]}x{clip.shape[1]}")
         self._sink.write(clip if self.gif else pad_to_even(clip))
