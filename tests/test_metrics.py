@@ -26,6 +26,12 @@ def test_ade_fde_are_best_of_k():
     np.testing.assert_allclose(M.displacement(pred, gt), [[[5.0, 0.0], [1.0, 2.0]]])
 
 
+def test_framewise_oracle_takes_the_closest_sample_at_each_frame():
+    pred, gt = _pred_gt()  # frame 0: min(5, 1) = 1; frame 1: min(0, 2) = 0
+    np.testing.assert_allclose(M.framewise_oracle_ade_per_window(pred, gt), [0.5])
+    assert M.framewise_oracle_ade_per_window(pred, gt)[0] < M.ade_per_window(pred, gt)[0]  # 0.5 < 1.5
+
+
 def test_ade_averages_windows():
     pred, gt = _pred_gt()
     pred2 = np.concatenate([pred, pred + 1.0])  # second window: gt one unit away in each coordinate

@@ -78,6 +78,14 @@ def ade_per_frame(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return d[np.arange(d.shape[0]), best].mean(axis=0)
 
 
+def framewise_oracle_ade_per_window(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """(N,) the mean over T of the minimum over K of the displacement at each frame: the ADE of a future stitched
+    frame by frame from whichever of the K samples is closest at that frame. No choice of one sample per window
+    (best-of-K ADE, :func:`ade_per_window`) can be lower, so it bounds what re-ordering or re-selecting the same K
+    samples could reach. pred (N, K, T, D); gt (N, T, D)."""
+    return displacement(pred, gt).min(axis=1).mean(axis=1)
+
+
 def ade(pred: np.ndarray, gt: np.ndarray) -> float:
     """Best-of-K ADE averaged over windows (units of the frame vector)."""
     return float(ade_per_window(pred, gt).mean())
