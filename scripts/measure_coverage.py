@@ -46,8 +46,10 @@ def ratio_rows(per_window: dict[str, np.ndarray], zero: dict[str, np.ndarray], l
     """
     groups = group_by_action(labels)
     model, base = per_action_means(per_window, groups), per_action_means(zero, groups)
-    ratios = {a: {k: model[a][k] / base[a]["fde" if k == "fde" else "ade"] for k in per_window} | {"windows": model[a]["windows"]}
-              for a in groups}
+    ratios = {}
+    for a in groups:
+        ratios[a] = {k: model[a][k] / base[a]["fde" if k == "fde" else "ade"] for k in per_window}
+        ratios[a]["windows"] = model[a]["windows"]
     return {"per_action": ratios, "macro": macro_average(ratios)}
 
 
