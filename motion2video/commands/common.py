@@ -53,6 +53,20 @@ BVH_HELP = ("also write each {what} as a BVH file into this folder (a standard H
             "y up, 25 fps; 3D body models only; opens in Blender: File > Import > Motion Capture (.bvh))")
 
 
+REFERENCE_POSE_HELP = ("the reference image's pose file (default: IMAGE.pose.npz beside the image; without one the pose "
+                       "is estimated)")
+CROP_PERSON_HELP = ("cut the reference photo to a square around its person (with a margin) first, so that a person "
+                    "small in a large photo fills the generator's frame")
+
+
+def add_reference_photo_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--reference-pose FILE``, ``--crop-person`` and ``--fit-view``: how the commands that draw a reference photo
+    (``synthesize``, ``transfer``) read it and keep its person in view; ``--reference`` itself is the caller's."""
+    parser.add_argument("--reference-pose", default=None, help=REFERENCE_POSE_HELP)
+    parser.add_argument("--crop-person", action="store_true", help=CROP_PERSON_HELP)
+    parser.add_argument("--fit-view", action="store_true", help=FIT_VIEW_HELP)
+
+
 def add_bvh_argument(parser: argparse.ArgumentParser, what: str) -> None:
     """``--bvh DIR``: one BVH file per ``what`` (future, re-enactment, ...)."""
     parser.add_argument("--bvh", metavar="DIR", default=None, help=BVH_HELP.format(what=what))

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.commands.common import (FIT_VIEW_HELP, RIGID_BONES_HELP, add_command, add_motion_input_arguments,
-                                          check_at_least)
+from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_motion_input_arguments,
+                                          add_reference_photo_arguments, check_at_least)
 from motion2video.core.errors import InputError
 
 HELP = "sample K futures of a clip and render them as RGB video of a reference person"
@@ -48,12 +48,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (.mp4, .avi, .mov: its "
                    "pose is estimated and cached) (body), FaceMotion .npz / .csv (face)")
     p.add_argument("--reference", required=True, help="reference appearance image (PNG, JPEG, ...)")
-    p.add_argument("--reference-pose", default=None,
-                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image; without one "
-                   "the pose is estimated)")
-    p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
-                   "in a large photo fills the generator's frame")
-    p.add_argument("--fit-view", action="store_true", help=FIT_VIEW_HELP)
+    add_reference_photo_arguments(p)
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("-o", "--output", required=True, help="output video OUT.mp4 (also OUT-structure.mp4, OUT-sheet.png)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")

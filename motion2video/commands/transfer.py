@@ -6,9 +6,9 @@ import argparse
 import sys
 
 from motion2video.core.atomic import save_npz
-from motion2video.commands.common import (FIT_VIEW_HELP, add_bvh_argument, add_command, add_motion_input_arguments,
-                                          add_video_output_arguments, check_at_least, check_bvh_output,
-                                          check_video_and_npz, set_threads)
+from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
+                                          add_reference_photo_arguments, add_video_output_arguments, check_at_least,
+                                          check_bvh_output, check_video_and_npz, set_threads)
 from motion2video.core.errors import InputError
 
 HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
@@ -58,12 +58,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
                    "(default when --reference is given); skeleton: limb maps")
     p.add_argument("--reference", default=None, help="reference image of the target person (--style frames)")
-    p.add_argument("--reference-pose", default=None,
-                   help="the reference image's pose file (default: IMAGE.pose.npz beside the image; without one "
-                   "the pose is estimated)")
-    p.add_argument("--crop-person", action="store_true", help="cut the reference photo to a square around its person (with a margin) first, so that a person small "
-                   "in a large photo fills the generator's frame")
-    p.add_argument("--fit-view", action="store_true", help=FIT_VIEW_HELP)
+    add_reference_photo_arguments(p)
     p.add_argument("--frame-model", default=None,
                    help="frame-generator checkpoint or shipped name for --style frames (default frames-body-128, "
                    "or frames-face-128 for face models)")
