@@ -3,6 +3,8 @@ exit code 2 and no output file."""
 
 from __future__ import annotations
 
+import re
+
 from pathlib import Path
 
 import numpy as np
@@ -66,6 +68,22 @@ def test_help_shows_examples(capsys):
     assert exit_info.value.code == 0
     text = capsys.readouterr().out
     assert "examples:" in text and "--style mesh" in text
+
+
+def test_every_help_example_is_one_command_per_line(capsys):
+    """A help example continued onto the next line ends in a backslash; one written with a single backslash in the
+    module's string would be joined into one line with a run of spaces inside."""
+    from motion2video.cli import COMMANDS
+
+    commands = [name.replace("_", "-") for name in COMMANDS]
+    for name in commands:
+        with pytest.raises(SystemExit):
+            main([name, "--help"])
+        text = capsys.readouterr().out
+        examples = text.split("examples:", 1)[1].split("\n\n", 1)[0] if "examples:" in text else ""
+        for line in examples.splitlines():
+            command = line.split(" #")[0].rstrip()  # aligned comments may follow a run of spaces
+            assert not re.search(r"\S {4,}\S", command), f"{name} --help joins two example lines: {line!r}"
 
 
 def _npz(path: Path, **arrays) -> Path:

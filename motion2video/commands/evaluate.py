@@ -25,7 +25,7 @@ MMFDE are the window-weighted means of the per-action ones.
 EXAMPLES = """\
 examples:
   motion2video evaluate --model mtvae-add --data ../shared/data/mocap --samples 50 --json out/eval.json
-  motion2video evaluate --model mtvae-add --model mtvae-add-dlow --model lcpvae --data ../shared/data/mocap \
+  motion2video evaluate --model mtvae-add --model mtvae-add-dlow --model lcpvae --data ../shared/data/mocap \\
       --plot out/ade_per_frame.png
   motion2video evaluate --model runs/cvae.safetensors --data ../shared/data/mocap/cmu/13_10.bvh
   motion2video evaluate --model mtvae-add-face --data ../shared/data/face/livelinkface/S07-001.csv

@@ -25,8 +25,9 @@ examples:
   motion2video synthesize --motion-model runs/mtvae.safetensors --frame-model runs/frames.safetensors \\
       ../shared/data/mocap/cmu/08_01.bvh --reference me.png --reference-pose me.pose.npz --samples 3 \\
       --observed 16 --horizon 60 -o out/me.mp4
-  motion2video synthesize --motion-model mtvae-add --frame-model frames-body-128 ../shared/data/video/dancer.avi \
-      --reference ../shared/data/photos/skier.jpg --crop-person --samples 3 -o out/skier_dances.mp4
+  motion2video synthesize --motion-model mixture-periodic --frame-model frames-body-mesh-256 \\
+      ../shared/data/video/dancer.avi --reference ../shared/data/photos/skier.jpg --crop-person --samples 3 \\
+      -o out/skier_dances.mp4
 
 Writes OUT.mp4 (every cell plays the observed frames framed green, then one sampled future framed red),
 OUT-structure.mp4 (the same grid of the structures the generator was given) and OUT-sheet.png (reference,
