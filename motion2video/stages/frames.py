@@ -201,7 +201,8 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
     time, so the grid video can be encoded while it is generated and never held whole.
 
     Each distinct structure row is generated once (the observed steps are shared by the K cells).
-    ``clock["generation"]`` (when given) accumulates the seconds spent generating.
+    ``clock["generation"]`` (when given) accumulates the seconds spent generating, the reference's encoding and
+    (mesh generator) the fitted meshes of every target included.
 
     Yields:
         (start, frames, previews): frames (t, K, S, S, 3) uint8 generated for steps start..start+t-1,
@@ -210,6 +211,7 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
     net = getattr(model, "model", model)
     warp = is_warp(net)
     mesh = is_mesh(net)
+    t0 = time.perf_counter()
     if mesh:  # the meshes of every target row, once
         with torch_threads(threads):
             video = mesh_setup(net, reference, structures)
@@ -221,6 +223,8 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
         if structures.size != size:
             raise ValueError(f"structures are {structures.size} px but the generator makes {size} px frames")
         ref_structure = structure_maps(structures, slice(0, 1))[0]
+    if clock is not None:  # fitting the reference and the target meshes is part of generating
+        clock["generation"] = clock.get("generation", 0.0) + time.perf_counter() - t0
     steps = structures.observed + structures.horizon
     for start in range(0, steps, chunk):
         rows = timeline_rows(structures, start, min(steps, start + chunk))  # (t, K)
