@@ -4,7 +4,6 @@ exit code 2 and no output file."""
 from __future__ import annotations
 
 import re
-
 from pathlib import Path
 
 import numpy as np
