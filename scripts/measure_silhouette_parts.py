@@ -49,21 +49,15 @@ def nearest_bone(mask: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def extend_colours(images: np.ndarray, source: np.ndarray, fill: np.ndarray) -> np.ndarray:
     """Copies of (N, S, S, 3) ``images`` whose ``fill`` pixels take the colour of the nearest ``source`` pixel
-    (both (N, S, S) bool): what a generator would paint there if its silhouette reached them and it extended its
-    neighbouring colours."""
-    import cv2
+    (both (N, S, S) bool; :func:`motion2video.frames.mesh_warp.fill_outside_person`): what a generator would paint
+    there if its silhouette reached them and it extended its neighbouring colours."""
+    import torch
 
-    out = images.copy()
-    for i in range(len(images)):
-        if not source[i].any() or not fill[i].any():
-            continue
-        _, label = cv2.distanceTransformWithLabels((~source[i]).astype(np.uint8), cv2.DIST_L2, 5,
-                                                   labelType=cv2.DIST_LABEL_PIXEL)
-        ys, xs = np.nonzero(source[i])
-        table = np.zeros((label.max() + 1, 3), np.uint8)
-        table[label[ys, xs]] = images[i][ys, xs]
-        out[i][fill[i]] = table[label[fill[i]]]
-    return out
+    from motion2video.frames.mesh_warp import fill_outside_person
+
+    nearest = fill_outside_person(torch.from_numpy(images).permute(0, 3, 1, 2),
+                                  torch.from_numpy(source.astype(np.float32))).permute(0, 2, 3, 1).numpy()
+    return np.where(fill[..., None], nearest, images)
 
 
 def main() -> None:
