@@ -9,6 +9,8 @@ Per method (the generator, copy-reference, limb-warp, and named baseline generat
 - ``l1``: mean absolute error of the whole frame, in [0, 1] (the field's L1);
 - ``psnr``, ``ssim`` of the whole frame; ``person_psnr``, ``person_ssim``, ``person_sharpness`` over the
   person, whose mask is BlazePose's segmentation of the real frame;
+- ``head_psnr``, ``head_ssim`` over the head: a square around the truth frame's head and neck joints
+  (:func:`head_box_masks`);
 - ``akd``: average keypoint distance (pixels at the generator's size) between the pose BlazePose finds on
   the generated frame and the one it finds on the real frame (17 canonical joints), over the frames where
   both are found; ``akd_missing``: the share of frames where the generated one has no pose.
@@ -32,6 +34,11 @@ from motion2video.pose.track import VideoTrack
 from motion2video.stages.people import video_track
 
 CROP_MARGIN = 0.1
+# head_box_masks: the head's square is centred between the neck/nose and head joints, its side this many times the
+# thorax-to-head distance (Human3.6M: 236 mm, about a head's height; 1.2 takes in the chin and the hair at the
+# sides), and at least MIN_HEAD_BOX_PX pixels.
+HEAD_BOX_SCALE = 1.2
+MIN_HEAD_BOX_PX = 4
 
 
 @dataclass(frozen=True)
@@ -198,6 +205,22 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
                    mesh_tgt_masks=grow_masks(track.masks[1:], margin))
 
 
+def head_box_masks(points: np.ndarray, size: int) -> np.ndarray:
+    """(N, S, S) bool: the head of each frame, a square around its canonical joints (N, 17, 2) (pixels): centred
+    between the neck/nose and the head joint, its side :data:`HEAD_BOX_SCALE` times the thorax-to-head distance
+    (at least :data:`MIN_HEAD_BOX_PX`), clipped to the frame."""
+    from motion2video.core.skeletons import HEAD, NECK, THORAX
+
+    pts = np.asarray(points, np.float64)
+    centre = 0.5 * (pts[:, NECK] + pts[:, HEAD])  # (N, 2)
+    side = np.maximum(HEAD_BOX_SCALE * np.linalg.norm(pts[:, HEAD] - pts[:, THORAX], axis=-1), MIN_HEAD_BOX_PX)
+    grid = np.arange(size) + 0.5  # pixel centres
+    lo, hi = centre - side[:, None] / 2, centre + side[:, None] / 2  # (N, 2)
+    inside_x = (grid[None] >= lo[:, :1]) & (grid[None] < hi[:, :1])  # (N, S)
+    inside_y = (grid[None] >= lo[:, 1:]) & (grid[None] < hi[:, 1:])
+    return inside_y[:, :, None] & inside_x[:, None, :]
+
+
 def keypoint_distance(pred: np.ndarray, truth_points: np.ndarray, model: BlazePose | None = None
                       ) -> tuple[float, float]:
     """AKD and the missing rate: BlazePose on each (S, S, 3) predicted frame against the truth's joints.
@@ -272,7 +295,8 @@ def evaluate_video_frames(model, frames: VideoFrames, *, video: str | Path, base
     if getattr(model, "kind", None) == "mesh" or any(getattr(m, "kind", None) == "mesh"
                                                      for m in (baseline_models or {}).values()):
         pairs = with_mesh(pairs, frames)
-    evaluation = evaluate_pairs(model, pairs, domain="body", baseline_models=baseline_models)
+    evaluation = evaluate_pairs(model, pairs, domain="body", baseline_models=baseline_models,
+                                tgt_head_masks=head_box_masks(pairs.tgt_points, pairs.tgt_images.shape[1]))
     truth = truth_points(pairs.tgt_images, pairs.tgt_points, pose_model)
     l1, akd, missing = {}, {}, {}
     for name in evaluation.results:
