@@ -20,6 +20,7 @@ NaN.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +29,7 @@ import numpy as np
 import torch
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
+from motion2video.frames.background import composite, inpaint_background, soft_matte
 from motion2video.frames.baselines import BASELINES, run_baseline
 from motion2video.frames.data import FramePairs, evaluation_pair_index, make_pairs
 from motion2video.frames.specs import FrameSequences
@@ -315,17 +317,40 @@ def run_generator(model: FrameGenerator | WarpGenerator | MeshWarpGenerator, pai
 
 @torch.inference_mode()
 def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: int = 16) -> np.ndarray:
-    """(N, H, W, 3) uint8 frames of the mesh generator on pairs that carry their mesh correspondence."""
+    """(N, H, W, 3) uint8 frames of the mesh generator on pairs that carry their mesh correspondence.
+
+    Pairs of real frames with a fitted body (``mesh_ref_masks`` given) are drawn as ``synthesize`` draws them: the
+    reference's person (its segmentation joined with the fitted silhouette) inpainted
+    (:func:`motion2video.frames.background.inpaint_background`) is the plate, and the generated person is laid
+    over it through its soft matte (:func:`~motion2video.frames.background.soft_matte`). Rendered pairs keep the
+    generator's own composite over its plate (:func:`~motion2video.frames.mesh_warp.mesh_plate`), as in training.
+    """
     if pairs.mesh_flow is None:
         raise ValueError("the mesh generator needs pairs with their mesh correspondence (sequences that keep "
                          "their mesh vertices)")
     model.eval()
     out = []
+    backgrounds: dict[bytes, np.ndarray] = {}  # one inpainting per distinct reference (and its masks)
     for i in range(0, len(pairs), batch_size):
         part = pairs.subset(slice(i, i + batch_size))
-        x = model(images_to_tensor(part.ref_images), *mesh_inputs(part), torch.from_numpy(part.tgt_structures),
-                  source_mask=mesh_source_mask(part))
-        out.append((x.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy())
+        inputs = mesh_inputs(part)
+        if part.mesh_ref_masks is None:
+            x = model(images_to_tensor(part.ref_images), *inputs, torch.from_numpy(part.tgt_structures),
+                      source_mask=mesh_source_mask(part))
+            out.append((x.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy())
+            continue
+        behind = []
+        for image, person, fitted in zip(part.ref_images, part.ref_masks, part.mesh_ref_masks):
+            key = hashlib.sha1(image.tobytes() + np.packbits(person | fitted).tobytes()).digest()
+            if key not in backgrounds:
+                backgrounds[key] = inpaint_background(image, person | fitted)
+            behind.append(backgrounds[key])
+        behind = np.stack(behind)
+        parts = model.forward_parts(images_to_tensor(part.ref_images), *inputs, torch.from_numpy(part.tgt_structures),
+                                    plate=images_to_tensor(behind), source_mask=mesh_source_mask(part))
+        person = parts.person.clamp(0, 1).permute(0, 2, 3, 1).numpy()
+        matte = soft_matte(parts.alpha[:, 0].numpy())
+        out.append(np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)]))
     return np.concatenate(out)
 
 

@@ -259,6 +259,9 @@ class MeshWarpOutput:
         alpha: (B, 1, H, W) the person's coverage.
         flow: (B, H, W, 2) the final backward flow, reference pixels.
         plate: (B, 3, H, W) the background without the reference person.
+        person: (B, 3, H, W) the person's colours, ``visibility * warped + (1 - visibility) * inpainting`` (what
+            ``image`` lays over the plate through ``alpha``; :func:`motion2video.frames.background.composite` lays
+            it over a full-resolution background).
     """
 
     image: torch.Tensor
@@ -268,6 +271,7 @@ class MeshWarpOutput:
     alpha: torch.Tensor
     flow: torch.Tensor
     plate: torch.Tensor
+    person: torch.Tensor
 
 
 class MeshWarpGenerator(nn.Module):
@@ -335,7 +339,7 @@ class MeshWarpGenerator(nn.Module):
         person = vis * warped + (1.0 - vis) * inpainting
         image = alpha * person + (1.0 - alpha) * plate
         return MeshWarpOutput(image=image, warped=warped, inpainting=inpainting, visibility=vis, alpha=alpha,
-                              flow=final_flow, plate=plate)
+                              flow=final_flow, plate=plate, person=person)
 
     def forward(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor, visibility: torch.Tensor,
                 silhouette: torch.Tensor, tgt_structure: torch.Tensor, source_mask: torch.Tensor | None = None

@@ -16,9 +16,10 @@ for a video:
    vertex's pixel and front-surface flag go through the placement's 2D similarity onto the reference picture
    and into the generator's person crop; :func:`motion2video.frames.mesh_flow.dense_flow` makes the flow.
 
-The crop and the paste follow the keypoint warp generator's (:func:`motion2video.frames.warp.person_crop`,
-:func:`~motion2video.frames.warp.paste_mask`): the person is generated at the model's size inside a square crop
-holding both poses and pasted back with a feathered mask, so the background keeps its resolution.
+The crop follows the keypoint warp generator's (:func:`motion2video.frames.warp.person_crop`): the person is generated
+at the model's size inside a square crop holding both poses and composited with a soft matte over the reference
+picture with its person inpainted at the output's resolution (:func:`reference_background`), so the background keeps
+its resolution and the reference person leaves no ghost.
 """
 
 from __future__ import annotations
@@ -203,6 +204,8 @@ class MeshVideo:
             (:func:`clothes_margin`); every silhouette is grown by it.
         uv_sources: (V,) int64, or None: after the surface completion, vertex v samples where vertex
             ``uv_sources[v]`` does (:func:`hand_colour_sources`: a fitted hand sampling beside the pictured hand).
+        background: (S_out, S_out, 3) uint8 the reference picture with its person inpainted
+            (:func:`reference_background`), or None (made from the fitted silhouette and the joints when needed).
     """
 
     crop: tuple[int, int, int]
@@ -213,6 +216,7 @@ class MeshVideo:
     person: np.ndarray | None = None
     margin: int = 0
     uv_sources: np.ndarray | None = None
+    background: np.ndarray | None = None
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
@@ -272,8 +276,42 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     ref_pts = (np.asarray(reference_points, np.float64) - [x0, y0]) * k
     tgt_pts = (np.asarray(target_rows, np.float64) - [x0, y0]) * k
     margin = 0 if small is None else clothes_margin(small, ref.masks[0])
-    return MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32), person=small,
-                     margin=margin, uv_sources=sources)
+    video = MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32), person=small,
+                      margin=margin, uv_sources=sources)
+    if image is not None:
+        video.background = reference_background(image, video, None if person is None else person.mask,
+                                                 reference_points)
+    return video
+
+
+def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray | None,
+                         points: np.ndarray) -> np.ndarray:
+    """(S, S, 3) uint8: the reference picture with its person inpainted
+    (:func:`motion2video.frames.background.inpaint_background`), the background every generated person is
+    composited over.
+
+    The hole is the person BlazePose segments (or the picture's alpha channel, ``person`` (S, S) in [0, 1]) joined
+    with the fitted reference body's silhouette grown by the clothes margin, which covers a limb the segmentation
+    missed; with no segmented person, the silhouette joined with the pose's limbs drawn thick
+    (:func:`motion2video.frames.warp.limb_region` of ``points`` (17, 2), output pixels), as hair and clothes reach
+    past the body model.
+    """
+    import cv2
+
+    from motion2video.frames.background import inpaint_background
+    from motion2video.frames.mesh_flow import grow_masks
+    from motion2video.frames.warp import limb_region
+
+    h, w = image.shape[:2]
+    x0, y0, side = video.crop
+    silhouette = grow_masks(video.reference.masks[:1, None], video.margin)[0, 0].astype(np.float32)
+    hole = np.zeros((h, w), np.float32)
+    hole[y0:y0 + side, x0:x0 + side] = cv2.resize(silhouette, (side, side), interpolation=cv2.INTER_LINEAR)
+    if person is not None and (np.asarray(person) > 0.5).any():
+        hole = np.maximum(hole, np.asarray(person, np.float32))
+    else:
+        hole = np.maximum(hole, limb_region(points, width=w, height=h).astype(np.float32))
+    return inpaint_background(image, hole)
 
 
 # clothes_margin: the quantile, over the fitted silhouette's outline, of how far the person reaches past each outline
@@ -717,7 +755,10 @@ def reference_crop(image: np.ndarray, crop: tuple[int, int, int], size: int) -> 
 
 def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndarray, *,
                          batch_size: int = 8) -> np.ndarray:
-    """Frames of the mesh generator for target ``rows`` of ``video``, pasted into the reference.
+    """Frames of the mesh generator for target ``rows`` of ``video``: the generated person (at the model's size,
+    resized to the crop) laid over the reference's background (``video.background``, :func:`reference_background`)
+    through its soft matte (:func:`motion2video.frames.background.soft_matte` of the generator's alpha), so where
+    the reference person stood shows the background, and no background colour is mixed into the person.
 
     Args:
         net: a :class:`motion2video.frames.mesh_warp.MeshWarpGenerator`.
@@ -727,25 +768,27 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     Returns:
         (R, S, S, 3) uint8.
     """
+    import cv2
     import torch
 
+    from motion2video.frames.background import composite, soft_matte
     from motion2video.frames.data import body_structures
     from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.frames.mesh_warp import mesh_plate, sampled_colours
-    from motion2video.frames.warp import MASK_SHARPNESS, part_logits, paste_generated, paste_mask
+    from motion2video.frames.mesh_warp import sampled_colours
 
     size = net.config.image_size
     x0, y0, side = video.crop
-    crop = image[y0:y0 + side, x0:x0 + side]
     small = reference_crop(image, video.crop, size)
     x_ref = torch.from_numpy(np.ascontiguousarray(small)).permute(2, 0, 1)[None].float() / 255.0
     ref_mask = torch.from_numpy(grow_masks(video.reference.masks[:1, None], video.margin).astype(np.float32))
-    # The background plate removes the mesh's silhouette and the keypoint warp's person region: a real person's
-    # hair and clothes reach past the Anny mesh.
-    ref_pts = torch.from_numpy(video.ref_points[None]).float()
-    region = 1.0 - torch.softmax(MASK_SHARPNESS * part_logits(ref_pts, size, size), dim=1)[:, -1:]
-    plate = mesh_plate(x_ref, torch.maximum(ref_mask, (region > 0.05).float()))
-    out = np.repeat(image[None], len(rows), axis=0)
+    background = video.background
+    if background is None:
+        background = reference_background(image, video, None, (video.ref_points * side / size) + [x0, y0])
+    # the network's plate is the same background, at its size
+    plate = torch.from_numpy(np.ascontiguousarray(reference_crop(background, video.crop, size))).permute(2, 0, 1)[
+        None].float() / 255.0
+    behind = background[y0:y0 + side, x0:x0 + side]
+    out = np.repeat(background[None], len(rows), axis=0)
     colours = sampled_colours(x_ref, ref_mask, plate, sampled_person(video))  # once for every target
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], image=small)
     if video.uv_sources is not None:  # a fitted hand beside the pictured one samples the pictured one
@@ -763,10 +806,12 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
                                       torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                       sil, structure, plate=plate.expand(n, -1, -1, -1),
                                       colours=colours.expand(n, -1, -1, -1))
-            gen = parts.image.clamp(0, 1).permute(0, 2, 3, 1).numpy()
-            region = np.maximum(parts.alpha[:, 0].numpy(), ref_mask[0].numpy())
-            alpha = paste_mask(region, size)
-            paste_generated(out[start:start + n], crop, (x0, y0, side), gen, alpha)
+            person = parts.person.clamp(0, 1).permute(0, 2, 3, 1).numpy()  # (n, size, size, 3)
+            alpha = parts.alpha[:, 0].numpy()  # (n, size, size)
+            if side != size:
+                person = np.stack([cv2.resize(p, (side, side), interpolation=cv2.INTER_CUBIC) for p in person])
+                alpha = np.stack([cv2.resize(a, (side, side), interpolation=cv2.INTER_LINEAR) for a in alpha])
+            out[start:start + n, y0:y0 + side, x0:x0 + side] = composite(behind, person, soft_matte(alpha))
     return out
 
 

@@ -170,6 +170,17 @@ def read_reference_image(path: str | Path) -> tuple[np.ndarray, tuple[str, ...]]
     return np.ascontiguousarray(image), tuple(notes)
 
 
+def reference_alpha(path: str | Path) -> np.ndarray | None:
+    """(H, W) float32 in [0, 1]: the alpha channel of a cut-out reference image (grey + alpha or RGBA, 8 or 16 bit)
+    whose alpha is below one half somewhere; None for an image without alpha or opaque everywhere (an RGBA file
+    whose alpha is 255 on every pixel is no cut-out). The caller has read the image (:func:`read_reference_image`)."""
+    image = cv2.imdecode(np.fromfile(Path(path), np.uint8), cv2.IMREAD_UNCHANGED)
+    if image is None or image.ndim != 3 or image.shape[2] not in (2, 4):
+        return None
+    alpha = image[..., -1].astype(np.float32) / (65535.0 if image.dtype == np.uint16 else 255.0)
+    return alpha if float(alpha.min()) < 0.5 else None
+
+
 @dataclass(frozen=True)
 class ImageFit:
     """How an image was made square and resized: ``out = in * scale + offset`` in pixels."""
@@ -427,6 +438,10 @@ def load_reference(path: str | Path, *, size: int, domain: str,
                              "frames", pose_path)
     elif domain == "body":
         pose, person = estimate_reference_pose(image, path)
+        alpha = reference_alpha(path)
+        if person is not None and alpha is not None:  # a cut-out's own matte is the person, sharper than a segmentation
+            person = replace(person, mask=alpha)
+            notes.append("the person is the image's alpha channel (a cut-out)")
         if pose is not None:
             notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
                          f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "

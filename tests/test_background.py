@@ -1,0 +1,131 @@
+"""The background behind the reference person and the soft matte the generated person is laid over it with.
+
+Real parts: a real photo of ../shared/data/photos (a woman in blue on a beige wall), BlazePose's segmentation of it,
+a cut-out with an alpha channel, the shipped mesh generator.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from motion2video.frames.background import composite, inpaint_background, person_hole, soft_matte
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def blue_share(pixels: np.ndarray) -> float:
+    """The share of (N, 3) RGB pixels that are the woman's clothes' blue (blue 25 levels over red): the beige wall,
+    the wooden door and the grey floor behind her are none of them."""
+    c = np.asarray(pixels, np.int64)
+    return float(np.mean(c[:, 2] > c[:, 0] + 25))
+
+
+@pytest.fixture(scope="module")
+def tracksuit(photos_dir) -> tuple[np.ndarray, np.ndarray]:
+    """``woman_blue_tracksuit.jpg`` at 512 px high and BlazePose's person probability on it."""
+    from motion2video.pose.estimate import default_model, estimate_image
+
+    image = cv2.cvtColor(cv2.imread(str(photos_dir / "woman_blue_tracksuit.jpg")), cv2.COLOR_BGR2RGB)
+    scale = 512 / image.shape[0]
+    image = cv2.resize(image, (round(image.shape[1] * scale), 512), interpolation=cv2.INTER_AREA)
+    found = estimate_image(image, model=default_model())
+    return image, found.landmarks.person_mask(found.width, found.height)
+
+
+def test_a_real_photos_inpainted_background_keeps_none_of_the_persons_colours(tracksuit):
+    image, person = tracksuit
+    region = person > 0.5
+    background = inpaint_background(image, person)
+    assert background.shape == image.shape and background.dtype == np.uint8
+    hole = person_hole(person)
+    np.testing.assert_array_equal(background[~hole], image[~hole])  # only the hole changes
+    assert blue_share(image[region]) > 0.5  # she is in blue (0.78)
+    assert blue_share(background[region]) < 0.01  # none of it left (0.000)
+    # the filled region's colour is the background's around it, not hers
+    ring = (cv2.dilate(hole.astype(np.uint8), np.ones((15, 15), np.uint8)) > 0) & ~hole
+    filled, around, hers = (x.reshape(-1, 3).mean(0) for x in (background[region], image[ring], image[region]))
+    assert np.linalg.norm(filled - around) < 0.5 * np.linalg.norm(filled - hers)
+
+
+def test_an_image_without_a_person_comes_back_unchanged():
+    image = np.random.default_rng(0).integers(0, 256, (32, 48, 3), dtype=np.uint8)
+    np.testing.assert_array_equal(inpaint_background(image, np.zeros((32, 48))), image)
+
+
+def test_the_soft_matte_is_in_0_1_and_feathered():
+    """The generator's alpha of a disc (0.018 outside, 0.982 inside: its sigmoid around the silhouette) becomes a
+    matte that is exactly 1 inside and 0 outside, with a ramp of a few pixels at the outline."""
+    yy, xx = np.mgrid[:128, :128]
+    r = np.hypot(xx - 63.5, yy - 63.5)
+    alpha = np.where(r < 30, 0.982, 0.018).astype(np.float32)
+    matte = soft_matte(alpha[None])[0]
+    assert matte.min() >= 0 and matte.max() <= 1
+    assert (matte[r < 26] > 0.999).all() and (matte[r > 34] < 0.001).all()
+    ramp = matte[(r > 28) & (r < 32)]
+    assert ((ramp > 0.02) & (ramp < 0.98)).mean() > 0.5  # feathered, not a hard cut
+    profile = matte[64, 64:]  # from the centre outward: never rising
+    assert (np.diff(profile) <= 1e-6).all()
+    # laid over a background: the person's colour inside, the background's outside, a mix on the ramp
+    person = np.zeros((1, 128, 128, 3), np.float32)
+    person[..., 2] = 1.0
+    out = composite(np.full((128, 128, 3), 200, np.uint8), person, matte[None])[0]
+    assert (out[r < 26] == [0, 0, 255]).all() and (out[r > 34] == 200).all()
+
+
+def test_a_cut_outs_alpha_is_the_reference_person(photos_dir, tmp_path):
+    from motion2video.stages.reference import load_reference, reference_alpha
+
+    path = photos_dir / "fashion_woman_shorts.png"
+    alpha = reference_alpha(path)
+    assert alpha is not None and alpha.shape == (670, 540) and 0.8 < float((alpha < 0.5).mean()) < 0.9
+    reference = load_reference(path, size=256, domain="body")
+    assert any("alpha channel" in note for note in reference.notes)
+    mask = reference.person.mask
+    soft = (mask > 0.02) & (mask < 0.98)
+    assert soft.any() and float((mask > 0.5).mean()) > 0.05
+    # an RGBA file opaque everywhere is no cut-out: BlazePose's segmentation stays the person
+    opaque = tmp_path / "opaque.png"
+    rgb = cv2.imread(str(photos_dir / "skier.jpg"))
+    cv2.imwrite(str(opaque), np.dstack([rgb, np.full(rgb.shape[:2], 255, np.uint8)]))
+    assert reference_alpha(opaque) is None
+    assert reference_alpha(photos_dir / "skier.jpg") is None
+
+
+def test_no_ghost_where_the_photos_person_stood(photos_dir):
+    """synthesize's mesh path on the real photo, the person walking 0.6 m to the side: where she stood and no
+    generated person now covers shows the background, and inside the generated person no background colour is mixed
+    in (every pixel deep inside the matte is the generator's own colour)."""
+    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.frames.mesh_flow import grow_masks
+    from motion2video.stages.frames import mesh_setup
+    from motion2video.stages.mesh_frames import generate_mesh_frames
+    from motion2video.stages.reference import load_reference
+    from motion2video.stages.sampling import Forecast
+    from motion2video.stages.structure import render_structures
+
+    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
+    aside = walk[2:4] + [0.6, 0.0, 0.0]
+    forecast = Forecast(observed=walk[:2], futures=aside[None], fps=25.0, layout="body3d", model="test", seed=0)
+    reference = load_reference(photos_dir / "woman_blue_tracksuit.jpg", size=256, domain="body", crop_person=True)
+    net = load_frame_model("frames-body-mesh-256").model
+    structures = render_structures(forecast, domain="body", size=256, reference=reference)
+    video = mesh_setup(net, reference, structures)
+    assert video.background is not None
+    frame = generate_mesh_frames(net, reference.image, video, np.array([3]))[0]
+    stood = reference.person.mask > 0.5
+    x0, y0, side = video.crop
+    now = np.zeros((256, 256), bool)
+    grown = grow_masks(video.targets.masks[3:4, None], video.margin + 6)[0, 0]
+    now[y0:y0 + side, x0:x0 + side] = cv2.resize(grown.astype(np.uint8), (side, side),
+                                                  interpolation=cv2.INTER_NEAREST) > 0
+    left = stood & ~now
+    assert left.sum() > 2000  # she moved: much of where she stood is uncovered
+    assert blue_share(reference.image[left]) > 0.5  # it was her blue
+    assert blue_share(frame[left]) < 0.02  # now it is the background
