@@ -61,7 +61,36 @@ def test_evaluate_frames_video_command(dancer_clip, tmp_path, capsys):
     assert set(results) == {"generator", "copy-reference", "limb-warp"}
     for scores in results.values():
         assert 0 <= scores["l1"] <= 1 and scores["person_psnr"] > 0 and 0 <= scores["akd_missing"] <= 1
+        assert np.isfinite(scores["head_psnr"]) and np.isfinite(scores["head_ssim"])
     # copy-reference is frame 0 itself: BlazePose finds the dancer in it, at her frame-0 pose
     assert results["copy-reference"]["akd_missing"] == 0 and results["copy-reference"]["akd"] > 0
     assert main(["evaluate-frames", "--model", str(model), "--video", str(tmp_path / "nope.mp4")]) == 2
     assert "no such video file" in capsys.readouterr().err
+
+
+def test_head_box_is_a_square_around_the_head_and_neck_joints():
+    from motion2video.evaluation.video_frames import head_box_masks
+
+    points = np.zeros((2, 17, 2))
+    points[:, 8] = (50, 60)  # thorax
+    points[:, 9] = (50, 50)  # neck/nose
+    points[:, 10] = (50, 40)  # head
+    points[1] += (45, -35)  # the second frame's head leaves the top-right corner: the square is clipped
+    boxes = head_box_masks(points, 100)
+    ys, xs = np.nonzero(boxes[0])
+    assert (xs.min(), xs.max(), ys.min(), ys.max()) == (38, 61, 33, 56)  # 24 px = 1.2 x thorax-to-head, centred
+    assert boxes[0].sum() == 24 * 24 and 0 < boxes[1].sum() < 24 * 24
+
+
+def test_the_mesh_generators_reconstruction_has_head_metrics(dancer_clip, tmp_path):
+    """The mesh generator in the protocol (its frames composited over frame 0's inpainted background): every method
+    has finite head PSNR and SSIM over the truth frame's head square."""
+    out = tmp_path / "eval.json"
+    assert main(["evaluate-frames", "--model", "frames-body-mesh-128", "--video", str(dancer_clip),
+                 "--video-frames", "3", "--json", str(out), "--no-progress"]) == 0
+    results = json.loads(out.read_text())["results"]
+    assert {"generator", "copy-reference", "limb-warp"} <= set(results)
+    for name, scores in results.items():
+        assert np.isfinite(scores["head_psnr"]) and 5 < scores["head_psnr"] < 60, name
+        assert np.isfinite(scores["head_ssim"]) and -1 <= scores["head_ssim"] <= 1, name
+    assert results["generator"]["person_psnr"] > 15
