@@ -7,7 +7,10 @@ the reference pose and in the target pose (:mod:`motion2video.frames.mesh_flow`)
 (Liu et al., ICCV 2019) and Dense Pose Transfer (Neverova et al., ECCV 2018):
 
 1. *Background.* The reference person's silhouette (grown by :data:`PLATE_GROW_PX`) is removed from the
-   reference and filled by OpenCV's Telea inpainting: the plate every target frame is composited over.
+   reference and filled by OpenCV's Telea inpainting: the plate every target frame is composited over in training.
+   On a real picture (``synthesize``, the reconstruction protocol) the plate is the picture with its segmented
+   person inpainted at the output's resolution, and the person (:attr:`MeshWarpOutput.person`) is laid over it
+   through a soft matte of ``alpha`` (:mod:`motion2video.frames.background`).
 2. *Prior.* Inside the target silhouette the reference is sampled along the mesh flow; the mesh's visibility
    map says where the reference shows that surface point. The reference person is sampled with the background
    outside it given the nearest person colour (:func:`fill_outside_person`, :func:`person_edge_refined`), so a
