@@ -19,6 +19,9 @@ Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2v
   :func:`~motion2video.stages.frames.generate_video_frames` for the body generator and each
   ``--mesh-frame-model`` (default: the demo's body generator, ``frames-body-mesh-256``, from --weights) side by
   side: the mesh generator's time includes fitting, posing and rendering the body mesh of every frame.
+  ``generators_512``: the same at 512x512 (``synthesize --size 512``): the generators run at their own size on
+  the person's crop, which is laid over the reference's background at 512 (targets: 512 px >= 3 frames/s, 256 px
+  >= 8).
 - ``end_to_end``: K=5 futures x 48 frames after 16 observed, body and face: the wall time of
   :func:`motion2video.apps.synthesize.synthesize` (checkpoint loading included) and each stage timed alone
   (sampling, structure rendering, generation, encoding of the three outputs); ``overhead_ratio`` =
@@ -337,6 +340,9 @@ def main(argv: list[str] | None = None) -> int:
             models[loaded.path.name.removesuffix(".safetensors")] = loaded
         print("videos at 256x256 ...", flush=True)
         result["generators_256"] = bench_video_256(models, files[demo.BODY["motion_model"]], repeats=args.repeats)
+        print("videos at 512x512 ...", flush=True)
+        result["generators_512"] = bench_video_256(models, files[demo.BODY["motion_model"]], repeats=args.repeats,
+                                                   size=512)
         result["end_to_end"] = {}
         for name, spec in (("body", demo.BODY), ("face", demo.FACE)):
             print(f"end to end ({name}) ...", flush=True)

@@ -278,7 +278,9 @@ class VideoEvaluation:
         out.update(protocol="reconstruction: frame 0 is the reference, later frames' poses drive, real frames "
                             "are the truth", video=self.video, num_frames=int(len(self.frame_index)),
                    frames=[int(i) for i in self.frame_index[:1]] + [int(self.frame_index[-1])],
-                   skipped_frames=self.skipped, person_mask="BlazePose segmentation")
+                   skipped_frames=self.skipped, person_mask="BlazePose segmentation",
+                   head_mask=f"a square of {HEAD_BOX_SCALE:g} x the thorax-to-head distance around the truth frame's "
+                             "neck and head joints")
         if self.start_fraction:
             out.update(start_fraction=self.start_fraction, targets_from=int(self.frame_index[1]))
         if self.box is not None:

@@ -771,7 +771,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     import cv2
     import torch
 
-    from motion2video.frames.background import composite, soft_matte
+    from motion2video.frames.background import MATTE_FEATHER_PX, composite, soft_matte
     from motion2video.frames.data import body_structures
     from motion2video.frames.mesh_flow import complete_reference_uv, flows_to_targets, grow_masks
     from motion2video.frames.mesh_warp import sampled_colours
@@ -811,7 +811,10 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             if side != size:
                 person = np.stack([cv2.resize(p, (side, side), interpolation=cv2.INTER_CUBIC) for p in person])
                 alpha = np.stack([cv2.resize(a, (side, side), interpolation=cv2.INTER_LINEAR) for a in alpha])
-            out[start:start + n, y0:y0 + side, x0:x0 + side] = composite(behind, person, soft_matte(alpha))
+            # the feather is MATTE_FEATHER_PX at the model's size: a person enlarged to a bigger output (--size 512)
+            # keeps the model's outline, whose stair of pixels grows with it
+            matte = soft_matte(alpha, feather_px=MATTE_FEATHER_PX * side / size)
+            out[start:start + n, y0:y0 + side, x0:x0 + side] = composite(behind, person, matte)
     return out
 
 
