@@ -25,6 +25,7 @@ stage); an exception it raises stops the work at the next step and leaves no par
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
@@ -116,19 +117,21 @@ def _write_bvh(folder: str | Path, stem: str, sequences: np.ndarray, fps: float,
     return write_bvh_files(check_bvh_dir(folder), stem, sequences, fps)
 
 
-def _render(chunks: Iterable[np.ndarray], fps: float, output: str | Path | None) -> tuple[np.ndarray, Path | None]:
+def _render(chunks: Iterable[np.ndarray], fps: float, output: str | Path | None, *, frames: int = 0,
+            progress: Progress = _no_progress) -> tuple[np.ndarray, Path | None]:
     """A stream of (t, H, W, 3) uint8 chunks as one (T, H, W, 3) array, written to ``output`` (mp4 / GIF) too when
-    given (atomically, as it is drawn)."""
+    given (atomically, as it is drawn); ``progress("frames", done / frames)`` after every chunk."""
     from motion2video.formats.video import VideoWriter
 
-    if output is None:
-        return np.concatenate(list(chunks)), None
-    kept = []
-    with VideoWriter(output, fps) as writer:
+    kept: list[np.ndarray] = []
+    with contextlib.ExitStack() as stack:
+        writer = None if output is None else stack.enter_context(VideoWriter(output, fps))
         for chunk in chunks:
-            writer.write(chunk)
+            if writer is not None:
+                writer.write(chunk)
             kept.append(chunk)
-    return np.concatenate(kept), Path(output)
+            progress("frames", min(1.0, sum(len(c) for c in kept) / max(1, frames)))
+    return np.concatenate(kept), None if output is None else Path(output)
 
 
 def _check_video_output(output: str | Path | None) -> Path | None:
@@ -263,7 +266,8 @@ def synthesize(motion_model, frame_model, clip: str | Path, reference: str | Pat
                size: int | None = None, rigid_bones: bool = False, crop_person: bool = False,
                fit_view: bool = False, reference_pose: str | Path | None = None, fps: float | None = None,
                character: str | Path | None = None, batch_size: int = 4, threads: int | None = None,
-               output: str | Path | None = None, progress: Progress | None = None) -> Synthesis:
+               max_seconds: float | None = None, output: str | Path | None = None,
+               progress: Progress | None = None) -> Synthesis:
     """Observed clip + reference photo -> K futures as frames of the pictured person.
 
     Args:
@@ -276,6 +280,7 @@ def synthesize(motion_model, frame_model, clip: str | Path, reference: str | Pat
         samples, observed, horizon, start, seed, rigid_bones, fps, character: as in :func:`sample`.
         size: output frame size (default: the frame model's).
         batch_size, threads: generator frames per pass and torch threads (default: half the cores, 1 to 4).
+        max_seconds: refuse a video clip longer than this (:func:`estimate_pose`).
         output: ``OUT.mp4``: also write it, ``OUT-structure.mp4`` and ``OUT-sheet.png`` (all three or none).
         progress: ``progress(stage, fraction)``: ``"pose estimation"`` (video clips), ``"loading"``,
             ``"sampling"``, ``"structures"``, ``"frames"``.
@@ -288,7 +293,7 @@ def synthesize(motion_model, frame_model, clip: str | Path, reference: str | Pat
     report = progress or _no_progress
     if is_video(clip):
         report(POSE_STAGE, 0.0)
-        estimate_pose(clip)  # cached by the file's hash: the clip's loading below reads it back
+        estimate_pose(clip, max_seconds=max_seconds)  # cached by the file's hash: the loading below reads it back
     config = SynthesisConfig(samples=samples, observed=observed, horizon=horizon, start=start, seed=seed,
                              batch_size=batch_size, generator_threads=threads, size=size, rigid_bones=rigid_bones,
                              character=None if character is None else str(character), input_fps=fps,
@@ -353,7 +358,8 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
              frame_model=None, reference: str | Path | None = None, reference_pose: str | Path | None = None,
              crop_person: bool = False, fit_view: bool = False, fps: float | None = None,
              character: str | Path | None = None, render: bool = False, size: int = 256,
-             output: str | Path | None = None, progress: Progress | None = None) -> Transfer:
+             max_seconds: float | None = None, output: str | Path | None = None,
+             progress: Progress | None = None) -> Transfer:
     """Re-enact the behaviour of ``behavior`` from ``target``'s posture at ``target_frame``, or ``samples`` new
     behaviours drawn through the flow (exactly one of the two).
 
@@ -366,6 +372,7 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
             ``reference`` is given: the frame generator ``frame_model`` animates the photo).
         render: also draw the side-by-side video into ``Transfer.video`` (``size`` px cells); implied by
             ``output`` (.mp4 or .gif).
+        max_seconds: refuse a video clip longer than this (:func:`estimate_pose`).
         progress: ``progress(stage, fraction)``: ``"pose estimation"`` (video clips), ``"loading"``,
             ``"sampling"`` (the re-enactment), ``"frames"``.
     Returns:
@@ -388,7 +395,7 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
     for clip in (target, behavior):
         if clip is not None and is_video(clip):
             report(POSE_STAGE, 0.0)
-            estimate_pose(clip)
+            estimate_pose(clip, max_seconds=max_seconds)
     report("loading", 0.0)
     style = requested_style(style, reference)
     bundle = _motion_model(model)
@@ -419,7 +426,8 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
     if render or out is not None:
         report("frames", 0.0)
         video, path = _render(iter_transfer(result, style=style, size=size, frame_model=frames_model,
-                                            reference=ref), result.fps, out)
+                                            reference=ref), result.fps, out, frames=result.reenacted.shape[1],
+                              progress=report)
     return Transfer(source=result.source, reenacted=result.reenacted, z=result.z, fps=float(result.fps),
                     layout=result.layout, style=style, notes=() if ref is None else tuple(ref.notes), video=video,
                     path=path)

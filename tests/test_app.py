@@ -1,0 +1,152 @@
+"""`motion2video app` in a real browser: the CLI serves the page, headless Chromium (Debian's, through Playwright)
+uploads a photo and a real BVH clip, presses Animate, waits for the futures to play, downloads the files and reads
+them back with the project's readers; a photo with nobody in it shows the CLI's one-line message, and the app keeps
+serving."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from motion2video import load_motion, read_video
+
+REPO = Path(__file__).resolve().parents[1]
+FUTURE_FRAMES = 8
+OBSERVED = 16  # mtvae-add's observed window
+
+
+def _chromium() -> str:
+    path = shutil.which("chromium") or shutil.which("chromium-browser")
+    if path is None:
+        pytest.fail("Debian's chromium is needed for the app test (make setup-test, which make test runs, installs it: "
+                    "apt-get install chromium)")
+    return path
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def app_url(tmp_path_factory):
+    """The app served by the CLI on a free port with the fastest models (mtvae-add, frames-body-128), one future of
+    8 frames; its address as printed."""
+    work = tmp_path_factory.mktemp("app-work")
+    env = {**os.environ, "PYTHONPATH": str(REPO), "PYOPENGL_PLATFORM": "osmesa"}
+    command = [sys.executable, "-m", "motion2video.cli", "app", "--port", str(_free_port()), "--motion-model",
+               "mtvae-add", "--frame-model", "frames-body-128", "--samples", "1", "--horizon", str(FUTURE_FRAMES),
+               "--work-dir", str(work)]
+    proc = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        line, deadline = "", time.monotonic() + 120
+        while "serving on" not in line and time.monotonic() < deadline and proc.poll() is None:
+            line = proc.stdout.readline()
+        if "serving on" not in line:
+            pytest.fail(f"the app did not start: {line!r} (exit code {proc.poll()})")
+        url = line.split("serving on ")[1].split()[0]
+        assert url.startswith("http://127.0.0.1:")  # the local address by default
+        yield url
+    finally:
+        proc.terminate()  # SIGTERM: the CLI stops like Ctrl-C
+        assert proc.wait(timeout=30) == 143
+
+
+def _downloads(page, folder: Path) -> dict[str, Path]:
+    """Click every download link of the page's downloads list and save what the browser receives."""
+    folder.mkdir()
+    files = {}
+    for link in page.locator("#downloads a[download]").all():
+        with page.expect_download() as info:
+            link.click()
+        download = info.value
+        files[download.suggested_filename] = folder / download.suggested_filename
+        download.save_as(files[download.suggested_filename])
+    return files
+
+
+def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_dir, tmp_path):
+    from playwright.sync_api import sync_playwright
+
+    wall = tmp_path / "wall.png"
+    cv2.imwrite(str(wall), np.full((240, 180, 3), 200, np.uint8))  # a photo with nobody in it
+    photo = shared_dir / "data" / "photos" / "woman_blue_tracksuit.jpg"
+    clip = shared_dir / "data" / "mocap" / "mass" / "mass_walk.bvh"  # 1.1 s of real capture at 120 fps
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=_chromium(),
+                                    args=["--no-sandbox", "--autoplay-policy=no-user-gesture-required"])
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 1000}, accept_downloads=True)
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(app_url)
+            page.wait_for_selector("#animate")
+            page.locator("#clip input[type=file]").set_input_files(clip)
+            page.wait_for_selector("#clip :text('mass_walk.bvh')", timeout=60_000)  # uploaded
+            page.locator("#photo input[type=file]").set_input_files(wall)
+            page.wait_for_selector("#photo img", timeout=60_000)
+
+            page.click("#animate")
+            page.wait_for_function("() => document.querySelector('#status').innerText.includes('error')",
+                                   timeout=120_000)
+            message = page.inner_text("#status").strip()
+            assert message.startswith("motion2video synthesize: error:") and "wall.png" in message
+            assert "no person found" in message and "\n" not in message  # the CLI's one line
+
+            page.locator("#photo input[type=file]").set_input_files(photo)  # the app still serves: a real photo now
+            page.click("#animate")
+            page.wait_for_function("""() => { const v = document.querySelector('#futures video');
+                return v && v.readyState >= 2 && v.currentTime > 0 && !v.paused }""", timeout=180_000)
+            structure = page.evaluate("() => { const v = document.querySelector('#structure video'); "
+                                      "return v ? [v.readyState, v.videoWidth, v.videoHeight] : null }")
+            status = page.inner_text("#status")
+            page.screenshot(path=tmp_path / "app.png", full_page=True)
+            files = _downloads(page, tmp_path / "downloads")
+            assert errors == []
+        finally:
+            browser.close()
+
+    assert f"1 future of {FUTURE_FRAMES} frames after {OBSERVED} observed" in status
+    assert structure is not None and structure[0] >= 2 and structure[1:] == [128, 128]  # one cell
+    assert sorted(files) == ["future_1.bvh", "future_1.npz", "futures-structure.mp4", "futures.mp4"]
+    frames, fps = read_video(files["futures.mp4"])
+    assert frames.shape == (OBSERVED + FUTURE_FRAMES, 128, 128, 3) and fps == pytest.approx(25.0)
+    assert frames[:, 20:110, 20:110].std() > 10  # a person on a background, not a blank picture
+    structure_frames, _ = read_video(files["futures-structure.mp4"])
+    assert structure_frames.shape == frames.shape
+    future = load_motion(files["future_1.npz"])
+    assert future.skeleton == "h36m-17" and future.joints.shape == (OBSERVED + FUTURE_FRAMES, 17, 3)
+    assert future.fps == 25.0 and np.isfinite(future.joints).all()
+    bvh = load_motion(files["future_1.bvh"])
+    assert bvh.skeleton == "h36m-17" and bvh.num_frames == OBSERVED + FUTURE_FRAMES
+    # the BVH holds the same motion, up to its rig's fit: the pelvis path within a centimetre
+    pelvis = bvh.joints[:, 0] - bvh.joints[0, 0]
+    np.testing.assert_allclose(pelvis, future.joints[:, 0] - future.joints[0, 0], atol=0.01)
+
+
+def test_the_cli_lists_app_without_importing_gradio():
+    code = ("import sys; from motion2video.cli import build_parser; "
+            "build_parser().parse_args(['app', '--port', '0']); print('gradio' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO,
+                         env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert out.stdout.strip() == "False", out.stdout + out.stderr
+
+
+def test_bad_app_options_give_one_line_and_exit_2(capsys):
+    from motion2video.cli import main
+
+    assert main(["app", "--port", "70000"]) == 2
+    assert capsys.readouterr().err.strip() == "motion2video app: error: --port must be in 0..65535, got 70000"
+    assert main(["app", "--samples", "0"]) == 2
+    assert "--samples must be >= 1, got 0" in capsys.readouterr().err
