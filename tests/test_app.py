@@ -62,11 +62,11 @@ def app_url(tmp_path_factory):
         assert proc.wait(timeout=30) == 143
 
 
-def _downloads(page, folder: Path) -> dict[str, Path]:
-    """Click every download link of the page's downloads list and save what the browser receives."""
+def _downloads(page, folder: Path, selector: str) -> dict[str, Path]:
+    """Click every download link of a downloads list (``selector``) and save what the browser receives."""
     folder.mkdir()
     files = {}
-    for link in page.locator("#downloads a[download]").all():
+    for link in page.locator(f"{selector} a[download]").all():
         with page.expect_download() as info:
             link.click()
         download = info.value
@@ -112,7 +112,16 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
                                       "return v ? [v.readyState, v.videoWidth, v.videoHeight] : null }")
             status = page.inner_text("#status")
             page.screenshot(path=tmp_path / "app.png", full_page=True)
-            files = _downloads(page, tmp_path / "downloads")
+            files = _downloads(page, tmp_path / "downloads", "#downloads")
+
+            page.get_by_role("tab", name="Behaviour transfer").click()  # bundled walk re-enacts the bundled jump
+            page.locator("#transfer-style label", has_text="skeleton").click()
+            page.locator("#transfer-adapt input").uncheck()
+            page.click("#transfer")
+            page.wait_for_function("""() => { const v = document.querySelector('#transfer-video video');
+                return v && v.readyState >= 2 && v.currentTime > 0 }""", timeout=180_000)
+            transfer_status = page.inner_text("#transfer-status")
+            transfer_files = _downloads(page, tmp_path / "transfer", "#transfer-downloads")
             assert errors == []
         finally:
             browser.close()
@@ -134,6 +143,14 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
     pelvis = bvh.joints[:, 0] - bvh.joints[0, 0]
     np.testing.assert_allclose(pelvis, future.joints[:, 0] - future.joints[0, 0], atol=0.01)
 
+    assert transfer_status.startswith(f"the behaviour re-enacted for {FUTURE_FRAMES} frames")
+    assert sorted(transfer_files) == ["reenacted.npz", "reenacted_1.bvh", "transfer.mp4"]
+    side_by_side, _ = read_video(transfer_files["transfer.mp4"])
+    assert side_by_side.shape[0] == 1 + FUTURE_FRAMES and side_by_side.shape[2] > side_by_side.shape[1]  # two cells
+    reenacted = load_motion(transfer_files["reenacted.npz"])
+    assert reenacted.joints.shape == (1 + FUTURE_FRAMES, 17, 3)
+    assert load_motion(transfer_files["reenacted_1.bvh"]).num_frames == 1 + FUTURE_FRAMES
+
 
 def test_the_cli_lists_app_without_importing_gradio():
     code = ("import sys; from motion2video.cli import build_parser; "
@@ -150,3 +167,28 @@ def test_bad_app_options_give_one_line_and_exit_2(capsys):
     assert capsys.readouterr().err.strip() == "motion2video app: error: --port must be in 0..65535, got 70000"
     assert main(["app", "--samples", "0"]) == 2
     assert "--samples must be >= 1, got 0" in capsys.readouterr().err
+
+
+def test_cancel_stops_a_run_at_its_next_step_and_leaves_no_file(tmp_path):
+    """The page's Cancel (``App.stop``) pressed while the frames are generated: the API's next progress report
+    raises, the handler says so and the run leaves nothing in the work folder."""
+    from motion2video.apps.web import App, AppSettings
+
+    app = App(AppSettings(work_dir=tmp_path))
+    seen = []
+
+    def bar(fraction, desc=None):  # Gradio's progress bar, pressing Cancel once the frames start
+        seen.append(desc)
+        if desc == "frames":
+            app.stop()
+
+    clip, photo = REPO / "demo_inputs" / "cmu_walk.npz", REPO / "demo_inputs" / "reference_body_128.png"
+    outputs = app.animate(None, photo.name, None, clip.name, "mtvae-add", "frames-body-128", 1, 40, 0, False, False,
+                          bar=bar)
+    assert outputs == (None, None, None, "cancelled")
+    assert seen == ["loading", "sampling", "structures", "frames"]
+    assert list(tmp_path.iterdir()) == []
+
+    video, structure, files, status = app.animate(None, photo.name, None, clip.name, "mtvae-add", "frames-body-128",
+                                                  1, 4, 0, False, False, bar=lambda fraction, desc=None: None)
+    assert status.startswith("1 future of 4 frames") and Path(video).is_file() and len(files) == 4

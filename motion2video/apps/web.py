@@ -211,15 +211,18 @@ def build(settings: AppSettings = AppSettings()) -> tuple[gr.Blocks, App]:
                     demo_behavior = gr.Dropdown(clips, value="cmu_jump.npz" if "cmu_jump.npz" in clips else None,
                                                 label="or a bundled behaviour")
                 with gr.Column():
-                    style = gr.Radio(["mesh", "skeleton"], value="mesh", label="Drawn as")
+                    style = gr.Radio(["mesh", "skeleton"], value="mesh", label="Drawn as", elem_id="transfer-style")
                     t_horizon = gr.Slider(4, 96, value=settings.horizon, step=1, label="Generated frames")
-                    adapt = gr.Checkbox(True, label="fit the decoder to the behaviour first (about 6 s)")
+                    adapt = gr.Checkbox(True, label="fit the decoder to the behaviour first (about 6 s)",
+                                        elem_id="transfer-adapt")
             with gr.Row():
                 t_go = gr.Button("Transfer", variant="primary", elem_id="transfer")
                 t_stop = gr.Button("Cancel")
             t_status = gr.Markdown(elem_id="transfer-status")
-            t_video = gr.Video(label="Behaviour (left) and its re-enactment (right)", autoplay=True, loop=True)
-            t_downloads = gr.File(label="Downloads: mp4, npz and BVH", file_count="multiple")
+            t_video = gr.Video(label="Behaviour (left) and its re-enactment (right)", autoplay=True, loop=True,
+                               elem_id="transfer-video")
+            t_downloads = gr.File(label="Downloads: mp4, npz and BVH", file_count="multiple",
+                                  elem_id="transfer-downloads")
             t_run = t_go.click(app.transfer, [target, demo_target, behavior, demo_behavior, style, t_horizon, adapt],
                                [t_video, t_downloads, t_status])
             t_stop.click(app.stop, None, t_status, cancels=[t_run])
