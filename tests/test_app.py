@@ -1,7 +1,7 @@
 """`motion2video app` in a real browser: the CLI serves the page, headless Chromium (Debian's, through Playwright)
 uploads a photo and a real BVH clip, presses Animate, waits for the futures to play, downloads the files and reads
-them back with the project's readers; a photo with nobody in it shows the CLI's one-line message, and the app keeps
-serving."""
+them back with the project's readers; a video too long and a photo with nobody in it show the CLI's one-line
+message, and the app keeps serving; the behaviour transfer tab plays and downloads likewise."""
 
 from __future__ import annotations
 
@@ -62,6 +62,14 @@ def app_url(tmp_path_factory):
         assert proc.wait(timeout=30) == 143
 
 
+def _status(page, selector: str, text: str) -> str:
+    """The status line once the run is over and it names ``text``."""
+    page.wait_for_function("([s, t]) => { const e = document.querySelector(s); "
+                           "return e && e.innerText.includes(t) && !e.innerText.includes('processing') }",
+                           arg=[selector, text], timeout=120_000)
+    return page.inner_text(selector).strip()
+
+
 def _downloads(page, folder: Path, selector: str) -> dict[str, Path]:
     """Click every download link of a downloads list (``selector``) and save what the browser receives."""
     folder.mkdir()
@@ -82,6 +90,7 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
     cv2.imwrite(str(wall), np.full((240, 180, 3), 200, np.uint8))  # a photo with nobody in it
     photo = shared_dir / "data" / "photos" / "woman_blue_tracksuit.jpg"
     clip = shared_dir / "data" / "mocap" / "mass" / "mass_walk.bvh"  # 1.1 s of real capture at 120 fps
+    long_video = shared_dir / "data" / "video" / "dancer.avi"  # 62.9 s, over the app's 30 s
 
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=_chromium(),
@@ -92,22 +101,28 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
             page.on("pageerror", lambda e: errors.append(str(e)))
             page.goto(app_url)
             page.wait_for_selector("#animate")
+            page.locator("#clip input[type=file]").set_input_files(long_video)
+            page.wait_for_selector("#clip :text('dancer.avi')", timeout=60_000)
+            page.click("#animate")  # with the demo photo
+            too_long = _status(page, "#status", "dancer.avi")
+            page.click("#clip button[aria-label=Clear]")
+
             page.locator("#clip input[type=file]").set_input_files(clip)
             page.wait_for_selector("#clip :text('mass_walk.bvh')", timeout=60_000)  # uploaded
             page.locator("#photo input[type=file]").set_input_files(wall)
             page.wait_for_selector("#photo img", timeout=60_000)
 
             page.click("#animate")
-            page.wait_for_function("() => document.querySelector('#status').innerText.includes('error')",
-                                   timeout=120_000)
-            message = page.inner_text("#status").strip()
+            message = _status(page, "#status", "wall.png")
             assert message.startswith("motion2video synthesize: error:") and "wall.png" in message
             assert "no person found" in message and "\n" not in message  # the CLI's one line
 
             page.locator("#photo input[type=file]").set_input_files(photo)  # the app still serves: a real photo now
             page.click("#animate")
             page.wait_for_function("""() => { const v = document.querySelector('#futures video');
-                return v && v.readyState >= 2 && v.currentTime > 0 && !v.paused }""", timeout=180_000)
+                const s = document.querySelector('#structure video');
+                return v && v.readyState >= 2 && v.currentTime > 0 && !v.paused && s && s.readyState >= 2 }""",
+                                   timeout=180_000)
             structure = page.evaluate("() => { const v = document.querySelector('#structure video'); "
                                       "return v ? [v.readyState, v.videoWidth, v.videoHeight] : null }")
             status = page.inner_text("#status")
@@ -126,6 +141,8 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
         finally:
             browser.close()
 
+    assert too_long.startswith("motion2video synthesize: error:") and too_long.endswith(
+        "dancer.avi: the video is 62.9 s long; at most 30 s is taken")
     assert f"1 future of {FUTURE_FRAMES} frames after {OBSERVED} observed" in status
     assert structure is not None and structure[0] >= 2 and structure[1:] == [128, 128]  # one cell
     assert sorted(files) == ["future_1.bvh", "future_1.npz", "futures-structure.mp4", "futures.mp4"]
