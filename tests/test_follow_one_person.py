@@ -4,6 +4,7 @@ here from the shared video and photos."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -102,24 +103,36 @@ def test_a_candidate_must_be_near_the_predicted_pelvis_and_look_alike():
     image[:, 200:] = (200, 30, 30)
     config = FollowConfig()
     state = MotionState.start(_body((60, 150)), torso_histogram(image, _body((60, 150))))
-    state = state.seen(_body((70, 150)), None, config.appearance_rate)  # moving right, 10 px a frame (then 5)
+    step = check_candidate(image, _body((70, 150)), 0.9, state, config)
+    state = state.seen(_body((70, 150)), step, config)  # moving right, 10 px a frame (5 in the velocity average)
     assert state.predicted()[0] == pytest.approx(75.0)
     near = check_candidate(image, _body((78, 150)), 0.9, state, config)
     assert near.matches and near.jump < 0.1
     far = check_candidate(image, _body((120, 150)), 0.9, state, config)  # 45 px: 0.75 torso lengths away
-    assert not far.matches and far.appearance < 0.1
-    other = check_candidate(image, _body((280, 150)), 0.9, state, replace_jump(config, 100.0))
-    assert not other.matches and other.appearance > config.max_appearance  # near enough, but another shirt
+    assert not far.matches and not far.plausible and far.appearance < 0.1
+    other = check_candidate(image, _body((280, 150)), 0.9, state, replace(config, max_jump=100.0))
+    assert not other.matches and not other.plausible and other.appearance > config.max_appearance_unsure
     absent = check_candidate(image, _body((75, 150)), 0.2, state, config)
     assert not absent.matches and not absent.present
     # frames without the person widen the allowed jump
     assert check_candidate(image, _body((120, 150)), 0.9, state.lost().lost(), config).matches
 
 
-def replace_jump(config: FollowConfig, jump: float) -> FollowConfig:
-    from dataclasses import replace
-
-    return replace(config, max_jump=jump)
+def test_a_look_somewhat_unlike_is_plausible_and_a_lasting_one_moves_the_model():
+    image = np.zeros((200, 200, 3), np.uint8)
+    image[:, :] = (40, 40, 160)
+    config = FollowConfig()
+    state = MotionState.start(_body((100, 150)), torso_histogram(image, _body((100, 150))))
+    image[:, :101] = (160, 40, 40)  # half the torso in another colour (an arm across it, another light)
+    half = check_candidate(image, _body((100, 150)), 0.9, state, config)
+    assert config.max_appearance < half.appearance <= config.max_appearance_unsure
+    assert half.plausible and not half.matches
+    for _ in range(config.reanchor_frames - 1):
+        state = state.seen(_body((100, 150)), half, config)
+    assert state.unlike == config.reanchor_frames - 1
+    assert appearance_distance(state.appearance, half.histogram) == pytest.approx(half.appearance, abs=1e-6)
+    state = state.seen(_body((100, 150)), half, config)
+    assert state.unlike == 0 and appearance_distance(state.appearance, half.histogram) < 0.5 * half.appearance
 
 
 def test_the_root_moves_in_depth_with_the_apparent_size():

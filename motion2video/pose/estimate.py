@@ -218,9 +218,11 @@ def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
     The person is chosen (``person``) in the first frame where the detector finds anyone; their torso's colour
     histogram and pelvis motion are followed from then on (:mod:`motion2video.pose.follow`). Each frame's ROI
     comes from the previous frame's landmarks; when its result fails a check (presence, a jump from the
-    pelvis's predicted position, a torso of other colours), the detector runs again and, of the people it finds,
-    the one that passes the checks at the least cost is taken; when none does, the frame has no person (a
-    passer-by in front, the person out of view) and the ROI moves on with the predicted motion.
+    pelvis's predicted position, a torso of other colours), the detector runs again and, of the people it finds
+    (and that result), the one that passes the checks at the least cost is taken, else the one near the predicted
+    position whose look is only somewhat different (a hand across the torso, a change of light); when none is,
+    the frame has no person (a passer-by in front, the person out of view) and the ROI moves on with the
+    predicted motion. Such frames are unsure.
 
     Yields:
         a :class:`Tracked` per frame.
@@ -249,7 +251,9 @@ def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
         if best is None:
             candidates = [model.landmarks(frame, detection_roi(d)) for d in model.detect(frame)]
             scored = [(c, check_candidate(frame, c.xy, c.score, state, config)) for c in candidates]
-            matching = [pair for pair in scored if pair[1].matches]
+            if roi is not None:
+                scored.append((lm, found))
+            matching = [pair for pair in scored if pair[1].matches] or [pair for pair in scored if pair[1].plausible]
             best = min(matching, key=lambda pair: pair[1].cost) if matching else None
         if best is None:
             step = state.velocity
@@ -259,8 +263,7 @@ def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
             yield Tracked(None, True)
             continue
         lm, found = best
-        confident = found.appearance <= 0.5 * config.max_appearance
-        state = state.seen(lm.xy, found.histogram if confident else None, config.appearance_rate)
+        state = state.seen(lm.xy, found, config)
         roi = lm.next_roi()
         yield Tracked(lm, unsure)
 

@@ -8,7 +8,8 @@ Pure functions on one frame's BlazePose landmarks, used by :func:`motion2video.p
 - :class:`MotionState`: the pelvis position, velocity and torso length of the frames so far, and where the
   pelvis should be in the next frame (constant velocity);
 - :func:`check_candidate`: whether a landmark result is the followed person (presence, distance from the
-  predicted position in torso lengths, appearance), and its cost among several candidates.
+  predicted position in torso lengths, appearance), only plausibly so (near, but looking somewhat different),
+  and its cost among several candidates.
 """
 
 from __future__ import annotations
@@ -31,15 +32,23 @@ class FollowConfig:
         min_presence: BlazePose's pose presence score below which the frame has no person.
         max_jump: how far (in torso lengths) the pelvis may land from its predicted position.
         jump_per_missed_frame: how much farther it may land per frame since the person was last seen.
-        max_appearance: Bhattacharyya distance of the torso histograms above which it is someone else.
+        max_appearance: Bhattacharyya distance of the torso histograms up to which it looks like the person (the
+            dancer video's torso, hands and coloured gloves crossing it, stays under 0.41 of its first frame).
+        max_appearance_unsure: up to which a candidate where the person should be is still taken, as unsure (a
+            hand or an object across the torso, a change of light); beyond it, someone else (the dancer in black
+            against a man in a red shirt: 0.97).
         appearance_rate: how fast the appearance model follows a confident frame (exponential average).
+        reanchor_frames: after this many frames in a row taken as unsure by their look alone, the model moves
+            halfway to the current look (the light changed for good).
     """
 
     min_presence: float = 0.5
     max_jump: float = 0.35
     jump_per_missed_frame: float = 0.25
     max_appearance: float = 0.45
+    max_appearance_unsure: float = 0.75
     appearance_rate: float = 0.05
+    reanchor_frames: int = 15
 
 
 def pelvis_and_torso(xy: np.ndarray) -> tuple[np.ndarray, float]:
@@ -87,6 +96,7 @@ class MotionState:
         torso: torso length, pixels (exponential average).
         missed: frames since the person was last seen.
         appearance: (512,) the torso histogram model, or None until one is seen.
+        unlike: frames in a row taken although their look differed from the model.
     """
 
     pelvis: np.ndarray
@@ -94,6 +104,7 @@ class MotionState:
     torso: float
     missed: int = 0
     appearance: np.ndarray | None = None
+    unlike: int = 0
 
     @staticmethod
     def start(xy: np.ndarray, appearance: np.ndarray | None) -> "MotionState":
@@ -104,15 +115,22 @@ class MotionState:
         """(2,) where the pelvis should be in the next frame."""
         return self.pelvis + self.velocity * (self.missed + 1)
 
-    def seen(self, xy: np.ndarray, appearance: np.ndarray | None, rate: float) -> "MotionState":
-        """The state after the person was found at landmarks ``xy`` with torso histogram ``appearance``."""
+    def seen(self, xy: np.ndarray, found: "Candidate", config: "FollowConfig") -> "MotionState":
+        """The state after the person was found at landmarks ``xy``, scored ``found``: a confident look (half the
+        :attr:`FollowConfig.max_appearance`) moves the appearance model by the rate; a look unlike the model for
+        :attr:`FollowConfig.reanchor_frames` frames in a row moves it halfway."""
         pelvis, torso = pelvis_and_torso(xy)
         step = (pelvis - self.pelvis) / (self.missed + 1)
-        model = self.appearance
-        if appearance is not None:
-            model = appearance if model is None else ((1 - rate) * model + rate * appearance).astype(np.float32)
+        model, hist = self.appearance, found.histogram
+        unlike = 0 if found.appearance <= config.max_appearance else self.unlike + 1
+        if hist is not None and model is None:
+            model = hist
+        elif hist is not None and found.appearance <= 0.5 * config.max_appearance:
+            model = ((1 - config.appearance_rate) * model + config.appearance_rate * hist).astype(np.float32)
+        elif hist is not None and unlike >= config.reanchor_frames:
+            model, unlike = (0.5 * model + 0.5 * hist).astype(np.float32), 0
         return MotionState(pelvis, 0.5 * self.velocity + 0.5 * step, 0.8 * self.torso + 0.2 * max(torso, 1.0), 0,
-                           model)
+                           model, unlike)
 
     def lost(self) -> "MotionState":
         """The state after a frame without the person (the velocity fades)."""
@@ -127,8 +145,10 @@ class Candidate:
         jump: distance of its pelvis from the predicted position, in torso lengths.
         appearance: Bhattacharyya distance of its torso histogram from the model.
         present: its pose presence reached the threshold.
-        matches: present, and near enough and alike enough to be the followed person.
-        cost: jump / max_jump + appearance / max_appearance (lower is better).
+        matches: present, near enough and alike enough to be the followed person.
+        plausible: present, near enough, and not unlike enough to be someone else (taken when nothing matches,
+            as unsure).
+        cost: jump / allowed jump + appearance / max_appearance (lower is better).
         histogram: its torso histogram (None when the torso is not in the image).
     """
 
@@ -136,6 +156,7 @@ class Candidate:
     appearance: float
     present: bool
     matches: bool
+    plausible: bool
     cost: float
     histogram: np.ndarray | None
 
@@ -149,6 +170,8 @@ def check_candidate(image: np.ndarray, xy: np.ndarray, score: float, state: Moti
     appearance = appearance_distance(hist, state.appearance)
     present = score >= config.min_presence
     allowed = config.max_jump + config.jump_per_missed_frame * state.missed
-    matches = present and jump <= allowed and appearance <= config.max_appearance
+    near = present and jump <= allowed
+    matches = near and appearance <= config.max_appearance
+    plausible = near and appearance <= config.max_appearance_unsure
     cost = jump / allowed + appearance / config.max_appearance
-    return Candidate(jump, appearance, present, matches, cost, hist)
+    return Candidate(jump, appearance, present, matches, plausible, cost, hist)
