@@ -45,6 +45,18 @@ def test_a_plain_colour_reference_is_refused_naming_the_file(frame_model, mocap_
     assert [p for p in tmp_path.rglob("*") if p.is_file()] == [wall]  # nothing written, not even a partial file
 
 
+def test_transfer_refuses_a_plain_colour_reference_too(mocap_dir, tmp_path, capsys):
+    wall = tmp_path / "plain_wall.png"
+    assert cv2.imwrite(str(wall), np.full((200, 200, 3), 240, np.uint8))
+    out = tmp_path / "out" / "transfer.mp4"
+    code = main(["transfer", "--model", "behavior", "--behavior", str(mocap_dir / "cmu" / "131_02.bvh"), "--target",
+                 str(mocap_dir / "cmu" / "08_01.bvh"), "--style", "frames", "--frame-model", "frames-body-mesh-256",
+                 "--reference", str(wall), "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.count("\n") == 0 and str(wall) in err and "no person found" in err, err
+    assert [p for p in tmp_path.rglob("*") if p.is_file()] == [wall]
+
+
 def test_a_person_cut_by_the_bottom_edge_gets_a_note_and_an_extended_picture(photos_dir, tmp_path):
     photo = cv2.imread(str(photos_dir / "woman_blue_tracksuit.jpg"))  # 1080 x 1920, head to feet
     whole = tmp_path / "whole.jpg"
