@@ -202,3 +202,17 @@ def test_the_pose_cache_is_versioned(tmp_path):
     np.savez(older, joints=np.zeros((2, 17, 3)), fps=25.0)  # a pose file of the tracker before: no unsure flags
     with pytest.raises(InputError, match="older.npz"):
         load_video_pose(older)
+
+
+def test_track_measures_find_the_jump_and_the_walk():
+    from motion2video.evaluation.tracking import track_measures
+
+    pelvis = np.stack([np.arange(10.0), np.zeros(10)], axis=1)
+    pelvis[6:] += [50.0, 0.0]  # a switch to someone 50 px away at row 6
+    root = np.zeros((10, 3))
+    root[:, 1] = 5.0 - 0.4 * np.arange(10)  # 3.6 m towards the camera
+    root[:, 0] = 0.1 * (np.arange(10) % 2)  # swaying 10 cm sideways
+    m = track_measures(pelvis, root, np.arange(10) == 6)
+    assert m.pelvis_max_jump_px == pytest.approx(51.0) and m.jump_frame == 6 and m.unsure_frames == 1
+    assert m.depth_travel_m == pytest.approx(3.6) and m.main_direction_m == pytest.approx(3.6, abs=0.01)
+    assert m.root_path_m == pytest.approx(9 * np.hypot(0.4, 0.1))
