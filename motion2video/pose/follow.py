@@ -32,7 +32,8 @@ class FollowConfig:
         min_presence: BlazePose's pose presence score below which the frame has no person.
         max_jump: how far (in torso lengths) the pelvis may land from its predicted position (on the dancer video
             and a person approaching the camera it lands at most 0.11 away, 0.07 for 99% of the frames).
-        jump_per_missed_frame: how much farther it may land per frame since the person was last seen.
+        jump_per_missed_frame: how much farther it may land per frame since the person was last seen (a walk
+            moves the pelvis about 0.1 torso lengths a frame at 25 fps).
         max_appearance: Bhattacharyya distance of the torso histograms up to which it looks like the person (the
             dancer video's torso, hands and coloured gloves crossing it, stays under 0.41 of its first frame).
         max_appearance_unsure: up to which a candidate where the person should be is still taken, as unsure (a
@@ -45,7 +46,7 @@ class FollowConfig:
 
     min_presence: float = 0.5
     max_jump: float = 0.25
-    jump_per_missed_frame: float = 0.25
+    jump_per_missed_frame: float = 0.1
     max_appearance: float = 0.45
     max_appearance_unsure: float = 0.75
     appearance_rate: float = 0.05
