@@ -172,6 +172,21 @@ def test_a_passer_by_in_front_is_not_followed(passer_by, tmp_path, capsys):
 
 
 @pytest.mark.slow
+def test_commands_that_read_a_video_say_which_frames_are_unsure(passer_by, tmp_path):
+    """synthesize, transfer and sample read a video through the cached pose: its note names the unsure frames,
+    estimated or read back."""
+    from motion2video.stages.people import frame_ranges, video_pose
+
+    notes: list[str] = []
+    pose = video_pose(passer_by, cache=tmp_path, note=notes.append)
+    again = video_pose(passer_by, cache=tmp_path, note=notes.append)
+    np.testing.assert_array_equal(again.unsure, pose.unsure)
+    assert pose.unsure_frames >= 8 and "estimated the pose" in notes[0] and "read from the cache" in notes[1]
+    for note in notes:
+        assert f"unsure of the person in {pose.unsure_frames} frames ({frame_ranges(pose.unsure)})" in note, note
+
+
+@pytest.mark.slow
 def test_a_person_growing_in_the_picture_comes_towards_the_camera(approach):
     from motion2video.pose.blazepose import NUM_BODY_LANDMARKS
     from motion2video.pose.estimate import estimate_video
@@ -203,6 +218,15 @@ def test_the_pose_cache_is_versioned(tmp_path):
     np.savez(older, joints=np.zeros((2, 17, 3)), fps=25.0)  # a pose file of the tracker before: no unsure flags
     with pytest.raises(InputError, match="older.npz"):
         load_video_pose(older)
+
+
+def test_frame_ranges_name_runs_of_video_frames():
+    from motion2video.stages.people import frame_ranges
+
+    flags = np.zeros(30, bool)
+    flags[[3, 10, 11, 12]] = True
+    assert frame_ranges(flags) == "3, 10-12" and frame_ranges(flags, first=100) == "103, 110-112"
+    assert frame_ranges(np.arange(30) % 2 == 0, most=2) == "0, 2 and 13 more runs"
 
 
 def test_track_measures_find_the_jump_and_the_walk():

@@ -143,7 +143,7 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
         try:
             pose = load_video_pose(cached)
             if note:
-                note(f"pose of {path.name} read from the cache {cached}")
+                note(f"pose of {path.name} read from the cache {cached}" + _unsure_note(pose))
             return pose
         except InputError:
             pass  # a damaged cache entry is estimated again and overwritten
@@ -156,16 +156,20 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
     if note:
         how = "from its cached track" if track is not None else "BlazePose full"
         note(f"estimated the pose of {path.name} ({how}): {pose.num_frames} frames at {pose.fps:g} fps"
-             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else "")
-             + (f", the tracker unsure of the person in {pose.unsure_frames} (frames "
-                f"{frame_ranges(pose.unsure, pose.first_frame)})"
-                if pose.unsure_frames else ""))
+             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else "") + _unsure_note(pose))
     if cached is not None:
         try:
             save_video_pose(cached, pose)
         except OSError:
             pass  # a read-only cache only costs the next run the estimate
     return pose
+
+
+def _unsure_note(pose: VideoPose) -> str:
+    if not pose.unsure_frames:
+        return ""
+    return (f", the tracker unsure of the person in {pose.unsure_frames} frames "
+            f"({frame_ranges(pose.unsure, pose.first_frame)})")
 
 
 @dataclass(frozen=True)
