@@ -45,7 +45,7 @@ class FollowConfig:
     """
 
     min_presence: float = 0.5
-    max_jump: float = 0.25
+    max_jump: float = 0.2
     jump_per_missed_frame: float = 0.1
     max_appearance: float = 0.45
     max_appearance_unsure: float = 0.75
