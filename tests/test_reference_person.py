@@ -81,6 +81,20 @@ def test_a_person_cut_by_the_bottom_edge_gets_a_note_and_an_extended_picture(pho
     assert col[int(ankles[:, 1].max())] < 0.5 and col[30] > 0.5
 
 
+def test_synthesize_prints_the_cut_note_once_on_stderr(photos_dir, mocap_dir, tmp_path, capsys):
+    photo = cv2.imread(str(photos_dir / "woman_blue_tracksuit.jpg"))
+    cut = tmp_path / "cut_at_the_shins.jpg"
+    assert cv2.imwrite(str(cut), photo[:1440])
+    out = tmp_path / "cut.mp4"
+    assert main(["synthesize", "--motion-model", "mixture-periodic", "--frame-model", "frames-body-128",
+                 str(mocap_dir / "cmu" / "131_02.bvh"), "--reference", str(cut), "--samples", "1", "--horizon", "4",
+                 "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    lines = [line for line in captured.err.splitlines() if "cut by the picture's edge" in line]
+    assert len(lines) == 1 and lines[0].startswith("motion2video synthesize: note:"), captured.err
+    assert "cut by the picture's edge" not in captured.out and out.is_file()
+
+
 def test_cut_edges_and_pose_margins_name_what_runs_past_which_edge():
     from motion2video.pose.blazepose import LANDMARK_NAMES
 
