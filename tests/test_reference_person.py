@@ -4,7 +4,6 @@ and a picture extended to hold their pose."""
 
 from __future__ import annotations
 
-
 import cv2
 import numpy as np
 import pytest
