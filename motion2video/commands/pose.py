@@ -15,10 +15,13 @@ Estimate the pose of one person with the bundled BlazePose full model (no downlo
 reference pose file (IMAGE.pose.npz: the canonical H36M-17 joints in its pixels), which synthesize and
 transfer read beside the image. A video (.mp4, .avi, .mov, ...) gives a motion .npz at the video's own frame
 rate: 3D joints (metres, z up, floor at 0; every motion command reads them), the 2D joints in the video's
-pixels (joints_2d), per-joint confidence, and which frames were interpolated. Frames without the person at
-the ends are trimmed; gaps inside are interpolated (the count is printed). --person picks one of several
-people: the largest (default) or an index counted left to right in the first frame with people; a video
-follows that person in every frame. --overlay draws the joints on the input so you can check them.
+pixels (joints_2d), per-joint confidence, which frames were interpolated and which the tracker was unsure of
+(unsure: printed, and a boolean per frame). Frames without the person at the ends are trimmed; gaps inside are
+interpolated (the count is printed). --person picks one of several people: the largest (default) or an index
+counted left to right in the first frame with people; a video follows that ONE person in every frame by the
+colours of their torso and the motion of their pelvis, so a passer-by is not taken for them. The 3D root moves
+in depth with the person's apparent size (a 60 degree field of view across the frame is assumed). --overlay
+draws the joints on the input so you can check them.
 """
 
 EXAMPLES = """\
@@ -93,6 +96,12 @@ def _video(src: Path, out: Path, person, overlay: str | None) -> int:
     print(f"wrote {out} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
           f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
           f"{trimmed_end} at the end of {pose.video_frames})")
+    if pose.unsure_frames:
+        print(f"unsure of the person in {pose.unsure_frames} frames (video frames "
+              f"{people.frame_ranges(pose.unsure, pose.first_frame)}): another person near them, a jump or a "
+              "low presence; gaps among them are interpolated (the npz's `unsure` marks them all)")
+    else:
+        print("followed one person in every frame: no unsure frames")
     if overlay is not None:
         print(f"wrote {people.write_video_overlay(overlay, src, pose)}")
     return 0

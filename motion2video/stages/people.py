@@ -24,7 +24,7 @@ import numpy as np
 from motion2video.core.errors import InputError
 from motion2video.pose.estimate import (IMAGE_SUFFIXES, VIDEO_SUFFIXES, PersonPose, VideoPose, estimate_image,
                                         estimate_video, iter_video_frames, poses_from_landmarks, read_image_rgb)
-from motion2video.pose.files import ESTIMATOR, load_video_pose, save_video_pose
+from motion2video.pose.files import ESTIMATOR, POSE_VERSION, load_video_pose, save_video_pose
 from motion2video.pose.track import VideoTrack, load_video_track, save_video_track, track_video
 
 def is_video(path: str | Path) -> bool:
@@ -46,6 +46,17 @@ def file_sha256(path: str | Path) -> str:
     return digest.hexdigest()
 
 
+def frame_ranges(flags: np.ndarray, first: int = 0, most: int = 6) -> str:
+    """The runs of True in (T,) ``flags`` as video frame numbers (row 0 = frame ``first``): ``"159-182, 200"``;
+    after ``most`` runs, how many more."""
+    flags = np.asarray(flags, bool)
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    runs = [f"{a + first}" if a == b else f"{a + first}-{b + first}" for a, b in zip(starts, ends)]
+    more = f" and {len(runs) - most} more runs" if len(runs) > most else ""
+    return ", ".join(runs[:most]) + more
+
+
 def cache_dir() -> Path:
     """``$XDG_CACHE_HOME/motion2video/pose`` (default ``~/.cache/motion2video/pose``)."""
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
@@ -53,13 +64,14 @@ def cache_dir() -> Path:
 
 
 def cache_path(video: str | Path, person: str | int, folder: str | Path | None = None) -> Path:
-    """Where the pose of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.npz``."""
+    """Where the pose of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.v<version>.npz``
+    (the version of :mod:`motion2video.pose.files`: a cache of an older tracker is never read)."""
     folder = Path(folder) if folder is not None else cache_dir()
-    return folder / f"{file_sha256(video)[:16]}-{person}.{ESTIMATOR}.npz"
+    return folder / f"{file_sha256(video)[:16]}-{person}.{ESTIMATOR}.v{POSE_VERSION}.npz"
 
 
 def track_cache_path(video: str | Path, person: str | int, folder: str | Path | None = None) -> Path:
-    """Where the track of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.track.npz``
+    """Where the track of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.v<version>.track.npz``
     beside the pose cache."""
     pose = cache_path(video, person, folder)
     return pose.with_name(pose.name.removesuffix(".npz") + ".track.npz")
@@ -99,8 +111,10 @@ def video_track(path: str | Path, *, person: str | int = "largest", cache: str |
         return track
     track = track_video(path, person=person, model=model)
     if note:
+        unsure = (f"; unsure of the person in {int(track.unsure.sum())} (frames {frame_ranges(track.unsure)})"
+                  if track.unsure.any() else "")
         note(f"tracked {path.name} (BlazePose full): the person in {int(track.found.sum())} of "
-             f"{track.num_frames} frames")
+             f"{track.num_frames} frames{unsure}")
     if cached is not None:
         try:
             save_video_track(cached, track)
@@ -129,26 +143,33 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
         try:
             pose = load_video_pose(cached)
             if note:
-                note(f"pose of {path.name} read from the cache {cached}")
+                note(f"pose of {path.name} read from the cache {cached}" + _unsure_note(pose))
             return pose
         except InputError:
             pass  # a damaged cache entry is estimated again and overwritten
     track = None if cache is False else _read_cached_track(track_cache_path(path, person, cache or None))
     if track is not None:  # tracked before by evaluate-frames / train-frames --video: the same landmarks
         pose = poses_from_landmarks([track.landmarks(i) for i in range(track.num_frames)], fps=track.fps,
-                                    width=track.width, height=track.height, source=path)
+                                    width=track.width, height=track.height, unsure=track.unsure, source=path)
     else:
         pose = estimate_video(path, person=person)
     if note:
         how = "from its cached track" if track is not None else "BlazePose full"
         note(f"estimated the pose of {path.name} ({how}): {pose.num_frames} frames at {pose.fps:g} fps"
-             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else ""))
+             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else "") + _unsure_note(pose))
     if cached is not None:
         try:
             save_video_pose(cached, pose)
         except OSError:
             pass  # a read-only cache only costs the next run the estimate
     return pose
+
+
+def _unsure_note(pose: VideoPose) -> str:
+    if not pose.unsure_frames:
+        return ""
+    return (f", the tracker unsure of the person in {pose.unsure_frames} frames "
+            f"({frame_ranges(pose.unsure, pose.first_frame)})")
 
 
 @dataclass(frozen=True)
