@@ -19,8 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from motion2video.core.motion import ARKIT_NAMES
 from motion2video.core.rotations import axis_angle_to_matrix, matrix_to_axis_angle
 
+GAZE_NAMES = tuple(name for name in ARKIT_NAMES if name.startswith("eyeLook"))
 PROJECTION = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])  # world (x, y, z) -> image (x, y) directions
 
 
@@ -32,12 +34,18 @@ class FitConfig:
         iterations: pose / expression alternations per frame.
         pose_steps: Gauss-Newton steps of the pose per alternation.
         ridge: weight of the squared coefficients, in squared face-size fractions (keeps the shapes the
-            landmarks do not see, e.g. tongueOut or cheekPuff, near 0).
+            landmarks hardly see, e.g. tongueOut or cheekPuff, near 0).
+        unfitted: coefficients held at 0: by default the gaze (the 468 landmarks have no iris).
     """
 
-    iterations: int = 3
-    pose_steps: int = 3
-    ridge: float = 1e-4
+    def active(self) -> np.ndarray:
+        """(52,) bool: the coefficients the fit solves for."""
+        return np.array([name not in self.unfitted for name in ARKIT_NAMES])
+
+    iterations: int = 2
+    pose_steps: int = 2
+    ridge: float = 1e-6
+    unfitted: tuple[str, ...] = GAZE_NAMES
 
 
 @dataclass(frozen=True)
@@ -126,17 +134,23 @@ def refine_pose(model: np.ndarray, xy: np.ndarray, rotation: np.ndarray, scale: 
 
 
 def fit_expressions(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, rotation: np.ndarray, scale: float,
-                    shift: np.ndarray, ridge: float, size: float, weights: np.ndarray | None = None
-                    ) -> np.ndarray:
+                    shift: np.ndarray, ridge: float, size: float, weights: np.ndarray | None = None,
+                    active: np.ndarray | None = None) -> np.ndarray:
     """The 52 coefficients in [0, 1] that best explain the landmarks under a fixed pose.
 
     Args:
         neutral: (L, 3); basis: (52, L, 3) deltas at weight 1; xy: (L, 2) pixels.
         ridge: squared-coefficient weight relative to a residual of one face size (``size`` pixels).
         weights: (L,) per-landmark weights (None: ones).
+        active: (52,) bool, the coefficients solved for (the others stay 0); None: all.
     Returns:
         (52,) coefficients.
     """
+    active = np.ones(len(basis), bool) if active is None else np.asarray(active, bool)
+    out = np.zeros(len(basis))
+    if not active.any():
+        return out
+    basis = basis[active]
     w = np.ones(len(xy)) if weights is None else np.asarray(weights, np.float64)
     sw = np.sqrt(np.repeat(w, 2))[:, None]
     R = axis_angle_to_matrix(np.asarray(rotation, np.float64))
@@ -146,7 +160,8 @@ def fit_expressions(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, rota
     lam = np.sqrt(ridge * len(xy)) * size
     A = np.concatenate([A * sw, lam * np.eye(len(basis))])
     b = np.concatenate([b * sw[:, 0], np.zeros(len(basis))])
-    return lsq_linear(A, b, bounds=(0.0, 1.0), method="bvls").x
+    out[active] = lsq_linear(A, b, bounds=(0.0, 1.0), method="bvls").x
+    return out
 
 
 def fit_frame(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: FitConfig = FitConfig(),
@@ -161,6 +176,7 @@ def fit_frame(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: Fi
         weights: (L,) per-landmark weights.
     """
     size = float(np.max(xy.max(axis=0) - xy.min(axis=0)))
+    active = config.active()
     if start is None:
         e = np.zeros(len(basis))
         rotation, scale, shift = initial_pose(neutral, xy)
@@ -169,7 +185,25 @@ def fit_frame(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: Fi
     for _ in range(config.iterations):
         model = neutral + np.tensordot(e, basis, axes=1)  # (L, 3)
         rotation, scale, shift = refine_pose(model, xy, rotation, scale, shift, config.pose_steps, weights)
-        e = fit_expressions(neutral, basis, xy, rotation, scale, shift, config.ridge, size, weights)
+        e = fit_expressions(neutral, basis, xy, rotation, scale, shift, config.ridge, size, weights, active)
     model = neutral + np.tensordot(e, basis, axes=1)
     residual = np.linalg.norm(project(model, rotation, scale, shift) - xy, axis=1)
     return FrameFit(rotation, scale, shift, e, residual)
+
+
+def person_neutral_offsets(neutral: np.ndarray, xy: np.ndarray, fits: list[FrameFit]) -> np.ndarray:
+    """The person's own face as offsets from the model's landmark points: each frame's residual of a pose-only
+    fit taken back into the head's frame (the least-norm 3D offset that projects onto it), and the median over
+    the frames, so that the coefficients then fitted describe expressions, not the person's face shape.
+
+    Args:
+        neutral: (L, 3) the model's points; xy: (T, L, 2) tracked landmarks; fits: T pose-only fits.
+    Returns:
+        (L, 3) offsets in the head's rest frame, metres.
+    """
+    offsets = []
+    for frame, fit in zip(xy, fits):
+        M = fit.scale * PROJECTION @ axis_angle_to_matrix(fit.rotation)  # (2, 3)
+        residual = frame - project(neutral, fit.rotation, fit.scale, fit.shift)  # (L, 2)
+        offsets.append(residual @ np.linalg.pinv(M).T)  # (L, 3)
+    return np.median(np.stack(offsets), axis=0)

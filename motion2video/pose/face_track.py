@@ -20,17 +20,18 @@ about the head's mean position.
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from motion2video.core.atomic import save_npz
 from motion2video.core.errors import InputError
-from motion2video.core.motion import FaceMotion
+from motion2video.core.motion import ARKIT_NAMES, FaceMotion
+from motion2video.core.rotations import axis_angle_to_matrix
 from motion2video.pose.estimate import interpolate_gaps, iter_video_frames, open_video
 from motion2video.pose.face_anny import head_basis, head_offset, posed_landmarks
-from motion2video.pose.face_fit import PROJECTION, FitConfig, fit_frame
+from motion2video.pose.face_fit import PROJECTION, FitConfig, FrameFit, fit_frame, person_neutral_offsets
 from motion2video.pose.facemesh import MIN_PRESENCE, NUM_LANDMARKS, FaceDetection, FaceLandmarks, FaceMesh, detection_roi
 from motion2video.pose.smoothing import IMAGE_LANDMARKS, one_euro, runs
 
@@ -94,6 +95,8 @@ class FaceTrack:
         interpolated: (T,) True where the face was not found and the landmarks are interpolated.
         camera: (T, 3) the fitted weak-perspective camera: pixels per metre, then the (x, y) shift in pixels
             (:func:`motion2video.pose.face_fit.project`).
+        neutral_offsets: (468, 3) the person's face as offsets from Anny's at the landmarks, metres in the
+            head's rest frame (:func:`motion2video.pose.face_fit.person_neutral_offsets`).
         reprojection: (T, 468) distance in pixels between each landmark re-projected from the fitted Anny head
             and the tracked one.
         first_frame: index in the video of the first kept frame.
@@ -105,6 +108,7 @@ class FaceTrack:
     confidence: np.ndarray
     interpolated: np.ndarray
     camera: np.ndarray
+    neutral_offsets: np.ndarray
     reprojection: np.ndarray
     first_frame: int
     width: int
@@ -140,19 +144,27 @@ def head_translation(rotations: np.ndarray, camera: np.ndarray, width: int, heig
     return placed - np.median(placed, axis=0)
 
 
-def reprojection_error(motion: FaceMotion, camera: np.ndarray, landmarks2d: np.ndarray) -> np.ndarray:
-    """(T, 468) pixels between the tracked landmarks and the same points of the Anny head posed by the face
-    motion through Anny's own forward (skinning and blendshapes as the face renderer draws them), seen by
-    the fitted camera.
+def reprojected_landmarks(motion: FaceMotion, camera: np.ndarray, offsets: np.ndarray | None = None
+                          ) -> np.ndarray:
+    """(T, 468, 2) pixels of the fitted head's landmark points seen by the fitted camera: the Anny head posed by
+    the face motion through Anny's own forward (skinning and blendshapes as the face renderer draws them),
+    plus the person's neutral offsets turned with the head.
 
     Args:
-        motion: the fitted face motion; camera: (T, 3) scale and shift; landmarks2d: (T, 468, 2).
+        motion: the fitted face motion; camera: (T, 3) scale and shift.
+        offsets: (468, 3) the person's neutral offsets (None: Anny's own face).
     """
     points = posed_landmarks(motion.expressions, motion.head_rotation, motion.head_translation)  # (T, 468, 3)
     # undo what head_translation added, so the camera sees the head as it was fitted: R v + skinning
-    rigid = points - (head_offset(motion.head_rotation) + motion.head_translation)[:, None, :]
-    pixels = camera[:, None, :1] * rigid @ PROJECTION.T + camera[:, None, 1:]
-    return np.linalg.norm(pixels - landmarks2d, axis=2)
+    points = points - (head_offset(motion.head_rotation) + motion.head_translation)[:, None, :]
+    if offsets is not None:
+        points = points + np.einsum("tij,lj->tli", axis_angle_to_matrix(motion.head_rotation), offsets)
+    return camera[:, None, :1] * points @ PROJECTION.T + camera[:, None, 1:]
+
+
+def fitted_landmarks2d(track: FaceTrack) -> np.ndarray:
+    """(T, 468, 2) the landmarks re-projected from a track's fitted head (:func:`reprojected_landmarks`)."""
+    return reprojected_landmarks(track.motion, track.camera, track.neutral_offsets)
 
 
 def face_track_from_landmarks(results: list[FaceLandmarks | None], *, fps: float, width: int, height: int,
@@ -179,19 +191,25 @@ def face_track_from_landmarks(results: list[FaceLandmarks | None], *, fps: float
             xy[start:stop] = one_euro(xy[start:stop], fps, IMAGE_LANDMARKS, scale=size[start:stop])
     xy = interpolate_gaps(xy, ok)
     basis = head_basis()
-    fits = []
-    previous = None
-    for frame in xy:
-        previous = fit_frame(basis.neutral, basis.basis, frame, config, previous)
-        fits.append(previous)
+    rigid = _fit_frames(basis.neutral, basis.basis, xy, replace(config, unfitted=ARKIT_NAMES))
+    offsets = person_neutral_offsets(basis.neutral, xy, rigid)  # (468, 3)
+    fits = _fit_frames(basis.neutral + offsets, basis.basis, xy, config)
     rotations = np.stack([f.rotation for f in fits])
     camera = np.array([[f.scale, *f.shift] for f in fits])
     params = np.concatenate([np.stack([f.expressions for f in fits]), rotations,
                              head_translation(rotations, camera, width, height)], axis=1)
     motion = FaceMotion(params, float(fps), {}, None if source is None else str(source))
-    error = reprojection_error(motion, camera, xy)
-    return FaceTrack(motion, xy, np.where(ok, score, 0.0), ~ok, camera, error, first, width, height,
+    error = np.linalg.norm(reprojected_landmarks(motion, camera, offsets) - xy, axis=2)  # (T, 468)
+    return FaceTrack(motion, xy, np.where(ok, score, 0.0), ~ok, camera, offsets, error, first, width, height,
                      len(results))
+
+
+def _fit_frames(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: FitConfig) -> list[FrameFit]:
+    """:func:`fit_frame` on (T, L, 2) landmarks in order, each frame starting from the last one's fit."""
+    fits: list[FrameFit] = []
+    for frame in xy:
+        fits.append(fit_frame(neutral, basis, frame, config, fits[-1] if fits else None))
+    return fits
 
 
 def track_face_video(path: str | Path, *, model: FaceMesh | None = None, smooth: bool = True,
@@ -215,7 +233,7 @@ def track_face_video(path: str | Path, *, model: FaceMesh | None = None, smooth:
 def save_face_track(path: str | Path, track: FaceTrack) -> Path:
     """Write a :class:`FaceTrack` as a face motion ``.npz`` (atomic): the keys every face reader takes
     (``face``, ``fps``, ``identity``; :func:`motion2video.formats.npz.load_face_npz`) plus ``landmarks_2d``,
-    ``confidence``, ``interpolated``, ``camera``, ``reprojection``, ``first_frame``, ``width``, ``height``,
+    ``confidence``, ``interpolated``, ``camera``, ``neutral_offsets``, ``reprojection``, ``first_frame``, ``width``, ``height``,
     ``video_frames`` and ``estimator``."""
     import json
 
@@ -227,6 +245,7 @@ def save_face_track(path: str | Path, track: FaceTrack) -> Path:
         "confidence": track.confidence.astype(np.float32),
         "interpolated": track.interpolated.astype(bool),
         "camera": track.camera.astype(np.float64),
+        "neutral_offsets": track.neutral_offsets.astype(np.float64),
         "reprojection": track.reprojection.astype(np.float32),
         "first_frame": np.int64(track.first_frame),
         "width": np.int64(track.width),
@@ -245,12 +264,14 @@ def load_face_track(path: str | Path) -> FaceTrack:
     from motion2video.formats.npz import load_face_npz, read_npz_arrays
 
     arrays = read_npz_arrays(path)
-    missing = [k for k in ("landmarks_2d", "confidence", "interpolated", "camera", "reprojection", "first_frame",
-                           "width", "height", "video_frames") if k not in arrays]
+    keys = ("landmarks_2d", "confidence", "interpolated", "camera", "neutral_offsets", "reprojection", "first_frame",
+            "width", "height", "video_frames")
+    missing = [k for k in keys if k not in arrays]
     if missing:
         raise InputError(f"not a tracked face motion file (lacks {', '.join(missing)})", path)
     return FaceTrack(load_face_npz(path), arrays["landmarks_2d"].astype(np.float64),
                      arrays["confidence"].astype(np.float64), arrays["interpolated"].astype(bool),
-                     arrays["camera"].astype(np.float64), arrays["reprojection"].astype(np.float64),
+                     arrays["camera"].astype(np.float64), arrays["neutral_offsets"].astype(np.float64),
+                     arrays["reprojection"].astype(np.float64),
                      int(arrays["first_frame"]), int(arrays["width"]), int(arrays["height"]),
                      int(arrays["video_frames"]))
