@@ -33,7 +33,7 @@ examples:
   motion2video pose ../shared/data/photos/three_walking.jpg -o out/walker.pose.npz --person 0
   motion2video pose ../shared/data/video/dancer.avi -o out/dancer.npz --overlay out/dancer_pose.mp4
   motion2video pose --face ../shared/data/video/face_talking_woman.mp4 -o out/woman_face.npz
-  motion2video render out/woman_face.npz -o out/woman_face.mp4
+  motion2video render out/woman_face.npz --style face -o out/woman_face.mp4
 """
 
 

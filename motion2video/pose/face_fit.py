@@ -8,8 +8,9 @@ expression blendshapes ``basis`` at them, :mod:`motion2video.pose.face_anny`):
 
 a weak-perspective camera looking along +y (world x -> image x, world z -> image -y), ``R`` the head
 rotation, ``s`` pixels per metre, ``t`` (2,) pixels, ``e`` (52,) ARKit coefficients in [0, 1]. The fit
-alternates the pose (Gauss-Newton on rotation, scale and shift) and the coefficients (bounded linear least
-squares with a small ridge), starting from the previous frame's values.
+solves for the pose (rotation, scale, shift) and the coefficients together by Gauss-Newton, each step a
+bounded linear least squares with a small ridge on the coefficients, starting from the previous frame's
+values.
 """
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ class FitConfig:
     """Settings of the per-frame fit.
 
     Attributes:
-        iterations: pose / expression alternations per frame.
-        pose_steps: Gauss-Newton steps of the pose per alternation.
+        iterations: Gauss-Newton steps per frame started from the previous frame's fit (one is enough at video
+            rates: a second changed the median re-projection error by under 0.01% of the face size).
+        first_iterations: Gauss-Newton steps when nothing starts the fit.
         ridge: weight of the squared coefficients, in squared face-size fractions (keeps the shapes the
             landmarks hardly see, e.g. tongueOut or cheekPuff, near 0).
         unfitted: coefficients held at 0: by default the gaze (the 468 landmarks have no iris).
@@ -42,8 +44,8 @@ class FitConfig:
         """(52,) bool: the coefficients the fit solves for."""
         return np.array([name not in self.unfitted for name in ARKIT_NAMES])
 
-    iterations: int = 2
-    pose_steps: int = 2
+    iterations: int = 1
+    first_iterations: int = 4
     ridge: float = 1e-6
     unfitted: tuple[str, ...] = GAZE_NAMES
 
@@ -105,90 +107,62 @@ def _skew(v: np.ndarray) -> np.ndarray:
                      np.stack([-v[:, 1], v[:, 0], z], -1)], axis=1)
 
 
-def refine_pose(model: np.ndarray, xy: np.ndarray, rotation: np.ndarray, scale: float, shift: np.ndarray,
-                steps: int = 3, weights: np.ndarray | None = None) -> tuple[np.ndarray, float, np.ndarray]:
-    """Gauss-Newton steps on the 2D re-projection error over (rotation increment, log scale, shift).
-
-    Args:
-        model: (L, 3) head points; xy: (L, 2) pixels; weights: (L,) per-landmark weights (None: ones).
-    Returns:
-        (3,) axis-angle, scale, (2,) shift.
-    """
-    w = np.ones(len(xy)) if weights is None else np.asarray(weights, np.float64)
-    sw = np.sqrt(np.repeat(w, 2))
-    R = axis_angle_to_matrix(np.asarray(rotation, np.float64))
-    for _ in range(steps):
-        X = model @ R.T  # (L, 3) rotated points
-        pred = scale * X @ PROJECTION.T + shift
-        r = (xy - pred).reshape(-1)  # (2L,)
-        # d pred / d omega (a small world rotation exp([omega]) R): -s A [X]x
-        j_rot = -scale * np.einsum("ij,ljk->lik", PROJECTION, _skew(X))  # (L, 2, 3)
-        j_scale = (scale * X @ PROJECTION.T)[:, :, None]  # (L, 2, 1), d / d log s
-        j_shift = np.broadcast_to(np.eye(2), (len(xy), 2, 2))
-        J = np.concatenate([j_rot, j_scale, j_shift], axis=2).reshape(-1, 6)  # (2L, 6)
-        delta = np.linalg.lstsq(J * sw[:, None], r * sw, rcond=None)[0]
-        R = axis_angle_to_matrix(delta[:3]) @ R
-        scale *= float(np.exp(delta[3]))
-        shift = shift + delta[4:]
-    return matrix_to_axis_angle(R), float(scale), np.asarray(shift, np.float64)
-
-
-def fit_expressions(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, rotation: np.ndarray, scale: float,
-                    shift: np.ndarray, ridge: float, size: float, weights: np.ndarray | None = None,
-                    active: np.ndarray | None = None) -> np.ndarray:
-    """The 52 coefficients in [0, 1] that best explain the landmarks under a fixed pose.
-
-    Args:
-        neutral: (L, 3); basis: (52, L, 3) deltas at weight 1; xy: (L, 2) pixels.
-        ridge: squared-coefficient weight relative to a residual of one face size (``size`` pixels).
-        weights: (L,) per-landmark weights (None: ones).
-        active: (52,) bool, the coefficients solved for (the others stay 0); None: all.
-    Returns:
-        (52,) coefficients.
-    """
-    active = np.ones(len(basis), bool) if active is None else np.asarray(active, bool)
-    out = np.zeros(len(basis))
-    if not active.any():
-        return out
-    basis = basis[active]
-    w = np.ones(len(xy)) if weights is None else np.asarray(weights, np.float64)
-    sw = np.sqrt(np.repeat(w, 2))[:, None]
-    R = axis_angle_to_matrix(np.asarray(rotation, np.float64))
-    M = scale * PROJECTION @ R  # (2, 3)
-    A = np.einsum("ij,klj->lik", M, basis).reshape(-1, len(basis))  # (2L, 52)
-    b = (xy - neutral @ M.T - shift).reshape(-1)  # (2L,)
-    lam = np.sqrt(ridge * len(xy)) * size
-    A = np.concatenate([A * sw, lam * np.eye(len(basis))])
-    b = np.concatenate([b * sw[:, 0], np.zeros(len(basis))])
-    out[active] = lsq_linear(A, b, bounds=(0.0, 1.0), method="bvls").x
-    return out
+def _pose_jacobian(X: np.ndarray, scale: float) -> np.ndarray:
+    """(L, 2, 6) derivative of the pixels of rotated points X (L, 3) by a small world rotation (3), the log
+    scale (1) and the shift (2): ``d(s A exp([w]) X + t)``."""
+    j_rot = -scale * np.einsum("ij,ljk->lik", PROJECTION, _skew(X))  # (L, 2, 3)
+    j_scale = (scale * X @ PROJECTION.T)[:, :, None]  # (L, 2, 1)
+    j_shift = np.broadcast_to(np.eye(2), (len(X), 2, 2))
+    return np.concatenate([j_rot, j_scale, j_shift], axis=2)
 
 
 def fit_frame(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: FitConfig = FitConfig(),
               start: FrameFit | None = None, weights: np.ndarray | None = None) -> FrameFit:
     """Fit head pose and expression to one frame's landmarks.
 
+    Gauss-Newton on the pose and the coefficients together: each step solves the linearised problem by
+    bounded least squares (the coefficients kept in [0, 1], the pose free), with a ridge on the coefficients.
+
     Args:
         neutral: (L, 3) rest positions of the landmark points, metres.
         basis: (52, L, 3) expression deltas.
         xy: (L, 2) tracked landmarks, pixels.
-        start: the previous frame's fit (its pose and coefficients start this one), or None.
-        weights: (L,) per-landmark weights.
+        config: the fit's settings.
+        start: the previous frame's fit (its pose and coefficients start this one), or None (the closed-form
+            pose of the neutral head, no expression).
+        weights: (L,) per-landmark weights (None: ones).
     """
     size = float(np.max(xy.max(axis=0) - xy.min(axis=0)))
     active = config.active()
+    n = int(active.sum())
+    sw = np.sqrt(np.repeat(np.ones(len(xy)) if weights is None else np.asarray(weights, np.float64), 2))
+    lam = np.sqrt(config.ridge * len(xy)) * size
     if start is None:
         e = np.zeros(len(basis))
         rotation, scale, shift = initial_pose(neutral, xy)
     else:
-        e, rotation, scale, shift = start.expressions, start.rotation, start.scale, start.shift
-    for _ in range(config.iterations):
-        model = neutral + np.tensordot(e, basis, axes=1)  # (L, 3)
-        rotation, scale, shift = refine_pose(model, xy, rotation, scale, shift, config.pose_steps, weights)
-        e = fit_expressions(neutral, basis, xy, rotation, scale, shift, config.ridge, size, weights, active)
+        e, rotation, scale, shift = start.expressions.copy(), start.rotation, start.scale, np.array(start.shift)
+    R = axis_angle_to_matrix(np.asarray(rotation, np.float64))
+    for _ in range(config.iterations if start is not None else config.first_iterations):
+        X = (neutral + np.tensordot(e, basis, axes=1)) @ R.T  # (L, 3)
+        r = (xy - scale * X @ PROJECTION.T - shift).reshape(-1)  # (2L,)
+        j_expr = np.einsum("ij,klj->lik", scale * PROJECTION @ R, basis[active]).reshape(-1, n)  # (2L, n)
+        J = np.concatenate([_pose_jacobian(X, scale).reshape(-1, 6), j_expr], axis=1)  # (2L, 6 + n)
+        ridge_rows = np.concatenate([np.zeros((n, 6)), lam * np.eye(n)], axis=1)
+        A = np.concatenate([J * sw[:, None], ridge_rows])
+        b = np.concatenate([r * sw, -lam * e[active]])
+        lower = np.concatenate([np.full(6, -np.inf), -e[active]])
+        upper = np.concatenate([np.full(6, np.inf), 1.0 - e[active]])
+        delta = lsq_linear(A, b, bounds=(lower, upper), method="bvls").x if n else \
+            np.linalg.lstsq(A, b, rcond=None)[0]
+        R = axis_angle_to_matrix(delta[:3]) @ R
+        scale *= float(np.exp(delta[3]))
+        shift = shift + delta[4:6]
+        e[active] = np.clip(e[active] + delta[6:], 0.0, 1.0)
+    rotation = matrix_to_axis_angle(R)
     model = neutral + np.tensordot(e, basis, axes=1)
     residual = np.linalg.norm(project(model, rotation, scale, shift) - xy, axis=1)
-    return FrameFit(rotation, scale, shift, e, residual)
+    return FrameFit(rotation, float(scale), np.asarray(shift, np.float64), e, residual)
 
 
 def person_neutral_offsets(neutral: np.ndarray, xy: np.ndarray, fits: list[FrameFit]) -> np.ndarray:
