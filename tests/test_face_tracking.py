@@ -117,8 +117,9 @@ def test_a_talking_head_is_tracked_and_the_fitted_head_lands_on_its_landmarks(tr
     # frontal heads: turned by less than 30 degrees, the coefficients in range and not all zero
     assert np.degrees(np.linalg.norm(track.motion.head_rotation, axis=1)).max() < 30
     assert track.motion.expressions.max() > 0.05
-    # smooth: the head turns by less than 3 degrees between frames at 30 fps
-    assert np.degrees(np.abs(np.diff(track.motion.head_rotation, axis=0))).max() < 3
+    # smooth: the head's turning speed changes by less than 1.5 degrees per frame between frames (the woman turns
+    # her head at up to 3 degrees per frame in this second)
+    assert np.degrees(np.abs(np.diff(track.motion.head_rotation, n=2, axis=0))).max() < 1.5
 
 
 @pytest.mark.slow

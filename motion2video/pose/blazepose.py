@@ -141,8 +141,9 @@ def decode_detections(raw_boxes: np.ndarray, raw_scores: np.ndarray, anchors: np
     raw, anc, scores = raw_boxes[keep] / size, anchors[keep], scores[keep]
     centre = raw[:, 0:2] + anc  # (M, 2)
     half = raw[:, 2:4] / 2
-    kps = raw[:, 4:].reshape(len(raw), -1, 2) + anc[:, None, :]  # (M, K, 2)
-    out = np.concatenate([centre - half, centre + half, kps.reshape(len(raw), -1)], axis=1)
+    num_keypoints = (raw_boxes.shape[1] - 4) // 2
+    kps = raw[:, 4:].reshape(len(raw), num_keypoints, 2) + anc[:, None, :]  # (M, K, 2)
+    out = np.concatenate([centre - half, centre + half, kps.reshape(len(raw), 2 * num_keypoints)], axis=1)
     return out, scores
 
 

@@ -146,7 +146,7 @@ def fit_frame(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: Fi
     for _ in range(config.iterations if start is not None else config.first_iterations):
         X = (neutral + np.tensordot(e, basis, axes=1)) @ R.T  # (L, 3)
         r = (xy - scale * X @ PROJECTION.T - shift).reshape(-1)  # (2L,)
-        j_expr = np.einsum("ij,klj->lik", scale * PROJECTION @ R, basis[active]).reshape(-1, n)  # (2L, n)
+        j_expr = np.einsum("ij,klj->lik", scale * PROJECTION @ R, basis[active]).reshape(len(r), n)  # (2L, n)
         J = np.concatenate([_pose_jacobian(X, scale).reshape(-1, 6), j_expr], axis=1)  # (2L, 6 + n)
         ridge_rows = np.concatenate([np.zeros((n, 6)), lam * np.eye(n)], axis=1)
         A = np.concatenate([J * sw[:, None], ridge_rows])
