@@ -185,3 +185,28 @@ def test_face_takes_a_video_only(photos_dir, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "--face takes a video" in err and "skier.jpg" in err
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.slow
+def test_a_face_video_is_the_observed_clip_of_a_face_model(face_clips, tracks, face_dir, tmp_path_factory,
+                                                          monkeypatch, capsys):
+    from motion2video.models.checkpoint import load_model
+    from motion2video.stages.clips import load_clip
+    from tests.test_pipeline import train_face_motion_model
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("cache")))  # not the user's ~/.cache
+    folder = tmp_path_factory.mktemp("face_model")
+    model = train_face_motion_model(face_dir, folder)
+    video = face_clips["face_talking_woman"]
+    clip = load_clip(load_model(model), video)
+    assert clip.source_frames == FRAMES and clip.source_fps == pytest.approx(30.0) and clip.data.shape[1] == FACE_DIM
+    assert "tracked the face in face_talking_woman.avi" in capsys.readouterr().err
+    # the tracked head pose and coefficients, not a procedural head track
+    np.testing.assert_allclose(clip.data[0], tracks["face_talking_woman"].motion.params[0], atol=1e-5)
+    out = folder / "futures.mp4"
+    assert main(["sample", str(video), "--model", str(model), "--samples", "2", "-o", str(out), "--size", "64",
+                 "--observed", "8", "--horizon", "8"]) == 0
+    assert "read from the cache" in capsys.readouterr().err  # tracked once, by the file's hash
+    cap = cv2.VideoCapture(str(out))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 16
+    cap.release()
