@@ -184,6 +184,7 @@ def test_face_takes_a_video_only(photos_dir, tmp_path, capsys):
     assert main(["pose", "--face", str(photos_dir / "skier.jpg"), "-o", str(tmp_path / "x.npz")]) == 2
     err = capsys.readouterr().err.strip()
     assert "--face takes a video" in err and "skier.jpg" in err
+    assert main(["pose", "--face", str(photos_dir / "skier.jpg"), "--person", "1", "-o", str(tmp_path / "x.npz")]) == 2
     assert not list(tmp_path.iterdir())
 
 

@@ -8,7 +8,8 @@ from pathlib import Path
 from motion2video.commands.common import add_command
 from motion2video.core.errors import InputError
 
-HELP = "estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose"
+HELP = ("estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose; --face: a "
+        "face video's face motion")
 
 DESCRIPTION = """\
 Estimate the pose of one person with the bundled BlazePose full model (no download). A photo gives its
@@ -69,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
                          "video (.mp4, .avi, .mov, ...)", src)
     if args.face and not video:
         raise InputError("--face takes a video (.mp4, .avi, .mov, ...)", src)
+    if args.face and args.person != "largest":
+        raise InputError("--person picks a body; --face follows the largest face")
     out = check_output_path(args.output, (".npz",))
     if args.overlay is not None:
         check_output_path(args.overlay, (".mp4",) if video else (".png",))
