@@ -119,7 +119,8 @@ def main(argv: list[str] | None = None) -> int:
         rel = track.relative_error()  # (T, 468)
         per_frame = np.median(rel, axis=1)
         entry = {
-            "frames": len(frames), "tracked_frames": track.num_frames, "found": int(sum(r is not None for r in results)),
+            "frames": len(frames), "tracked_frames": track.num_frames,
+            "found": int(sum(r is not None for r in results)),
             "gaps": track.gaps, "frame_size": [int(frames[0].shape[1]), int(frames[0].shape[0])],
             "scale_from_video": scale,
             "tracking_fps": len(frames) / track_s, "fit_and_measure_fps": track.num_frames / fit_s,

@@ -6,8 +6,11 @@
   score falls below ``min_presence``.
 - :func:`face_track_from_landmarks`: per-frame results -> :class:`FaceTrack`: frames without the face at the
   ends trimmed, the landmarks One-Euro smoothed (the body's image settings, speed in face sizes per second)
-  and gaps inside linearly interpolated, then the head's pose and 52 ARKit coefficients fitted to each frame
-  (:mod:`.face_fit`), the next frame starting from the last.
+  and gaps inside linearly interpolated; then the person's own face measured as offsets from Anny's at the
+  landmarks (a pose-only fit of every frame, the median residual: :func:`.face_fit.person_neutral_offsets`),
+  and the head's pose and 52 ARKit coefficients fitted to each frame with those offsets
+  (:func:`.face_fit.fit_frame`), the next frame starting from the last. The coefficients thus describe the
+  expression, not the difference between the person's face and Anny's; the face motion drives Anny's own face.
 - :func:`track_face_video`: a video file -> :class:`FaceTrack`, the data of ``motion2video pose --face``.
 
 Head pose in the face motion: the rotation is the fitted one (world axes, as the face renderer turns the head).
@@ -19,6 +22,7 @@ about the head's mean position.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -32,7 +36,8 @@ from motion2video.core.rotations import axis_angle_to_matrix
 from motion2video.pose.estimate import interpolate_gaps, iter_video_frames, open_video
 from motion2video.pose.face_anny import head_basis, head_offset, posed_landmarks
 from motion2video.pose.face_fit import PROJECTION, FitConfig, FrameFit, fit_frame, person_neutral_offsets
-from motion2video.pose.facemesh import MIN_PRESENCE, NUM_LANDMARKS, FaceDetection, FaceLandmarks, FaceMesh, detection_roi
+from motion2video.pose.facemesh import (MIN_PRESENCE, NUM_LANDMARKS, FaceDetection, FaceLandmarks, FaceMesh,
+                                        detection_roi)
 from motion2video.pose.smoothing import IMAGE_LANDMARKS, one_euro, runs
 
 FOCAL_PER_LONG_SIDE = 1.0  # the assumed pinhole focal length, in frame long sides (about 53 degrees across)
@@ -233,9 +238,8 @@ def track_face_video(path: str | Path, *, model: FaceMesh | None = None, smooth:
 def save_face_track(path: str | Path, track: FaceTrack) -> Path:
     """Write a :class:`FaceTrack` as a face motion ``.npz`` (atomic): the keys every face reader takes
     (``face``, ``fps``, ``identity``; :func:`motion2video.formats.npz.load_face_npz`) plus ``landmarks_2d``,
-    ``confidence``, ``interpolated``, ``camera``, ``neutral_offsets``, ``reprojection``, ``first_frame``, ``width``, ``height``,
-    ``video_frames`` and ``estimator``."""
-    import json
+    ``confidence``, ``interpolated``, ``camera``, ``neutral_offsets``, ``reprojection``, ``first_frame``,
+    ``width``, ``height``, ``video_frames`` and ``estimator``."""
 
     return save_npz(path, {
         "face": track.motion.params.astype(np.float32),
