@@ -101,6 +101,26 @@ def tracks(face_clips):
 
 
 @pytest.mark.slow
+def test_the_eye_model_puts_both_eyelids_where_the_mesh_has_them_on_open_eyes(face_clips):
+    """Frame 0 of the woman: eyes open, frontal. The eye model's lids (the left eye's crop mirrored) land within
+    3 pixels of the mesh's on a face about 340 pixels high, and they are its own points, not the mesh's."""
+    cap = cv2.VideoCapture(str(face_clips["face_talking_woman"]))
+    ok, frame = cap.read()
+    cap.release()
+    assert ok
+    image = cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+    plain, refined = fm.FaceMesh(refine_eyes=False), fm.FaceMesh()
+    roi = fm.detection_roi(plain.detect(image)[0])
+    a, b = plain.landmarks(image, roi), refined.landmarks(image, roi)
+    for contour in fm.EYE_CONTOUR_IN_MESH:
+        lids = list(contour[:16])
+        gap = np.linalg.norm(a.xy[lids] - b.xy[lids], axis=1)
+        assert 0.1 < gap.mean() < 3.0
+    others = np.setdiff1d(np.arange(468), np.concatenate([list(c) for c in fm.EYE_CONTOUR_IN_MESH]))
+    np.testing.assert_array_equal(a.xy[others], b.xy[others])
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("name, size", [("face_talking_woman", (512, 512)), ("face_talking_man_glasses", (720, 1280))])
 def test_a_talking_head_is_tracked_and_the_fitted_head_lands_on_its_landmarks(tracks, name, size):
     track = tracks[name]

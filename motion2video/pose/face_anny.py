@@ -3,7 +3,8 @@
 The table (``pose/data/face_anny_landmarks.npz``, built by ``scripts/make_face_correspondence.py``) gives
 each face-mesh landmark a point on Anny's head skin: three vertex indices and barycentric weights. It was
 made once from a frontal render of the neutral default head (512 x 512, the face renderer's close-up
-camera): the face mesh was run on the render, and each landmark's camera ray was cut with the head's skin
+camera): the face mesh (its eyes refined by the eye model) was run on the render, and each landmark's camera ray
+was cut with the head's skin
 triangles (the eyeballs left out, so that the eyelid landmarks sit on the lids); the nearest triangle hit
 gives the point, and a ray through the eye opening takes the nearest visible skin vertex.
 

@@ -210,10 +210,11 @@ def face_track_from_landmarks(results: list[FaceLandmarks | None], *, fps: float
 
 
 def _fit_frames(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: FitConfig) -> list[FrameFit]:
-    """:func:`fit_frame` on (T, L, 2) landmarks in order, each frame starting from the last one's fit."""
+    """:func:`fit_frame` on (T, 468, 2) landmarks in order, each frame starting from the last one's fit."""
     fits: list[FrameFit] = []
+    weights = config.weights()
     for frame in xy:
-        fits.append(fit_frame(neutral, basis, frame, config, fits[-1] if fits else None))
+        fits.append(fit_frame(neutral, basis, frame, config, fits[-1] if fits else None, weights))
     return fits
 
 

@@ -1,16 +1,20 @@
 """MediaPipe's face detector and face mesh run through LiteRT, with the project's own pre- and post-processing.
 
-Two bundled Apache-2.0 models (``motion2video/weights/facemesh.md``):
+Three bundled Apache-2.0 models (``motion2video/weights/facemesh.md``):
 
 - the detector ``face_detection_short_range.tflite`` (BlazeFace, faces within about 2 m): a 128 x 128
   letterboxed RGB image in [-1, 1] -> 896 SSD boxes of 16 values (box centre, size, 6 keypoints: right eye,
   left eye, nose tip, mouth centre, right ear tragion, left ear tragion) and a score logit;
 - the landmark model ``face_landmark.tflite``: a 192 x 192 RGB crop in [0, 1] of a rotated square region of
-  interest (ROI) -> 468 landmarks x (x, y, z) in crop pixels and a face-presence logit.
+  interest (ROI) -> 468 landmarks x (x, y, z) in crop pixels and a face-presence logit;
+- the eye model ``iris_landmark.tflite``: a 64 x 64 RGB crop in [0, 1] around one eye -> 71 eyelid, eye-halo
+  and brow points and 5 iris points x (x, y, z) in crop pixels; its eyelid and brow points replace the
+  mesh's (face mesh with refined landmarks, before the attention model).
 
 The constants follow MediaPipe's graphs (``face_detection_short_range.pbtxt``,
 ``face_detection_front_detection_to_roi.pbtxt``, ``face_landmark_cpu.pbtxt``,
-``face_landmark_landmarks_to_roi.pbtxt``); the code is written here from those facts and shares the SSD,
+``face_landmark_landmarks_to_roi.pbtxt``, ``iris_landmark_left_and_right_cpu.pbtxt``,
+``update_face_landmarks_calculator.cc``); the code is written here from those facts and shares the SSD,
 non-maximum suppression and ROI geometry of :mod:`motion2video.pose.blazepose`. ``right``/``left`` are the
 person's own sides (their right eye is on the image's left in a frontal view).
 
@@ -31,6 +35,7 @@ from motion2video.pose.blazepose import (
 
 DETECTOR_FILE = WEIGHTS / "face_detection_short_range.tflite"
 LANDMARK_FILE = WEIGHTS / "face_landmark.tflite"
+IRIS_FILE = WEIGHTS / "iris_landmark.tflite"
 
 DETECTOR_SIZE = 128
 DETECTOR_STRIDES = (8, 16, 16, 16)
@@ -43,6 +48,23 @@ ROI_SCALE = 1.5
 MIN_PRESENCE = 0.5  # face_landmark_front: tracking is dropped (the detector runs again) below this
 # The two eye corners whose direction sets the ROI's rotation in tracking (right eye outer, left eye outer).
 ROI_ROTATION_LANDMARKS = (33, 263)
+IRIS_SIZE = 64
+EYE_ROI_SCALE = 2.3
+# The eye model's crop runs from the first corner to the second; it sees a right eye (the person's), so the left
+# eye's crop is mirrored (iris_landmark_left_and_right_cpu.pbtxt).
+EYE_CORNERS = ((33, 133), (362, 263))
+# Where the eye model's 71 eye-contour and brow points go in the face mesh, per eye (update_face_landmarks):
+# lower lid (9), upper lid (7), then four halos around the eye and the brow.
+EYE_CONTOUR_IN_MESH = (
+    (33, 7, 163, 144, 145, 153, 154, 155, 133, 246, 161, 160, 159, 158, 157, 173,
+     130, 25, 110, 24, 23, 22, 26, 112, 243, 247, 30, 29, 27, 28, 56, 190,
+     226, 31, 228, 229, 230, 231, 232, 233, 244, 113, 225, 224, 223, 222, 221, 189,
+     35, 124, 46, 53, 52, 65, 143, 111, 117, 118, 119, 120, 121, 128, 245, 156, 70, 63, 105, 66, 107, 55, 193),
+    (263, 249, 390, 373, 374, 380, 381, 382, 362, 466, 388, 387, 386, 385, 384, 398,
+     359, 255, 339, 254, 253, 252, 256, 341, 463, 467, 260, 259, 257, 258, 286, 414,
+     446, 261, 448, 449, 450, 451, 452, 453, 464, 342, 445, 444, 443, 442, 441, 413,
+     265, 353, 276, 283, 282, 295, 372, 340, 346, 347, 348, 349, 350, 357, 465, 383, 300, 293, 334, 296, 336, 285, 417),
+)
 
 
 @dataclass(frozen=True)
@@ -97,6 +119,24 @@ def landmarks_roi(xy: np.ndarray) -> Roi:
     return rotated_square_roi(box, xy[ROI_ROTATION_LANDMARKS[0]], xy[ROI_ROTATION_LANDMARKS[1]])
 
 
+def eye_roi(xy: np.ndarray, eye: int) -> Roi:
+    """The eye model's ROI for eye ``eye`` (0: the person's right, 1: left) of (468, 2) landmarks
+    (IrisLandmarkLandmarksToRoi): the square around the two corners, 2.3 x their distance, turned along them."""
+    a, b = xy[EYE_CORNERS[eye][0]], xy[EYE_CORNERS[eye][1]]
+    box = np.concatenate([np.minimum(a, b), np.maximum(a, b)])
+    return rotated_square_roi(box, a, b, EYE_ROI_SCALE)
+
+
+def decode_eye_contour(raw: np.ndarray, roi: Roi, mirrored: bool) -> np.ndarray:
+    """(71, 2) image pixels of the eye model's contour output (213,) = 71 x (x, y, z) in crop pixels, taken on
+    ``roi`` (``mirrored``: the crop was flipped left to right)."""
+    pts = np.asarray(raw, np.float64).reshape(-1, 3)[:, :2] / IRIS_SIZE  # (71, 2) normalised
+    if mirrored:
+        pts[:, 0] = 1.0 - pts[:, 0]
+    mat = roi_matrix(roi, 1)
+    return pts @ mat[:, :2].T + mat[:, 2]
+
+
 @dataclass(frozen=True)
 class FaceLandmarks:
     """The face mesh's result for one ROI.
@@ -145,13 +185,15 @@ def face_anchors() -> np.ndarray:
 
 
 class FaceMesh:
-    """The face detector and the face mesh behind LiteRT interpreters.
+    """The face detector, the face mesh and the eye model behind LiteRT interpreters.
 
     Args:
         num_threads: CPU threads for each interpreter.
+        refine_eyes: run the eye model on both eyes and put its eyelid and brow points in the mesh (the mesh
+            alone closes the lids by about a third of their gap on a blink, the eye model by about half).
     """
 
-    def __init__(self, *, num_threads: int = 2) -> None:
+    def __init__(self, *, num_threads: int = 2, refine_eyes: bool = True) -> None:
         from ai_edge_litert.interpreter import Interpreter
 
         with _quiet_stderr():  # LiteRT prints "INFO: Created TensorFlow Lite XNNPACK delegate" to fd 2
@@ -159,6 +201,12 @@ class FaceMesh:
             self._det.allocate_tensors()
             self._lmk = Interpreter(model_path=str(LANDMARK_FILE), num_threads=num_threads)
             self._lmk.allocate_tensors()
+            self._eye = None
+            if refine_eyes:
+                self._eye = Interpreter(model_path=str(IRIS_FILE), num_threads=num_threads)
+                self._eye.allocate_tensors()
+                self._eye_in = self._eye.get_input_details()[0]["index"]
+                self._eye_out = {int(np.prod(d["shape"])): d["index"] for d in self._eye.get_output_details()}[213]
         self._det_in = self._det.get_input_details()[0]["index"]
         det_out = {d["shape"][-1]: d["index"] for d in self._det.get_output_details()}
         self._det_boxes, self._det_scores = det_out[4 + 2 * NUM_DETECTION_KEYPOINTS], det_out[1]
@@ -183,5 +231,17 @@ class FaceMesh:
         """The face mesh on one ROI of an (H, W, 3) uint8 RGB image."""
         self._lmk.set_tensor(self._lmk_in, crop_roi(image, roi, LANDMARK_SIZE)[None])
         self._lmk.invoke()
-        return decode_face_landmarks(self._lmk.get_tensor(self._lmk_raw).reshape(-1),
-                                     float(self._lmk.get_tensor(self._lmk_flag).reshape(())), roi)
+        lm = decode_face_landmarks(self._lmk.get_tensor(self._lmk_raw).reshape(-1),
+                                   float(self._lmk.get_tensor(self._lmk_flag).reshape(())), roi)
+        if self._eye is None:
+            return lm
+        xy = lm.xy.copy()
+        for eye in (0, 1):
+            eye_box = eye_roi(lm.xy, eye)
+            crop = crop_roi(image, eye_box, IRIS_SIZE)
+            mirrored = eye == 1
+            self._eye.set_tensor(self._eye_in, np.ascontiguousarray(crop[:, ::-1] if mirrored else crop)[None])
+            self._eye.invoke()
+            xy[list(EYE_CONTOUR_IN_MESH[eye])] = decode_eye_contour(self._eye.get_tensor(self._eye_out)[0],
+                                                                    eye_box, mirrored)
+        return FaceLandmarks(xy, lm.z, lm.score, lm.roi)
