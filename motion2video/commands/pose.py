@@ -21,8 +21,8 @@ the ends are trimmed; gaps inside are interpolated (the count is printed). --per
 people: the largest (default) or an index counted left to right in the first frame with people; a video
 follows that person in every frame. --overlay draws the joints on the input so you can check them.
 
---face tracks a face video instead (MediaPipe's face detector and 468-point face mesh, bundled) and fits the
-Anny head to every frame: the output is a face motion .npz (the 52 ARKit coefficients and the head pose per
+--face tracks a face video instead (MediaPipe's face detector, 468-point face mesh and eye model, bundled) and
+fits the Anny head to every frame: the output is a face motion .npz (the 52 ARKit coefficients and the head pose per
 frame, the file every face command reads), with the 2D landmarks, a per-frame confidence and the fit's
 re-projection error beside them. Frames without the face at the ends are trimmed; gaps inside are
 interpolated. --overlay then draws the tracked landmarks (green) and the fitted head's (red) on the video.
