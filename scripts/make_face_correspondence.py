@@ -1,9 +1,10 @@
-"""Build ``motion2video/pose/data/face_anny_landmarks.npz``: MediaPipe's 468 face-mesh landmarks on Anny's head.
+"""Build ``motion2video/pose/data/face_anny_landmarks.npz``: the tracked face points on Anny's head.
 
 The neutral default head is rendered frontally at 512 x 512 with the face renderer's close-up camera; the face
 mesh runs on the render (detector, then the landmark model twice, the second time on the ROI of its own
 landmarks, as in tracking); each landmark's ray is cut with the head's skin triangles
-(:func:`motion2video.pose.face_anny.surface_points`). Writes the table and a picture of the landmarks on the
+(:func:`motion2video.pose.face_anny.surface_points`); the two iris centres are the eyeballs' front-most
+vertices. Writes the table and a picture of the landmarks on the
 render (``--picture``) to check it.
 
     PYOPENGL_PLATFORM=osmesa python scripts/make_face_correspondence.py [--picture out/face_anny_landmarks.png]
@@ -21,7 +22,7 @@ from motion2video.core.motion import FACE_DIM, FaceMotion
 from motion2video.pose.face_anny import CORRESPONDENCE_FILE, skin_triangles, surface_points
 from motion2video.pose.facemesh import FaceMesh, detection_roi
 from renderers import anny_model
-from renderers.face import FaceRenderer, FaceStyle
+from renderers.face import FaceRenderer, FaceStyle, face_landmark_vertices
 
 SIZE = 512
 
@@ -47,15 +48,20 @@ def main(argv: list[str] | None = None) -> int:
     triangles = skin_triangles()
     on_skin = np.zeros(len(rest.vertices), bool)
     on_skin[triangles.ravel()] = True
-    corr = surface_points(lm.xy, uvz[:, :2], uvz[:, 2], triangles, out.vertex_visible[0] & on_skin)
-    save_npz(args.output, {"vertices": corr.vertices.astype(np.int32), "weights": corr.weights.astype(np.float32)})
-    hits = int((corr.weights[:, 0] < 1.0).sum())
-    print(f"wrote {args.output}: {len(corr.vertices)} landmarks, {hits} on a skin triangle, "
-          f"{len(corr.vertices) - hits} on the nearest visible skin vertex; face presence {lm.score:.3f}")
+    mesh = surface_points(lm.xy, uvz[:, :2], uvz[:, 2], triangles, out.vertex_visible[0] & on_skin)
+    pupils = face_landmark_vertices(rest)[:2]  # the right and left eyeballs' front-most vertices
+    vertices = np.concatenate([mesh.vertices, np.stack([pupils, pupils, pupils], axis=1)])  # (470, 3)
+    weights = np.concatenate([mesh.weights, np.tile([1.0, 0.0, 0.0], (2, 1))])
+    save_npz(args.output, {"vertices": vertices.astype(np.int32), "weights": weights.astype(np.float32)})
+    hits = int((mesh.weights[:, 0] < 1.0).sum())
+    iris_gap = np.linalg.norm(lm.iris - uvz[pupils, :2], axis=1)
+    print(f"wrote {args.output}: {len(mesh.vertices)} mesh landmarks, {hits} on a skin triangle, "
+          f"{len(mesh.vertices) - hits} on the nearest visible skin vertex, and the 2 pupils ({iris_gap.max():.1f} "
+          f"pixels from the tracked iris centres); face presence {lm.score:.3f}")
     if args.picture:
-        back = uvz[:, :2][corr.vertices]  # (468, 3, 2)
+        back = uvz[:, :2][vertices]  # (470, 3, 2)
         drawn = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
-        for p, q in zip(lm.xy, np.einsum("lkd,lk->ld", back, corr.weights)):
+        for p, q in zip(lm.points(), np.einsum("lkd,lk->ld", back, weights)):
             cv2.circle(drawn, (int(p[0]), int(p[1])), 2, (0, 160, 0), -1)
             cv2.circle(drawn, (int(q[0]), int(q[1])), 1, (0, 0, 255), -1)
         cv2.imwrite(args.picture, drawn)

@@ -1,12 +1,13 @@
-"""The Anny head at MediaPipe's 468 face-mesh landmarks: the correspondence table and what the fit needs.
+"""The Anny head at the tracked face points: the correspondence table and what the fit needs.
 
 The table (``pose/data/face_anny_landmarks.npz``, built by ``scripts/make_face_correspondence.py``) gives
-each face-mesh landmark a point on Anny's head skin: three vertex indices and barycentric weights. It was
-made once from a frontal render of the neutral default head (512 x 512, the face renderer's close-up
-camera): the face mesh (its eyes refined by the eye model) was run on the render, and each landmark's camera ray
-was cut with the head's skin
-triangles (the eyeballs left out, so that the eyelid landmarks sit on the lids); the nearest triangle hit
-gives the point, and a ray through the eye opening takes the nearest visible skin vertex.
+each tracked point a point on Anny's head: three vertex indices and barycentric weights. It was made once
+from a frontal render of the neutral default head (512 x 512, the face renderer's close-up camera): the face
+mesh (its eyes refined by the eye model) was run on the render, and each of its 468 landmarks' camera ray was
+cut with the head's skin triangles (the eyeballs left out, so that the eyelid landmarks sit on the lids); the
+nearest triangle hit gives the point, and a ray through the eye opening takes the nearest visible skin vertex.
+The two iris centres are the pupils: the front-most vertex of each eyeball
+(:func:`renderers.face.face_landmark_vertices`), which Anny's eyeLook* shapes move.
 
 Renderer geometry (:func:`renderers.face.head_bone_poses`): a head vertex ``v`` (skinned to the ``head``
 bone) is drawn at ``R v + c(R) + T``, the rotation spread over the neck turning the skull about the upper
@@ -34,15 +35,15 @@ class Correspondence:
     """Face-mesh landmarks on Anny's surface.
 
     Attributes:
-        vertices: (468, 3) int64 Anny vertex indices.
-        weights: (468, 3) float64 barycentric weights (rows sum to 1).
+        vertices: (470, 3) int64 Anny vertex indices (the face mesh's 468 landmarks, then the two iris centres).
+        weights: (470, 3) float64 barycentric weights (rows sum to 1).
     """
 
     vertices: np.ndarray
     weights: np.ndarray
 
     def points(self, vertices: np.ndarray) -> np.ndarray:
-        """(..., 468, 3) landmark points of (..., V, 3) Anny vertices."""
+        """(..., 470, 3) the points of (..., V, 3) Anny vertices."""
         return np.einsum("...lkd,lk->...ld", vertices[..., self.vertices, :], self.weights)
 
 
@@ -140,7 +141,7 @@ def head_offset(rotations: np.ndarray, phenotype: dict[str, float] | None = None
 
 def posed_landmarks(expressions: np.ndarray, rotations: np.ndarray, translations: np.ndarray,
                     phenotype: dict[str, float] | None = None, batch: int = 32) -> np.ndarray:
-    """(T, 468, 3) the landmark points on Anny's full forward (skinning included), as the face renderer
+    """(T, 470, 3) the tracked points on Anny's full forward (skinning included), as the face renderer
     poses the head: what the re-projection error is measured on.
 
     Args:

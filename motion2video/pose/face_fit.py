@@ -22,9 +22,8 @@ from scipy.optimize import lsq_linear
 
 from motion2video.core.motion import ARKIT_NAMES
 from motion2video.core.rotations import axis_angle_to_matrix, matrix_to_axis_angle
-from motion2video.pose.facemesh import EYE_CONTOUR_IN_MESH, NUM_LANDMARKS
+from motion2video.pose.facemesh import EYE_CONTOUR_IN_MESH, NUM_LANDMARKS, NUM_POINTS
 
-GAZE_NAMES = tuple(name for name in ARKIT_NAMES if name.startswith("eyeLook"))
 PROJECTION = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])  # world (x, y, z) -> image (x, y) directions
 
 
@@ -38,20 +37,22 @@ class FitConfig:
         first_iterations: Gauss-Newton steps when nothing starts the fit.
         ridge: weight of the squared coefficients, in squared face-size fractions (keeps the shapes the
             landmarks hardly see, e.g. tongueOut or cheekPuff, near 0).
-        unfitted: coefficients held at 0: by default the gaze (the irises are not fitted).
+        unfitted: coefficients held at 0 (none by default).
         eyelid_weight: weight of the 32 eyelid landmarks (the others weigh 1): the eyelids carry the blinks,
             and the tracked lids close by less than the model's on a blink (on face_talking_woman frames 36-58 the
             fitted eyeBlink peaks rose from 0.24 / 0.19 to 0.33 / 0.36, the median error from 0.33% to 0.37%).
         eye_halo_weight: weight of the 64 landmarks in the two rings around each eye, whose skin folds move less
             in the video than in Anny's eyeBlink.
+        iris_weight: weight of the two iris centres, which alone carry the gaze (eyeLook*) against 468 others.
     """
 
     def weights(self) -> np.ndarray:
-        """(468,) per-landmark weights of the face mesh's points."""
-        w = np.ones(NUM_LANDMARKS)
+        """(470,) per-point weights of the tracked points (the mesh's 468, then the two iris centres)."""
+        w = np.ones(NUM_POINTS)
         for contour in EYE_CONTOUR_IN_MESH:
             w[list(contour[:16])] = self.eyelid_weight
             w[list(contour[16:48])] = self.eye_halo_weight
+        w[NUM_LANDMARKS:] = self.iris_weight
         return w
 
     def active(self) -> np.ndarray:
@@ -61,9 +62,10 @@ class FitConfig:
     iterations: int = 1
     first_iterations: int = 4
     ridge: float = 1e-6
-    unfitted: tuple[str, ...] = GAZE_NAMES
+    unfitted: tuple[str, ...] = ()
     eyelid_weight: float = 4.0
     eye_halo_weight: float = 0.25
+    iris_weight: float = 4.0
 
 
 @dataclass(frozen=True)

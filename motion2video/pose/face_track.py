@@ -36,7 +36,7 @@ from motion2video.core.rotations import axis_angle_to_matrix
 from motion2video.pose.estimate import interpolate_gaps, iter_video_frames, open_video
 from motion2video.pose.face_anny import head_basis, head_offset, posed_landmarks
 from motion2video.pose.face_fit import PROJECTION, FitConfig, FrameFit, fit_frame, person_neutral_offsets
-from motion2video.pose.facemesh import (MIN_PRESENCE, NUM_LANDMARKS, FaceDetection, FaceLandmarks, FaceMesh,
+from motion2video.pose.facemesh import (MIN_PRESENCE, NUM_POINTS, FaceDetection, FaceLandmarks, FaceMesh,
                                         detection_roi)
 from motion2video.pose.smoothing import IMAGE_LANDMARKS, one_euro, runs
 
@@ -95,14 +95,15 @@ class FaceTrack:
 
     Attributes:
         motion: the :class:`FaceMotion` (52 ARKit coefficients, head rotation and translation per frame).
-        landmarks2d: (T, 468, 2) the face mesh's landmarks in the video's pixels (smoothed, gaps interpolated).
+        landmarks2d: (T, 470, 2) the tracked points in the video's pixels: the face mesh's 468 landmarks, then the
+            right and left iris centres (smoothed, gaps interpolated).
         confidence: (T,) face-presence score; 0 on interpolated frames.
         interpolated: (T,) True where the face was not found and the landmarks are interpolated.
         camera: (T, 3) the fitted weak-perspective camera: pixels per metre, then the (x, y) shift in pixels
             (:func:`motion2video.pose.face_fit.project`).
-        neutral_offsets: (468, 3) the person's face as offsets from Anny's at the landmarks, metres in the
+        neutral_offsets: (470, 3) the person's face as offsets from Anny's at the landmarks, metres in the
             head's rest frame (:func:`motion2video.pose.face_fit.person_neutral_offsets`).
-        reprojection: (T, 468) distance in pixels between each landmark re-projected from the fitted Anny head
+        reprojection: (T, 470) distance in pixels between each landmark re-projected from the fitted Anny head
             and the tracked one.
         first_frame: index in the video of the first kept frame.
         width, height: the video's frame size; video_frames: how many frames it has.
@@ -133,7 +134,7 @@ class FaceTrack:
         return np.max(self.landmarks2d.max(axis=1) - self.landmarks2d.min(axis=1), axis=1)
 
     def relative_error(self) -> np.ndarray:
-        """(T, 468) :attr:`reprojection` in face sizes."""
+        """(T, 470) :attr:`reprojection` in face sizes."""
         return self.reprojection / self.face_size()[:, None]
 
 
@@ -151,15 +152,15 @@ def head_translation(rotations: np.ndarray, camera: np.ndarray, width: int, heig
 
 def reprojected_landmarks(motion: FaceMotion, camera: np.ndarray, offsets: np.ndarray | None = None
                           ) -> np.ndarray:
-    """(T, 468, 2) pixels of the fitted head's landmark points seen by the fitted camera: the Anny head posed by
+    """(T, 470, 2) pixels of the fitted head's landmark points seen by the fitted camera: the Anny head posed by
     the face motion through Anny's own forward (skinning and blendshapes as the face renderer draws them),
     plus the person's neutral offsets turned with the head.
 
     Args:
         motion: the fitted face motion; camera: (T, 3) scale and shift.
-        offsets: (468, 3) the person's neutral offsets (None: Anny's own face).
+        offsets: (470, 3) the person's neutral offsets (None: Anny's own face).
     """
-    points = posed_landmarks(motion.expressions, motion.head_rotation, motion.head_translation)  # (T, 468, 3)
+    points = posed_landmarks(motion.expressions, motion.head_rotation, motion.head_translation)  # (T, 470, 3)
     # undo what head_translation added, so the camera sees the head as it was fitted: R v + skinning
     points = points - (head_offset(motion.head_rotation) + motion.head_translation)[:, None, :]
     if offsets is not None:
@@ -168,7 +169,7 @@ def reprojected_landmarks(motion: FaceMotion, camera: np.ndarray, offsets: np.nd
 
 
 def fitted_landmarks2d(track: FaceTrack) -> np.ndarray:
-    """(T, 468, 2) the landmarks re-projected from a track's fitted head (:func:`reprojected_landmarks`)."""
+    """(T, 470, 2) the landmarks re-projected from a track's fitted head (:func:`reprojected_landmarks`)."""
     return reprojected_landmarks(track.motion, track.camera, track.neutral_offsets)
 
 
@@ -187,8 +188,8 @@ def face_track_from_landmarks(results: list[FaceLandmarks | None], *, fps: float
     if last == first:
         raise InputError("a face is found in only one frame; a motion needs at least two", source)
     kept, ok = results[first:last + 1], found[first:last + 1]
-    blank = np.zeros((NUM_LANDMARKS, 2))
-    xy = np.stack([r.xy if r is not None else blank for r in kept])  # (T, 468, 2)
+    blank = np.zeros((NUM_POINTS, 2))
+    xy = np.stack([r.points() if r is not None else blank for r in kept])  # (T, 470, 2)
     score = np.array([r.score if r is not None else 0.0 for r in kept])
     if smooth:
         size = np.array([r.size if r is not None else 1.0 for r in kept])
@@ -197,20 +198,20 @@ def face_track_from_landmarks(results: list[FaceLandmarks | None], *, fps: float
     xy = interpolate_gaps(xy, ok)
     basis = head_basis()
     rigid = _fit_frames(basis.neutral, basis.basis, xy, replace(config, unfitted=ARKIT_NAMES))
-    offsets = person_neutral_offsets(basis.neutral, xy, rigid)  # (468, 3)
+    offsets = person_neutral_offsets(basis.neutral, xy, rigid)  # (470, 3)
     fits = _fit_frames(basis.neutral + offsets, basis.basis, xy, config)
     rotations = np.stack([f.rotation for f in fits])
     camera = np.array([[f.scale, *f.shift] for f in fits])
     params = np.concatenate([np.stack([f.expressions for f in fits]), rotations,
                              head_translation(rotations, camera, width, height)], axis=1)
     motion = FaceMotion(params, float(fps), {}, None if source is None else str(source))
-    error = np.linalg.norm(reprojected_landmarks(motion, camera, offsets) - xy, axis=2)  # (T, 468)
+    error = np.linalg.norm(reprojected_landmarks(motion, camera, offsets) - xy, axis=2)  # (T, 470)
     return FaceTrack(motion, xy, np.where(ok, score, 0.0), ~ok, camera, offsets, error, first, width, height,
                      len(results))
 
 
 def _fit_frames(neutral: np.ndarray, basis: np.ndarray, xy: np.ndarray, config: FitConfig) -> list[FrameFit]:
-    """:func:`fit_frame` on (T, 468, 2) landmarks in order, each frame starting from the last one's fit."""
+    """:func:`fit_frame` on (T, 470, 2) landmarks in order, each frame starting from the last one's fit."""
     fits: list[FrameFit] = []
     weights = config.weights()
     for frame in xy:

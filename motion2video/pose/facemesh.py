@@ -9,7 +9,8 @@ Three bundled Apache-2.0 models (``motion2video/weights/facemesh.md``):
   interest (ROI) -> 468 landmarks x (x, y, z) in crop pixels and a face-presence logit;
 - the eye model ``iris_landmark.tflite``: a 64 x 64 RGB crop in [0, 1] around one eye -> 71 eyelid, eye-halo
   and brow points and 5 iris points x (x, y, z) in crop pixels; its eyelid and brow points replace the
-  mesh's (face mesh with refined landmarks, before the attention model).
+  mesh's (face mesh with refined landmarks, before the attention model), and the iris centres follow the
+  gaze.
 
 The constants follow MediaPipe's graphs (``face_detection_short_range.pbtxt``,
 ``face_detection_front_detection_to_roi.pbtxt``, ``face_landmark_cpu.pbtxt``,
@@ -41,6 +42,7 @@ DETECTOR_SIZE = 128
 DETECTOR_STRIDES = (8, 16, 16, 16)
 LANDMARK_SIZE = 192
 NUM_LANDMARKS = 468
+NUM_POINTS = NUM_LANDMARKS + 2  # the tracked points: the mesh's landmarks, then the right and left iris centres
 NUM_DETECTION_KEYPOINTS = 6
 DETECTION_MIN_SCORE = 0.5
 NMS_MIN_IOU = 0.3
@@ -127,10 +129,10 @@ def eye_roi(xy: np.ndarray, eye: int) -> Roi:
     return rotated_square_roi(box, a, b, EYE_ROI_SCALE)
 
 
-def decode_eye_contour(raw: np.ndarray, roi: Roi, mirrored: bool) -> np.ndarray:
-    """(71, 2) image pixels of the eye model's contour output (213,) = 71 x (x, y, z) in crop pixels, taken on
-    ``roi`` (``mirrored``: the crop was flipped left to right)."""
-    pts = np.asarray(raw, np.float64).reshape(-1, 3)[:, :2] / IRIS_SIZE  # (71, 2) normalised
+def decode_eye_points(raw: np.ndarray, roi: Roi, mirrored: bool) -> np.ndarray:
+    """(K, 2) image pixels of an eye-model output, (3K,) = K x (x, y, z) in crop pixels (71 contour points or 5
+    iris points, the centre first), taken on ``roi`` (``mirrored``: the crop was flipped left to right)."""
+    pts = np.asarray(raw, np.float64).reshape(-1, 3)[:, :2] / IRIS_SIZE  # (K, 2) normalised
     if mirrored:
         pts[:, 0] = 1.0 - pts[:, 0]
     mat = roi_matrix(roi, 1)
@@ -146,12 +148,20 @@ class FaceLandmarks:
         z: (468,) depth in image pixels (smaller is nearer the camera), relative to the face's centre.
         score: face presence probability in [0, 1].
         roi: the ROI it was computed on.
+        iris: (2, 2) the right and left iris centres, pixels, from the eye model; None without it.
     """
 
     xy: np.ndarray
     z: np.ndarray
     score: float
     roi: Roi
+    iris: np.ndarray | None = None
+
+    def points(self) -> np.ndarray:
+        """(470, 2) the tracked points: :attr:`xy`, then :attr:`iris` (ValueError without the eye model)."""
+        if self.iris is None:
+            raise ValueError("no iris centres: the landmarks were found without the eye model")
+        return np.concatenate([self.xy, self.iris])
 
     def next_roi(self) -> Roi:
         return landmarks_roi(self.xy)
@@ -206,7 +216,8 @@ class FaceMesh:
                 self._eye = Interpreter(model_path=str(IRIS_FILE), num_threads=num_threads)
                 self._eye.allocate_tensors()
                 self._eye_in = self._eye.get_input_details()[0]["index"]
-                self._eye_out = {int(np.prod(d["shape"])): d["index"] for d in self._eye.get_output_details()}[213]
+                outputs = {int(np.prod(d["shape"])): d["index"] for d in self._eye.get_output_details()}
+                self._eye_contour, self._eye_iris = outputs[71 * 3], outputs[5 * 3]
         self._det_in = self._det.get_input_details()[0]["index"]
         det_out = {d["shape"][-1]: d["index"] for d in self._det.get_output_details()}
         self._det_boxes, self._det_scores = det_out[4 + 2 * NUM_DETECTION_KEYPOINTS], det_out[1]
@@ -236,12 +247,14 @@ class FaceMesh:
         if self._eye is None:
             return lm
         xy = lm.xy.copy()
+        iris = np.zeros((2, 2))
         for eye in (0, 1):
             eye_box = eye_roi(lm.xy, eye)
             crop = crop_roi(image, eye_box, IRIS_SIZE)
             mirrored = eye == 1
             self._eye.set_tensor(self._eye_in, np.ascontiguousarray(crop[:, ::-1] if mirrored else crop)[None])
             self._eye.invoke()
-            xy[list(EYE_CONTOUR_IN_MESH[eye])] = decode_eye_contour(self._eye.get_tensor(self._eye_out)[0],
-                                                                    eye_box, mirrored)
-        return FaceLandmarks(xy, lm.z, lm.score, lm.roi)
+            xy[list(EYE_CONTOUR_IN_MESH[eye])] = decode_eye_points(self._eye.get_tensor(self._eye_contour)[0],
+                                                                   eye_box, mirrored)
+            iris[eye] = decode_eye_points(self._eye.get_tensor(self._eye_iris)[0], eye_box, mirrored)[0]
+        return FaceLandmarks(xy, lm.z, lm.score, lm.roi, iris)
