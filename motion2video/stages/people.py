@@ -8,6 +8,8 @@
 - :func:`video_track`: a video -> :class:`~motion2video.pose.track.VideoTrack` (every frame's raw landmarks
   and person segmentation: the reconstruction protocol and fine-tuning on a video), cached in the same folder;
   :func:`video_pose` derives its pose from a cached track instead of tracking the video again;
+- :func:`face_video_track`: a face video -> :class:`~motion2video.pose.face_track.FaceTrack` (the face motion
+  fitted to the tracked face mesh), cached in the same folder;
 - :func:`write_photo_overlay` / :func:`write_video_overlay`: the keypoints drawn on the input.
 """
 
@@ -17,7 +19,7 @@ import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -26,6 +28,9 @@ from motion2video.pose.estimate import (IMAGE_SUFFIXES, VIDEO_SUFFIXES, PersonPo
                                         estimate_video, iter_video_frames, poses_from_landmarks, read_image_rgb)
 from motion2video.pose.files import ESTIMATOR, POSE_VERSION, load_video_pose, save_video_pose
 from motion2video.pose.track import VideoTrack, load_video_track, save_video_track, track_video
+
+if TYPE_CHECKING:  # the face track module loads Anny and the face renderer: imported when a face is tracked
+    from motion2video.pose.face_track import FaceTrack
 
 def is_video(path: str | Path) -> bool:
     """A video file by its extension (``.mp4``, ``.avi``, ``.mov``, ...)."""
@@ -172,6 +177,52 @@ def _unsure_note(pose: VideoPose) -> str:
             f"({frame_ranges(pose.unsure, pose.first_frame)})")
 
 
+def face_cache_path(video: str | Path, folder: str | Path | None = None) -> Path:
+    """Where the face track of ``video`` is cached: ``<sha256[:16]>-face.<face estimator>.npz`` beside the pose
+    cache."""
+    from motion2video.pose.face_track import FACE_ESTIMATOR
+
+    folder = Path(folder) if folder is not None else cache_dir()
+    return folder / f"{file_sha256(video)[:16]}-face.{FACE_ESTIMATOR}.npz"
+
+
+def face_video_track(path: str | Path, *, cache: str | Path | None | bool = None,
+                     note: Callable[[str], None] | None = None) -> FaceTrack:
+    """The face motion of the (largest) face in a video, read from the cache when it was tracked before.
+
+    Args:
+        path: the video.
+        cache: a folder to cache in; None: the user cache (:func:`cache_dir`); False: no cache.
+        note: called with one line when the face is tracked or read from the cache.
+    Raises:
+        InputError: unreadable video, no face, a face in fewer than two frames.
+    """
+    from motion2video.pose.face_track import load_face_track, save_face_track, track_face_video
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    cached = None if cache is False else face_cache_path(path, None if cache is None else cache)
+    if cached is not None and cached.is_file():
+        try:
+            track = load_face_track(cached)
+            if note:
+                note(f"face track of {path.name} read from the cache {cached}")
+            return track
+        except InputError:
+            pass  # a damaged cache entry is tracked again and overwritten
+    track = track_face_video(path)
+    if note:
+        note(f"tracked the face in {path.name} (face mesh + Anny head): {track.num_frames} frames at "
+             f"{track.motion.fps:g} fps" + (f", {track.gaps} gap frames interpolated" if track.gaps else ""))
+    if cached is not None:
+        try:
+            save_face_track(cached, track)
+        except OSError:
+            pass  # a read-only cache only costs the next run the tracking
+    return track
+
+
 @dataclass(frozen=True)
 class PhotoPose:
     """A photo, its person's pose and what the generator needs of it.
@@ -230,3 +281,28 @@ def write_video_overlay(path: str | Path, video: str | Path, pose: VideoPose) ->
                 break
 
     return write_video(path, frames(), pose.fps, n_frames=pose.num_frames, preset="veryfast")
+
+
+def write_face_overlay(path: str | Path, video: str | Path, track: "FaceTrack") -> Path:
+    """The video with the tracked face landmarks (green) and those re-projected from the fitted head (red) drawn
+    on every kept frame (mp4 at the video's rate)."""
+    import cv2
+
+    from motion2video.formats.video import write_video
+    from motion2video.pose.face_track import fitted_landmarks2d
+
+    fitted = fitted_landmarks2d(track)  # (T, 468, 2)
+    radius = max(1, round(max(track.width, track.height) / 600))
+
+    def frames():
+        for i, frame in enumerate(iter_video_frames(video)):
+            t = i - track.first_frame
+            if not 0 <= t < track.num_frames:
+                continue
+            frame = frame.copy()
+            for points, colour in ((track.landmarks2d[t], (0, 200, 0)), (fitted[t], (230, 0, 0))):
+                for x, y in points:
+                    cv2.circle(frame, (int(x), int(y)), radius, colour, -1)
+            yield frame[None]
+
+    return write_video(path, frames(), track.motion.fps)
