@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q --upgrade pip
 	# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install
 	$(PY) -m pip install -q torch==2.13.0
-	$(PY) -m pip install -q -e '.[dev,ray]'
+	$(PY) -m pip install -q -e '.[dev,ray,app]'
 	@touch $@
 
 # Debian's chromium, for the tests only: the batch gallery test opens index.html in it (Playwright drives the

@@ -2,9 +2,15 @@
 
 The public API, importable from here::
 
-    from motion2video import load_motion, save_motion, render_motion, iter_frames, write_video, Motion, InputError
+    from motion2video import load_model, sample, synthesize, transfer, analogy, estimate_pose
+    from motion2video import load_motion, save_motion, render_motion, iter_frames, write_video, read_video
+    from motion2video import Motion, FaceMotion, InputError
 
-Each name is the one defined in its layer (see docs/architecture.md): ``load_motion`` / ``save_motion`` in
+The pipeline: ``load_model``, ``sample`` (K futures of a clip), ``synthesize`` (futures as video of a photo's
+person), ``transfer`` (behaviour transfer), ``analogy`` (A : B :: C : D) and ``estimate_pose`` (a person in a photo
+or video), with their typed results ``Futures``, ``Synthesis``, ``Transfer``, ``Analogy`` and ``Pose``, are in
+:mod:`motion2video.apps.api`. Each name is the one defined in its layer (see docs/architecture.md):
+``load_motion`` / ``save_motion`` in
 :mod:`motion2video.formats.io`, ``render_motion`` / ``iter_frames`` in :mod:`motion2video.apps.render`,
 ``write_video`` in :mod:`motion2video.formats.video`, ``Motion`` / ``FaceMotion`` in :mod:`motion2video.core.motion`,
 ``InputError`` in :mod:`motion2video.core.errors`. They load on first use, so ``import motion2video`` stays cheap
@@ -19,6 +25,17 @@ __version__ = "0.1.0"
 
 # public name -> the module that defines it
 _PUBLIC = {
+    "load_model": "motion2video.apps.api",
+    "sample": "motion2video.apps.api",
+    "synthesize": "motion2video.apps.api",
+    "transfer": "motion2video.apps.api",
+    "analogy": "motion2video.apps.api",
+    "estimate_pose": "motion2video.apps.api",
+    "Futures": "motion2video.apps.api",
+    "Synthesis": "motion2video.apps.api",
+    "Transfer": "motion2video.apps.api",
+    "Analogy": "motion2video.apps.api",
+    "Pose": "motion2video.apps.api",
     "load_motion": "motion2video.formats.io",
     "save_motion": "motion2video.formats.io",
     "render_motion": "motion2video.apps.render",

@@ -17,7 +17,7 @@ from motion2video.core.errors import InputError
 
 # Sub-command modules, in the order `--help` lists them. A module that does not exist yet is skipped.
 COMMANDS = ("render", "pose", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
-            "transfer", "analogy", "corpus_stats", "batch", "doctor")
+            "transfer", "analogy", "corpus_stats", "batch", "doctor", "app")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -271,5 +271,7 @@ def test_every_shipped_weight_file_has_a_model_card_and_stays_under_30_mb():
     assert len(files) >= 10
     for path in files:
         assert path.stat().st_size < 30 * 2**20, path.name
-        card = {"pose_detection": "blazepose", "pose_landmark_full": "blazepose"}.get(path.stem, path.stem)
+        card = {"pose_detection": "blazepose", "pose_landmark_full": "blazepose",
+                "face_detection_short_range": "facemesh", "face_landmark": "facemesh",
+                "iris_landmark": "facemesh"}.get(path.stem, path.stem)
         assert (WEIGHTS_DIR / f"{card}.md").is_file(), f"{path.name} has no model card"

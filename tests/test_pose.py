@@ -137,6 +137,7 @@ def test_poses_from_landmarks_trims_the_ends_and_interpolates_the_gaps():
     results = [None, _fake_landmarks(0), None, None, _fake_landmarks(30), None]
     pose = poses_from_landmarks(results, fps=30.0, width=640, height=480)
     assert pose.num_frames == 4 and pose.first_frame == 1 and pose.gaps == 2
+    np.testing.assert_array_equal(pose.unsure, [False, True, True, False])  # the gaps are unsure frames
     np.testing.assert_allclose(pose.points2d[1:3, 0, 0], [110, 120])
     assert (pose.confidence[1:3] == 0).all() and (pose.confidence[[0, 3]] > 0).all()
     # the 3D body stands on the floor and moves sideways with the 2D pelvis.
@@ -338,7 +339,9 @@ def test_pose_command_on_a_video_writes_a_motion_file(dancer_clip, tmp_path, cap
     cap = cv2.VideoCapture(str(overlay))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 40
     cap.release()
-    assert "0 gap frames interpolated" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "0 gap frames interpolated" in printed and "no unsure frames" in printed
+    assert pose.unsure.shape == (40,) and not pose.unsure.any()
 
 
 @pytest.mark.parametrize("make, message", [

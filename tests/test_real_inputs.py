@@ -75,8 +75,6 @@ def test_a_video_is_an_observed_clip_for_3d_and_2d_models(models, dancer_clip, c
     assert "read from the cache" in capsys.readouterr().err
     flat = load_clip(load_model(models["body2d"]), dancer_clip)  # the 2D keypoints, on a plane facing its camera
     assert flat.data.shape == clip.data.shape and np.all(flat.data[..., 1] == 0)
-    with pytest.raises(InputError, match="face model"):
-        load_clip(load_model(models["face"]), dancer_clip)
 
 
 def test_sample_command_with_a_video(models, dancer_clip, tmp_path, capsys):

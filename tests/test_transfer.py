@@ -21,7 +21,7 @@ from motion2video.models.training import TrainConfig, train_model
 from motion2video.evaluation.transfer import TABLE1_TIMESTEPS, evaluate_transfer, regression_error, transfer_pairs
 from motion2video.stages.clips import LoadedClip, load_clip
 from motion2video.apps.transfer import transfer_behavior
-from motion2video.formats.video import read_video, write_image
+from motion2video.formats.video import read_image, read_video, write_image
 from tests.conftest import link_clips
 
 CLIPS = ("cmu/131_01.bvh", "cmu/131_03.bvh", "cmu/01_01.bvh", "mass/mass_walk.bvh")
@@ -215,15 +215,18 @@ def frame_ckpt(tmp_path_factory):
 
 @pytest.mark.slow
 def test_transfer_frames_style_with_reference(ckpts, clips, frame_ckpt, tmp_path, capsys):
-    ref = np.zeros((40, 60, 3), np.uint8)
+    person = read_image(Path(__file__).resolve().parents[1] / "demo_inputs" / "reference_body_128.png").copy()
+    person[person.astype(int).min(axis=2) > 235] = (0, 0, 200)  # the white backdrop made blue
+    ref = np.zeros((128, 192, 3), np.uint8)
     ref[:, :, 2] = 200
+    ref[:, 32:160] = person  # a wide picture of a person on blue, no pose file beside it: the pose is estimated
     write_image(tmp_path / "ref.png", ref)
     out = tmp_path / "frames.mp4"
     code = main(["transfer", "--model", str(ckpts["behavior"]), "--behavior", clips["source"], "--target",
                  clips["target"], "--horizon", "3", "--size", "32", "--frame-model", str(frame_ckpt),
                  "--reference", str(tmp_path / "ref.png"), "-o", str(out)])
     assert code == 0
-    assert "note: reference image is 60x40" in capsys.readouterr().err  # padded and resized, with a note
+    assert "note: reference image is 192x128" in capsys.readouterr().err  # padded and resized, with a note
     frames, _ = read_video(out)
     assert frames.shape == (4, 32, 66, 3)
     assert frames[:, 5:11, 40:62, 2].mean() > 150  # above the label: the generator copies the blue reference

@@ -50,7 +50,7 @@ def test_video_track_is_cached_and_is_the_trackers_result(dancer30, tmp_path, ca
     np.testing.assert_array_equal(again.xy, track.xy)
     np.testing.assert_array_equal(again.segmentation, track.segmentation)
     # the landmarks are the tracker's, bit for bit; the mask its segmentation within 8-bit rounding
-    first = next(iter(track_frames(iter_video_frames(dancer30))))
+    first = next(iter(track_frames(iter_video_frames(dancer30)))).landmarks
     np.testing.assert_array_equal(track.xy[0], first.xy)
     exact = first.person_mask(track.width, track.height)
     assert np.abs(track.person_mask(0) - exact).max() <= 1.0 / 255 + 1e-6

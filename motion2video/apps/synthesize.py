@@ -40,10 +40,12 @@ Placement
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -222,7 +224,7 @@ class SynthesisResult:
     """What :func:`synthesize` wrote and how long each stage took.
 
     Attributes:
-        video, structure_video, sheet: the written files.
+        video, structure_video, sheet: the written files (None when nothing was written).
         frames: (T, H, W, 3) shape of the grid video.
         samples, observed, horizon: K, To, Tf.
         fps: frame rate of the videos.
@@ -233,9 +235,9 @@ class SynthesisResult:
         structures: the :class:`Structures` used.
     """
 
-    video: Path
-    structure_video: Path
-    sheet: Path
+    video: Path | None
+    structure_video: Path | None
+    sheet: Path | None
     frames: tuple[int, ...]
     samples: int
     observed: int
@@ -280,10 +282,13 @@ def write_outputs(paths: tuple[Path, Path, Path], video: np.ndarray, structure_v
 
 
 def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: str | Path,
-               output: str | Path, config: SynthesisConfig = SynthesisConfig(),
-               reference_pose: str | Path | None = None) -> SynthesisResult:
+               output: str | Path | None, config: SynthesisConfig = SynthesisConfig(),
+               reference_pose: str | Path | None = None,
+               on_chunk: Callable[[int, np.ndarray, np.ndarray], None] | None = None,
+               progress: Callable[[str, float], None] | None = None) -> SynthesisResult:
     """Observed clip + reference image -> K futures as RGB videos: ``OUT.mp4``, ``OUT-structure.mp4`` and
-    ``OUT-sheet.png`` (see the module docstring).
+    ``OUT-sheet.png`` (see the module docstring); with ``output=None`` nothing is written and ``on_chunk`` is
+    the only way the frames come out.
 
     Args:
         motion_model: a checkpoint path / shipped name, or a loaded ModelBundle.
@@ -291,9 +296,14 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
         input_path: the observed clip (.bvh / body .npz / a video of a person for body models; FaceMotion
             .npz / .csv for face).
         reference: the reference appearance image.
-        output: ``OUT.mp4``.
+        output: ``OUT.mp4``, or None.
         config: the options.
         reference_pose: the reference pose file (default: ``IMAGE.pose.npz`` when it exists).
+        on_chunk: called with every generated chunk, ``(start, frames, previews)`` as
+            :func:`~motion2video.stages.frames.iter_generated` yields them, before it is written.
+        progress: called with ``(stage, fraction)``: ``"loading"``, ``"sampling"``, ``"structures"``, then
+            ``"frames"`` after every chunk (fraction of the video's steps done). An exception it raises (a
+            cancelled request) stops the work and leaves no file.
     Returns:
         A :class:`SynthesisResult`.
     Raises:
@@ -306,7 +316,9 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
 
     timings: dict[str, float] = {}
     t_all = t0 = time.perf_counter()
-    paths = check_output(output)
+    report = progress or (lambda stage, fraction: None)
+    paths = None if output is None else check_output(output)
+    report("loading", 0.0)
     bundle = load_model(motion_model) if isinstance(motion_model, (str, Path)) else motion_model
     frames_model = load_frame_model(frame_model) if isinstance(frame_model, (str, Path)) else frame_model
     gen_config = frames_model.model.config
@@ -329,12 +341,14 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
+    report("sampling", 0.0)
     fc = sample_forecast(bundle, clip, samples=config.samples, observed=config.observed, horizon=config.horizon,
                         start=config.start, seed=config.seed, threads=config.motion_threads, source=str(input_path),
                         rigid_bones=config.rigid_bones)
     timings["sampling"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
+    report("structures", 0.0)
     ref = reference_in_view(fc, ref, size=size, fit_view=config.fit_view)
     structures = render_structures(fc, domain=domain, size=size, reference=ref)
     timings["structures"] = time.perf_counter() - t0
@@ -350,14 +364,25 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     compose_s = 0.0
     chunks = iter_generated(frames_model, ref, structures, batch_size=config.batch_size, threads=threads,
                             clock=clock)
-    temps = [p.with_name(f".{p.stem}.{os.getpid()}.partial{p.suffix}") for p in paths]
+    temps = [] if paths is None else [p.with_name(f".{p.stem}.{os.getpid()}.partial{p.suffix}") for p in paths]
+    steps = to + tf
+    grid_shape = None
+    report("frames", 0.0)
     try:
-        with VideoWriter(temps[0], fc.fps, crf=config.crf, preset=config.preset) as video, \
-                VideoWriter(temps[1], fc.fps, crf=config.crf, preset=config.preset) as structure_video:
+        with contextlib.ExitStack() as stack:
+            writers = [stack.enter_context(VideoWriter(tmp, fc.fps, crf=config.crf, preset=config.preset))
+                       for tmp in temps[:2]]
             for start, frames, previews in chunks:
+                if on_chunk is not None:
+                    on_chunk(start, frames, previews)
                 c0 = time.perf_counter()
-                video.write(compose_chunk(frames, start, to))
-                structure_video.write(compose_chunk(previews, start, to))
+                if writers:
+                    grid = compose_chunk(frames, start, to)
+                    writers[0].write(grid)
+                    writers[1].write(compose_chunk(previews, start, to))
+                    grid_shape = grid.shape[1:]
+                elif grid_shape is None:  # nothing written: the shape the grid video would have
+                    grid_shape = compose_chunk(frames[:1], start, to).shape[1:]
                 for i in range(len(frames)):
                     step = start + i
                     if step < to and step in obs_steps:
@@ -366,12 +391,14 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
                         for j in range(frames.shape[1]):
                             picked[j, step] = frames[i, j]
                 compose_s += time.perf_counter() - c0
+                report("frames", (start + len(frames)) / steps)
         c0 = time.perf_counter()
         sheet = contact_sheet_of(lambda t: picked[0, t], lambda j, t: picked[j, to + t], to, tf,
                                  structures.samples, header=header)
-        write_image(temps[2], sheet)
+        if paths is not None:
+            write_image(temps[2], sheet)
         compose_s += time.perf_counter() - c0
-        for tmp, final in zip(temps, paths):
+        for tmp, final in zip(temps, paths or ()):
             os.replace(tmp, final)
     finally:
         for tmp in temps:
@@ -381,8 +408,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     timings["compose"] = compose_s
     timings["encoding"] = max(0.0, loop_s - timings["generation"] - compose_s)
     timings["total"] = time.perf_counter() - t_all
-    return SynthesisResult(video=paths[0], structure_video=paths[1], sheet=paths[2],
-                           frames=(video.num_frames, video.height, video.width, 3),
+    return SynthesisResult(video=paths and paths[0], structure_video=paths and paths[1], sheet=paths and paths[2],
+                           frames=(to + tf, *grid_shape),
                            samples=structures.samples, observed=structures.observed, horizon=structures.horizon,
                            fps=float(fc.fps), domain=domain, notes=ref.notes, timings=timings, forecast=fc,
                            structures=structures)

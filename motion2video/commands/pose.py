@@ -8,17 +8,27 @@ from pathlib import Path
 from motion2video.commands.common import add_command
 from motion2video.core.errors import InputError
 
-HELP = "estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose"
+HELP = ("estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose; --face: a "
+        "face video's face motion")
 
 DESCRIPTION = """\
 Estimate the pose of one person with the bundled BlazePose full model (no download). A photo gives its
 reference pose file (IMAGE.pose.npz: the canonical H36M-17 joints in its pixels), which synthesize and
 transfer read beside the image. A video (.mp4, .avi, .mov, ...) gives a motion .npz at the video's own frame
 rate: 3D joints (metres, z up, floor at 0; every motion command reads them), the 2D joints in the video's
-pixels (joints_2d), per-joint confidence, and which frames were interpolated. Frames without the person at
-the ends are trimmed; gaps inside are interpolated (the count is printed). --person picks one of several
-people: the largest (default) or an index counted left to right in the first frame with people; a video
-follows that person in every frame. --overlay draws the joints on the input so you can check them.
+pixels (joints_2d), per-joint confidence, which frames were interpolated and which the tracker was unsure of
+(unsure: printed, and a boolean per frame). Frames without the person at the ends are trimmed; gaps inside are
+interpolated (the count is printed). --person picks one of several people: the largest (default) or an index
+counted left to right in the first frame with people; a video follows that ONE person in every frame by the
+colours of their torso and the motion of their pelvis, so a passer-by is not taken for them. The 3D root moves
+in depth with the person's apparent size (a 60 degree field of view across the frame is assumed). --overlay
+draws the joints on the input so you can check them.
+
+--face tracks a face video instead (MediaPipe's face detector, 468-point face mesh and eye model, bundled) and
+fits the Anny head to every frame: the output is a face motion .npz (the 52 ARKit coefficients and the head pose per
+frame, the file every face command reads), with the 2D landmarks, a per-frame confidence and the fit's
+re-projection error beside them. Frames without the face at the ends are trimmed; gaps inside are
+interpolated. --overlay then draws the tracked landmarks (green) and the fitted head's (red) on the video.
 """
 
 EXAMPLES = """\
@@ -26,6 +36,8 @@ examples:
   motion2video pose ../shared/data/photos/skier.jpg -o out/skier.pose.npz --overlay out/skier_pose.png
   motion2video pose ../shared/data/photos/three_walking.jpg -o out/walker.pose.npz --person 0
   motion2video pose ../shared/data/video/dancer.avi -o out/dancer.npz --overlay out/dancer_pose.mp4
+  motion2video pose --face ../shared/data/video/face_talking_woman.mp4 -o out/woman_face.npz
+  motion2video render out/woman_face.npz --style face -o out/woman_face.mp4
 """
 
 
@@ -37,6 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "synthesize to find it) or a video's motion file")
     p.add_argument("--person", default="largest",
                    help="which person: 'largest' (default) or an index counted left to right (0 = leftmost)")
+    p.add_argument("--face", action="store_true",
+                   help="the input is a face video: write its face motion (52 ARKit coefficients + head pose)")
     p.add_argument("--overlay", default=None,
                    help="also write the joints drawn on the input: a .png for a photo, an .mp4 for a video")
 
@@ -57,9 +71,15 @@ def run(args: argparse.Namespace) -> int:
     if not video and not people.is_image(src):
         raise InputError(f"unsupported input extension {src.suffix or '(none)'!r}: a photo (.png, .jpg, ...) or a "
                          "video (.mp4, .avi, .mov, ...)", src)
+    if args.face and not video:
+        raise InputError("--face takes a video (.mp4, .avi, .mov, ...)", src)
+    if args.face and args.person != "largest":
+        raise InputError("--person picks a body; --face follows the largest face")
     out = check_output_path(args.output, (".npz",))
     if args.overlay is not None:
         check_output_path(args.overlay, (".mp4",) if video else (".png",))
+    if args.face:
+        return _face(src, out, args.overlay)
     if video:
         return _video(src, out, person, args.overlay)
     return _photo(src, out, person, args.overlay)
@@ -93,6 +113,31 @@ def _video(src: Path, out: Path, person, overlay: str | None) -> int:
     print(f"wrote {out} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
           f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
           f"{trimmed_end} at the end of {pose.video_frames})")
+    if pose.unsure_frames:
+        print(f"unsure of the person in {pose.unsure_frames} frames (video frames "
+              f"{people.frame_ranges(pose.unsure, pose.first_frame)}): another person near them, a jump or a "
+              "low presence; gaps among them are interpolated (the npz's `unsure` marks them all)")
+    else:
+        print("followed one person in every frame: no unsure frames")
     if overlay is not None:
         print(f"wrote {people.write_video_overlay(overlay, src, pose)}")
+    return 0
+
+
+def _face(src: Path, out: Path, overlay: str | None) -> int:
+    import numpy as np
+
+    from motion2video.pose.face_track import save_face_track
+    from motion2video.stages import people
+
+    track = people.face_video_track(src, cache=False)
+    save_face_track(out, track)
+    trimmed_end = track.video_frames - track.first_frame - track.num_frames
+    error = track.relative_error()
+    print(f"wrote {out} ({track.num_frames} frames at {track.motion.fps:g} fps, {track.width}x{track.height}; "
+          f"{track.gaps} gap frames interpolated; trimmed {track.first_frame} frames at the start and "
+          f"{trimmed_end} at the end of {track.video_frames}; landmarks re-projected from the fitted head within "
+          f"{100 * float(np.median(error)):.2f}% of the face size (median))")
+    if overlay is not None:
+        print(f"wrote {people.write_face_overlay(overlay, src, track)}")
     return 0

@@ -36,7 +36,9 @@ its structure, observed frames, and a row of future frames per sample): all thre
 The reference image is padded to a square and resized to the generator's size when needed (with a note);
 grey-scale images become RGB, RGBA images are composited over white. Its pose is read from IMAGE.pose.npz
 when that exists (or --reference-pose); otherwise a body pose is estimated in the image (BlazePose, with a
-note), and only when nobody is found is the image assumed to show the first observed pose. A video as the
+note), a picture with nobody in it is refused (exit 2), and a person cut by the picture's edge gets a note (the
+picture is extended, its edge repeated, where the joints lie beyond it). A face reference without a pose file is
+assumed to show the first observed pose. A video as the
 observed clip has its person's pose estimated (cached in ~/.cache/motion2video/pose by the file's hash).
 """
 

@@ -164,7 +164,8 @@ def video_frames(path: str | Path, *, size: int, targets: int = 64, stride: int 
     box = square_box(np.concatenate([track.body_landmarks(i) for i in kept]))
     images, points, masks = crop_frames(path, track, kept, size=size, box=box)
     body = slice(0, NUM_BODY_LANDMARKS)
-    _, joints3d, _ = landmarks_to_joints(track.xy[kept, body], track.world[kept, body], track.visibility[kept, body])
+    _, joints3d, _ = landmarks_to_joints(track.xy[kept, body], track.world[kept, body], track.visibility[kept, body],
+                                         width=track.width, height=track.height, fps=track.fps)
     return VideoFrames(images, points, masks, np.array(kept), track.fps, box, len(wanted) - len(kept), joints3d)
 
 

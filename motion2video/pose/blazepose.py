@@ -128,11 +128,12 @@ def decode_detections(raw_boxes: np.ndarray, raw_scores: np.ndarray, anchors: np
     """SSD decoding of the detector's outputs (TensorsToDetectionsCalculator, reverse_output_order).
 
     Args:
-        raw_boxes: (N, 12) x, y, w, h, then 4 keypoints (x, y), in input pixels relative to the anchor.
+        raw_boxes: (N, 4 + 2K) x, y, w, h, then K keypoints (x, y), in input pixels relative to the anchor
+            (K = 4 for the pose detector, 6 for the face detector).
         raw_scores: (N,) score logits.
         anchors: (N, 2) anchor centres, normalised.
     Returns:
-        (M, 12) decoded boxes (x_min, y_min, x_max, y_max, then 4 keypoints (x, y)) normalised to the
+        (M, 4 + 2K) decoded boxes (x_min, y_min, x_max, y_max, then K keypoints (x, y)) normalised to the
         detector input, and (M,) scores, for the M anchors scoring at least ``min_score``.
     """
     scores = 1.0 / (1.0 + np.exp(-np.clip(raw_scores.astype(np.float64), -SCORE_CLIP, SCORE_CLIP)))
@@ -140,8 +141,9 @@ def decode_detections(raw_boxes: np.ndarray, raw_scores: np.ndarray, anchors: np
     raw, anc, scores = raw_boxes[keep] / size, anchors[keep], scores[keep]
     centre = raw[:, 0:2] + anc  # (M, 2)
     half = raw[:, 2:4] / 2
-    kps = raw[:, 4:12].reshape(-1, 4, 2) + anc[:, None, :]  # (M, 4, 2)
-    out = np.concatenate([centre - half, centre + half, kps.reshape(-1, 8)], axis=1)
+    num_keypoints = (raw_boxes.shape[1] - 4) // 2
+    kps = raw[:, 4:].reshape(len(raw), num_keypoints, 2) + anc[:, None, :]  # (M, K, 2)
+    out = np.concatenate([centre - half, centre + half, kps.reshape(len(raw), 2 * num_keypoints)], axis=1)
     return out, scores
 
 

@@ -1,18 +1,19 @@
 """Pose of a person in a photo or a video: BlazePose landmarks -> canonical H36M-17 joints.
 
 - :func:`estimate_image`: one photo -> :class:`PersonPose` (2D joints in its pixels, 3D joints in metres).
-- :func:`track_frames`: a stream of video frames -> one BlazePose :class:`~.blazepose.Landmarks` (or None)
-  per frame, following one person: the ROI of each frame comes from the previous frame's landmarks, and the
-  detector runs again (keeping the detection nearest the person's last position) when the landmark model's
-  presence score falls below ``min_presence``.
+- :func:`track_frames`: a stream of video frames -> a :class:`Tracked` per frame (the person's BlazePose
+  :class:`~.blazepose.Landmarks` or None, and whether the frame was unsure), following ONE person by appearance
+  and motion (:mod:`motion2video.pose.follow`): the ROI of each frame comes from the previous frame's landmarks,
+  and when that result fails a check (presence, a jump from the predicted position, a torso of other colours)
+  the detector runs again and the candidate that matches the person's look and predicted position is taken.
 - :func:`estimate_video`: a video file -> :class:`VideoPose` (frames without a person at the ends trimmed,
-  landmarks smoothed as MediaPipe smooths them, gaps inside linearly interpolated), the data of
-  ``motion2video pose VIDEO``.
+  landmarks smoothed as MediaPipe smooths them, gaps inside linearly interpolated, unsure frames flagged), the
+  data of ``motion2video pose VIDEO``.
 
 3D joints: BlazePose's world landmarks (hip-centred, metres) turned z up, on the canonical body points
-(:func:`motion2video.core.skeletons.h36m_body_points`, skeleton version 2); the body's position comes from the
-2D hip centre under a constant metres-per-pixel scale (the clip's median leg length in metres over its
-90th-percentile leg length in pixels): sideways and vertical movement in the image plane, none in depth.
+(:func:`motion2video.core.skeletons.h36m_body_points`, skeleton version 2); the body's position in 3D comes from
+the pelvis's pixel and the body's apparent size (:mod:`motion2video.pose.depth`): its distance from the camera
+changes as the person walks towards or away from it.
 The floor is put at z = 0, :data:`~motion2video.formats.canonical.ANKLE_HEIGHT` below the lowest ankle.
 """
 
@@ -28,8 +29,10 @@ import numpy as np
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import h36m_body_points
 from motion2video.formats.canonical import floor_height
-from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, detection_roi
-from motion2video.pose.h36m import blazepose_to_h36m, leg_length, world_to_project
+from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, Roi, detection_roi
+from motion2video.pose.follow import Candidate, FollowConfig, MotionState, check_candidate, torso_histogram
+from motion2video.pose.depth import default_focal, pixels_per_metre, root_path
+from motion2video.pose.h36m import blazepose_to_h36m, world_to_project
 from motion2video.pose.smoothing import smooth_landmarks
 
 MIN_PRESENCE = 0.5
@@ -95,14 +98,22 @@ def parse_person(value: str) -> str | int:
 
 # --- joints from landmarks ----------------------------------------------------------------------------------
 
-def landmarks_to_joints(xy: np.ndarray, world: np.ndarray, visibility: np.ndarray
+def landmarks_to_joints(xy: np.ndarray, world: np.ndarray, visibility: np.ndarray, *, width: int, height: int,
+                        fps: float = 25.0, focal: float | None = None
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """BlazePose landmarks of T frames -> canonical joints with a root trajectory and the floor at 0.
+
+    The root moves in 3D: its distance from the camera from the body's apparent size, its sideways and vertical
+    position from its pixel at that distance (:mod:`motion2video.pose.depth`), relative to the first frame.
 
     Args:
         xy: (T, 33, 2) image pixels.
         world: (T, 33, 3) world landmarks (BlazePose axes: y down, metres, hip-centred).
         visibility: (T, 33) in [0, 1].
+        width, height: the image size (the principal point is its centre).
+        fps: frames per second (the apparent size is smoothed over
+            :data:`~motion2video.pose.depth.DEPTH_WINDOW_S`).
+        focal: the camera's focal length in pixels (default :func:`~motion2video.pose.depth.default_focal`).
     Returns:
         points2d (T, 17, 2) pixels, joints3d (T, 17, 3) metres z up floor at 0, confidence (T, 17).
     """
@@ -112,11 +123,10 @@ def landmarks_to_joints(xy: np.ndarray, world: np.ndarray, visibility: np.ndarra
     # head along the thorax -> ears direction (the raw neck -> head direction)
     local = h36m_body_points(raw)
     local -= local[:, :1]
-    leg_m = float(np.median(leg_length(world)))
-    leg_px = float(np.percentile(leg_length(xy), 90))
-    metres_per_px = leg_m / max(leg_px, 1e-6)
-    root_px = points2d[:, 0] - points2d[:1, 0]  # (T, 2) image motion of the pelvis
-    root = np.stack([root_px[:, 0], np.zeros(len(root_px)), -root_px[:, 1]], axis=1) * metres_per_px
+    focal = default_focal(width, height) if focal is None else float(focal)
+    root = root_path(points2d[:, 0], pixels_per_metre(xy, world, visibility), focal=focal,
+                     centre=np.array([0.5 * width, 0.5 * height]), fps=fps)  # (T, 3)
+    root[:, :2] -= root[:1, :2]
     joints3d = local + root[:, None, :]
     joints3d[..., 2] -= floor_height(joints3d)
     return points2d, joints3d, confidence
@@ -162,7 +172,8 @@ def estimate_image(image: np.ndarray, *, person: str | int = "largest", model: B
     if lm.score < MIN_PRESENCE:
         raise InputError(f"no person found (pose presence {lm.score:.2f})", source)
     body = slice(0, NUM_BODY_LANDMARKS)
-    p2, j3, conf = landmarks_to_joints(lm.xy[None, body], lm.world[None, body], lm.visibility[None, body])
+    p2, j3, conf = landmarks_to_joints(lm.xy[None, body], lm.world[None, body], lm.visibility[None, body],
+                                       width=image.shape[1], height=image.shape[0])
     return PersonPose(p2[0], j3[0], conf[0], lm, image.shape[1], image.shape[0], len(detections))
 
 
@@ -184,42 +195,77 @@ def read_image_rgb(path: str | Path) -> np.ndarray:
 
 # --- video -------------------------------------------------------------------------------------------------
 
-def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
-                 model: BlazePose | None = None, min_presence: float = MIN_PRESENCE,
-                 source: str | Path | None = None) -> Iterator[Landmarks | None]:
-    """Follow one person through a stream of (H, W, 3) uint8 RGB frames.
+@dataclass(frozen=True)
+class Tracked:
+    """One video frame's result of :func:`track_frames`.
 
-    The person is chosen (``person``) in the first frame where the detector finds anyone; afterwards each
-    frame's ROI comes from the previous frame's landmarks. When the presence score drops below
-    ``min_presence`` the detector runs on that frame again and the detection whose hip centre is nearest
-    the person's last hip centre is taken.
+    Attributes:
+        landmarks: the followed person's landmarks, None where they are not found.
+        unsure: the landmarks from the person's last position failed a check (presence under the threshold, a
+            jump from the predicted position, a torso of other colours): the detector was asked again, and the
+            frame has the candidate that matches the person (or none).
+    """
+
+    landmarks: Landmarks | None
+    unsure: bool
+
+
+def track_frames(frames: Iterable[np.ndarray], *, person: str | int = "largest",
+                 model: BlazePose | None = None, config: FollowConfig = FollowConfig(),
+                 source: str | Path | None = None) -> Iterator[Tracked]:
+    """Follow one person through a stream of (H, W, 3) uint8 RGB frames, by appearance and motion.
+
+    The person is chosen (``person``) in the first frame where the detector finds anyone; their torso's colour
+    histogram and pelvis motion are followed from then on (:mod:`motion2video.pose.follow`). Each frame's ROI
+    comes from the previous frame's landmarks; when its result fails a check (presence, a jump from the
+    pelvis's predicted position, a torso of other colours), the detector runs again and, of the people it finds
+    (and that result), the one that passes the checks at the least cost is taken, else the one near the predicted
+    position whose look is only somewhat different (a hand across the torso, a change of light); when none is,
+    the frame has no person (a passer-by in front, the person out of view) and the ROI moves on with the
+    predicted motion. Such frames are unsure.
 
     Yields:
-        the person's :class:`Landmarks` per frame, or None for a frame where they are not found.
+        a :class:`Tracked` per frame.
     """
     model = model or default_model()
-    roi = None
-    last_hip: np.ndarray | None = None
+    roi: Roi | None = None
+    state: MotionState | None = None
     for frame in frames:
-        lm = model.landmarks(frame, roi) if roi is not None else None
-        if lm is None or lm.score < min_presence:
+        if state is None:
             detections = model.detect(frame)
-            if not detections:
-                roi = None
-                yield None
+            lm = choose_person(model, frame, detections, person, source) if detections else None
+            if lm is None or lm.score < config.min_presence:
+                yield Tracked(None, False)
                 continue
-            if last_hip is None:
-                lm = choose_person(model, frame, detections, person, source)
-            else:
-                det = min(detections, key=lambda d: float(np.hypot(*(d.keypoints[0] - last_hip))))
-                lm = model.landmarks(frame, detection_roi(det))
-            if lm.score < min_presence:
-                roi = None
-                yield None
-                continue
+            state = MotionState.start(lm.xy, torso_histogram(frame, lm.xy))
+            roi = lm.next_roi()
+            yield Tracked(lm, False)
+            continue
+        best: tuple[Landmarks, Candidate] | None = None
+        if roi is not None:
+            lm = model.landmarks(frame, roi)
+            found = check_candidate(frame, lm.xy, lm.score, state, config)
+            if found.matches:
+                best = (lm, found)
+        unsure = best is None
+        if best is None:
+            candidates = [model.landmarks(frame, detection_roi(d)) for d in model.detect(frame)]
+            scored = [(c, check_candidate(frame, c.xy, c.score, state, config)) for c in candidates]
+            if roi is not None:
+                scored.append((lm, found))
+            matching = [pair for pair in scored if pair[1].matches] or [pair for pair in scored if pair[1].plausible]
+            best = min(matching, key=lambda pair: pair[1].cost) if matching else None
+        if best is None:
+            step = state.velocity
+            state = state.lost()
+            if roi is not None:
+                roi = Roi(roi.centre + step, roi.size, roi.rotation)
+            yield Tracked(None, True)
+            continue
+        lm, found = best
+        state = state.seen(lm.xy, found, config)
         roi = lm.next_roi()
-        last_hip = lm.xy[33].copy()
-        yield lm
+        yield Tracked(lm, unsure)
 
 
 @dataclass(frozen=True)
@@ -283,6 +329,8 @@ class VideoPose:
         first_frame: index in the video of the first kept frame.
         width, height: the video's frame size.
         video_frames: how many frames the video has.
+        unsure: (T,) True where the tracker was unsure of the person (see :class:`Tracked`); every
+            interpolated frame is unsure too.
     """
 
     points2d: np.ndarray
@@ -295,10 +343,16 @@ class VideoPose:
     width: int
     height: int
     video_frames: int
+    unsure: np.ndarray
 
     @property
     def num_frames(self) -> int:
         return len(self.points2d)
+
+    @property
+    def unsure_frames(self) -> int:
+        """Number of frames the tracker was unsure of."""
+        return int(self.unsure.sum())
 
     @property
     def gaps(self) -> int:
@@ -324,11 +378,13 @@ def interpolate_gaps(values: np.ndarray, found: np.ndarray) -> np.ndarray:
 
 
 def poses_from_landmarks(results: list[Landmarks | None], *, fps: float, width: int, height: int,
-                         source: str | Path | None = None, smooth: bool = True) -> VideoPose:
+                         unsure: np.ndarray | None = None, source: str | Path | None = None,
+                         smooth: bool = True) -> VideoPose:
     """Per-frame tracking results -> :class:`VideoPose` (trim the ends, smooth, interpolate the gaps).
 
-    ``smooth``: MediaPipe's One-Euro smoothing of the landmarks (:mod:`motion2video.pose.smoothing`), each
-    run of frames with the person on its own.
+    ``unsure``: (len(results),) the tracker's unsure flags (default: the frames without a person). ``smooth``:
+    MediaPipe's One-Euro smoothing of the landmarks (:mod:`motion2video.pose.smoothing`), each run of frames with
+    the person on its own.
 
     Raises:
         InputError: no person in any frame, or in fewer than 2 frames (a motion needs two).
@@ -341,6 +397,7 @@ def poses_from_landmarks(results: list[Landmarks | None], *, fps: float, width: 
         raise InputError("a person is found in only one frame; a motion needs at least two", source)
     kept = results[first:last + 1]
     ok = found[first:last + 1]
+    doubt = ~ok if unsure is None else np.asarray(unsure, bool)[first:last + 1] | ~ok
     body = slice(0, NUM_BODY_LANDMARKS)
     blank = np.zeros((NUM_BODY_LANDMARKS, 1))
     xy = np.stack([r.xy[body] if r is not None else blank.repeat(2, 1) for r in kept])  # (T, 33, 2)
@@ -350,9 +407,9 @@ def poses_from_landmarks(results: list[Landmarks | None], *, fps: float, width: 
         size = np.array([r.roi.size if r is not None else 1.0 for r in kept])
         xy, world, vis = smooth_landmarks(xy, world, vis, size, ok, fps)
     xy, world = interpolate_gaps(xy, ok), interpolate_gaps(world, ok)
-    points2d, joints3d, confidence = landmarks_to_joints(xy, world, vis)
+    points2d, joints3d, confidence = landmarks_to_joints(xy, world, vis, width=width, height=height, fps=fps)
     confidence[~ok] = 0.0
-    return VideoPose(points2d, joints3d, confidence, ~ok, xy, float(fps), first, width, height, len(results))
+    return VideoPose(points2d, joints3d, confidence, ~ok, xy, float(fps), first, width, height, len(results), doubt)
 
 
 def estimate_video(path: str | Path, *, person: str | int = "largest", model: BlazePose | None = None,
@@ -364,10 +421,10 @@ def estimate_video(path: str | Path, *, person: str | int = "largest", model: Bl
     """
     cap, info = open_video(path)
     cap.release()
+    tracked = list(track_frames(iter_video_frames(path), person=person, model=model, source=path))
     # the segmentation (256 KB a frame) is not kept: a long video's landmarks stay a few MB
-    results = [None if lm is None else replace(lm, segmentation=None)
-               for lm in track_frames(iter_video_frames(path), person=person, model=model, source=path)]
+    results = [None if t.landmarks is None else replace(t.landmarks, segmentation=None) for t in tracked]
     if len(results) < 2:
         raise InputError(f"the video has {len(results)} frame; a motion needs at least two", path)
-    return poses_from_landmarks(results, fps=info.fps, width=info.width, height=info.height, source=path,
-                                smooth=smooth)
+    return poses_from_landmarks(results, fps=info.fps, width=info.width, height=info.height,
+                                unsure=np.array([t.unsure for t in tracked]), source=path, smooth=smooth)

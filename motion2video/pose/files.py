@@ -7,9 +7,12 @@ Keys (the body Motion keys first, so every motion reader takes the file as a 3D 
 - ``joints_2d`` (T, 17, 2) float32: the same joints in the video's pixels (x right, y down);
 - ``confidence`` (T, 17) float32: per-joint visibility in [0, 1], 0 on interpolated frames;
 - ``interpolated`` (T,) bool: frames where the person was not found (joints interpolated);
+- ``unsure`` (T,) bool: frames where the tracker was unsure of the person (a low presence, a jump from the
+  predicted position or a torso of other colours made it ask the detector again; every interpolated frame);
 - ``landmarks_2d`` (T, 33, 2) float32: BlazePose's own image landmarks;
 - ``image_size`` (2,) int: width, height; ``first_frame``: the video frame of row 0;
-  ``video_frames``: the video's frame count; ``estimator``: ``"blazepose-full"``.
+  ``video_frames``: the video's frame count; ``estimator``: ``"blazepose-full"``; ``version``:
+  :data:`POSE_VERSION`.
 """
 
 from __future__ import annotations
@@ -24,8 +27,10 @@ from motion2video.core.motion import Motion
 from motion2video.pose.estimate import VideoPose
 
 ESTIMATOR = "blazepose-full"
-POSE_KEYS = ("joints", "fps", "skeleton", "joints_2d", "confidence", "interpolated", "landmarks_2d",
-             "image_size", "first_frame", "video_frames", "estimator")
+# 2: one person followed by appearance and motion, unsure frames flagged, the root's depth from the body's size
+POSE_VERSION = 2
+POSE_KEYS = ("joints", "fps", "skeleton", "joints_2d", "confidence", "interpolated", "unsure", "landmarks_2d",
+             "image_size", "first_frame", "video_frames", "estimator", "version")
 
 
 def save_video_pose(path: str | Path, pose: VideoPose) -> Path:
@@ -37,16 +42,19 @@ def save_video_pose(path: str | Path, pose: VideoPose) -> Path:
         "joints_2d": pose.points2d.astype(np.float32),
         "confidence": pose.confidence.astype(np.float32),
         "interpolated": pose.interpolated.astype(bool),
+        "unsure": pose.unsure.astype(bool),
         "landmarks_2d": pose.landmarks2d.astype(np.float32),
         "image_size": np.array([pose.width, pose.height], np.int64),
         "first_frame": np.int64(pose.first_frame),
         "video_frames": np.int64(pose.video_frames),
         "estimator": np.str_(ESTIMATOR),
+        "version": np.int64(POSE_VERSION),
     })
 
 
 def load_video_pose(path: str | Path) -> VideoPose:
-    """Read a file written by :func:`save_video_pose`; InputError naming it when keys are missing."""
+    """Read a file written by :func:`save_video_pose`; InputError naming it when keys are missing or it is of
+    another version."""
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as z:
@@ -55,12 +63,15 @@ def load_video_pose(path: str | Path) -> VideoPose:
         raise InputError(f"not a readable pose .npz ({type(err).__name__})", path) from None
     missing = [k for k in POSE_KEYS if k not in data]
     if missing:
-        raise InputError(f"not a pose file of `motion2video pose` (lacks {', '.join(missing)})", path)
+        raise InputError(f"not a pose file of `motion2video pose` version {POSE_VERSION} (lacks "
+                         f"{', '.join(missing)})", path)
+    if int(data["version"]) != POSE_VERSION:
+        raise InputError(f"pose file version {int(data['version'])}, expected {POSE_VERSION}", path)
     w, h = (int(v) for v in data["image_size"])
     return VideoPose(data["joints_2d"].astype(np.float64), data["joints"].astype(np.float64),
                      data["confidence"].astype(np.float64), data["interpolated"].astype(bool),
                      data["landmarks_2d"].astype(np.float64), float(data["fps"]), int(data["first_frame"]),
-                     w, h, int(data["video_frames"]))
+                     w, h, int(data["video_frames"]), data["unsure"].astype(bool))
 
 
 def pose_motion_3d(pose: VideoPose, source: str | Path | None = None) -> Motion:

@@ -22,8 +22,8 @@ from motion2video.pose.blazepose import (LANDMARK_SIZE, NUM_BODY_LANDMARKS, NUM_
                                          Roi, roi_map_to_image)
 from motion2video.pose.estimate import iter_video_frames, open_video, track_frames
 
-TRACK_VERSION = 1
-TRACK_KEYS = ("found", "xy", "z", "world", "visibility", "presence", "score", "roi", "segmentation", "fps",
+TRACK_VERSION = 2  # 2: followed by appearance and motion, with the unsure flags
+TRACK_KEYS = ("found", "unsure", "xy", "z", "world", "visibility", "presence", "score", "roi", "segmentation", "fps",
               "image_size", "version")
 
 
@@ -33,6 +33,8 @@ class VideoTrack:
 
     Attributes:
         found: (T,) bool, the person was found in the frame.
+        unsure: (T,) bool, the tracker was unsure of the person there
+            (:class:`~motion2video.pose.estimate.Tracked`).
         xy: (T, 39, 2) BlazePose image landmarks, pixels (zeros where not found).
         z: (T, 39); visibility, presence: (T, 39) in [0, 1]; world: (T, 39, 3) metres (see
             :class:`~motion2video.pose.blazepose.Landmarks`).
@@ -43,6 +45,7 @@ class VideoTrack:
     """
 
     found: np.ndarray
+    unsure: np.ndarray
     xy: np.ndarray
     z: np.ndarray
     world: np.ndarray
@@ -92,9 +95,12 @@ def track_video(path: str | Path, *, person: str | int = "largest", model: Blaze
     cap, info = open_video(path)
     cap.release()
     rows: list[Landmarks | None] = []
+    unsure: list[bool] = []
     seg: list[np.ndarray] = []
     blank = np.zeros((LANDMARK_SIZE, LANDMARK_SIZE), np.uint8)
-    for lm in track_frames(iter_video_frames(path), person=person, model=model, source=path):
+    for tracked in track_frames(iter_video_frames(path), person=person, model=model, source=path):
+        lm = tracked.landmarks
+        unsure.append(tracked.unsure)
         rows.append(None if lm is None else Landmarks(lm.xy, lm.z, lm.visibility, lm.presence, lm.world, lm.score,
                                                       lm.roi))
         if lm is None or lm.segmentation is None:
@@ -111,6 +117,7 @@ def track_video(path: str | Path, *, person: str | int = "largest", model: Blaze
 
     return VideoTrack(
         found=np.array([r is not None for r in rows]),
+        unsure=np.array(unsure, bool),
         xy=stack(lambda r: r.xy, (NUM_LANDMARKS, 2)),
         z=stack(lambda r: r.z, (NUM_LANDMARKS,)),
         world=stack(lambda r: r.world, (NUM_LANDMARKS, 3)),
@@ -126,7 +133,7 @@ def track_video(path: str | Path, *, person: str | int = "largest", model: Blaze
 def save_video_track(path: str | Path, track: VideoTrack) -> Path:
     """Write a :class:`VideoTrack` as a compressed ``.npz`` (atomically). Returns the path."""
     return save_npz(path, {
-        "found": track.found, "xy": track.xy, "z": track.z, "world": track.world, "visibility": track.visibility,
+        "found": track.found, "unsure": track.unsure, "xy": track.xy, "z": track.z, "world": track.world, "visibility": track.visibility,
         "presence": track.presence, "score": track.score, "roi": track.roi, "segmentation": track.segmentation,
         "fps": np.float64(track.fps), "image_size": np.array([track.width, track.height], np.int64),
         "version": np.int64(TRACK_VERSION),
@@ -154,6 +161,6 @@ def load_video_track(path: str | Path) -> VideoTrack:
         if data[key].shape != shape:
             raise InputError(f"video track {key} has shape {data[key].shape}, expected {shape}", path)
     w, h = (int(v) for v in data["image_size"])
-    return VideoTrack(data["found"].astype(bool), data["xy"], data["z"], data["world"], data["visibility"],
+    return VideoTrack(data["found"].astype(bool), data["unsure"].astype(bool), data["xy"], data["z"], data["world"], data["visibility"],
                       data["presence"], data["score"], data["roi"], data["segmentation"].astype(np.uint8),
                       float(data["fps"]), w, h)

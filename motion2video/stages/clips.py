@@ -2,8 +2,9 @@
 feeds its model with.
 
 One loader per input kind, chosen by the model's layout: body models take 3D h36m-17 motion (BVH of any rig,
-DeepMimic / exp-map text, motion npz, ..., or a video of a person, whose pose is estimated and cached), face models take face captures (Live Link Face CSV, FaceMotion
-npz). The clip is resampled to the model's rate exactly as its training data was
+DeepMimic / exp-map text, motion npz, ..., or a video of a person, whose pose is estimated and cached), face models
+take face captures (Live Link Face CSV, FaceMotion npz) or a video of a face, whose face motion is tracked and
+cached. The clip is resampled to the model's rate exactly as its training data was
 (:mod:`motion2video.data.dataset`); a face capture with no head pose gets the same procedural head track the
 training captures got (``DatasetConfig.face_head_pose``).
 """
@@ -90,18 +91,19 @@ def _note(line: str) -> None:
     print(f"note: {line}", file=sys.stderr)
 
 
-def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion:
-    """The motion of the person in a video for ``bundle``'s model: its estimated pose
-    (:func:`motion2video.stages.people.video_pose`, cached in the user cache by the file's hash) at the
-    video's frame rate: 3D joints (metres, z up) for 3D body models, the 2D image keypoints for 2D body models
-    (which see them through their virtual camera, :func:`motion2video.pose.h36m.image_to_plane`). Face models
-    refuse it."""
+def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion | FaceMotion:
+    """The motion in a video for ``bundle``'s model, at the video's frame rate. Body models: the person's
+    estimated pose (:func:`motion2video.stages.people.video_pose`, cached in the user cache by the file's hash):
+    3D joints (metres, z up) for 3D body models, the 2D image keypoints for 2D body models (which see them
+    through their virtual camera, :func:`motion2video.pose.h36m.image_to_plane`). Face models: the face
+    motion tracked and fitted to the largest face (:func:`motion2video.stages.people.face_video_track`, cached
+    likewise)."""
     from motion2video.pose.files import pose_motion_2d, pose_motion_3d
-    from motion2video.stages.people import video_pose
+    from motion2video.stages.people import face_video_track, video_pose
 
     layout = bundle.data_config.layout
     if layout == "face":
-        raise InputError(f"{bundle.name} is a face model; a video gives body motion", path)
+        return face_video_track(path, note=_note).motion
     pose = video_pose(path, person=person, note=_note)
     return pose_motion_2d(pose, path) if layout == "body2d" else pose_motion_3d(pose, path)
 

@@ -8,6 +8,8 @@
 - :func:`video_track`: a video -> :class:`~motion2video.pose.track.VideoTrack` (every frame's raw landmarks
   and person segmentation: the reconstruction protocol and fine-tuning on a video), cached in the same folder;
   :func:`video_pose` derives its pose from a cached track instead of tracking the video again;
+- :func:`face_video_track`: a face video -> :class:`~motion2video.pose.face_track.FaceTrack` (the face motion
+  fitted to the tracked face mesh), cached in the same folder;
 - :func:`write_photo_overlay` / :func:`write_video_overlay`: the keypoints drawn on the input.
 """
 
@@ -17,15 +19,18 @@ import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.pose.estimate import (IMAGE_SUFFIXES, VIDEO_SUFFIXES, PersonPose, VideoPose, estimate_image,
                                         estimate_video, iter_video_frames, poses_from_landmarks, read_image_rgb)
-from motion2video.pose.files import ESTIMATOR, load_video_pose, save_video_pose
+from motion2video.pose.files import ESTIMATOR, POSE_VERSION, load_video_pose, save_video_pose
 from motion2video.pose.track import VideoTrack, load_video_track, save_video_track, track_video
+
+if TYPE_CHECKING:  # the face track module loads Anny and the face renderer: imported when a face is tracked
+    from motion2video.pose.face_track import FaceTrack
 
 def is_video(path: str | Path) -> bool:
     """A video file by its extension (``.mp4``, ``.avi``, ``.mov``, ...)."""
@@ -46,6 +51,17 @@ def file_sha256(path: str | Path) -> str:
     return digest.hexdigest()
 
 
+def frame_ranges(flags: np.ndarray, first: int = 0, most: int = 6) -> str:
+    """The runs of True in (T,) ``flags`` as video frame numbers (row 0 = frame ``first``): ``"159-182, 200"``;
+    after ``most`` runs, how many more."""
+    flags = np.asarray(flags, bool)
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    runs = [f"{a + first}" if a == b else f"{a + first}-{b + first}" for a, b in zip(starts, ends)]
+    more = f" and {len(runs) - most} more runs" if len(runs) > most else ""
+    return ", ".join(runs[:most]) + more
+
+
 def cache_dir() -> Path:
     """``$XDG_CACHE_HOME/motion2video/pose`` (default ``~/.cache/motion2video/pose``)."""
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
@@ -53,13 +69,14 @@ def cache_dir() -> Path:
 
 
 def cache_path(video: str | Path, person: str | int, folder: str | Path | None = None) -> Path:
-    """Where the pose of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.npz``."""
+    """Where the pose of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.v<version>.npz``
+    (the version of :mod:`motion2video.pose.files`: a cache of an older tracker is never read)."""
     folder = Path(folder) if folder is not None else cache_dir()
-    return folder / f"{file_sha256(video)[:16]}-{person}.{ESTIMATOR}.npz"
+    return folder / f"{file_sha256(video)[:16]}-{person}.{ESTIMATOR}.v{POSE_VERSION}.npz"
 
 
 def track_cache_path(video: str | Path, person: str | int, folder: str | Path | None = None) -> Path:
-    """Where the track of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.track.npz``
+    """Where the track of ``video`` (for ``person``) is cached: ``<sha256[:16]>-<person>.<estimator>.v<version>.track.npz``
     beside the pose cache."""
     pose = cache_path(video, person, folder)
     return pose.with_name(pose.name.removesuffix(".npz") + ".track.npz")
@@ -99,8 +116,10 @@ def video_track(path: str | Path, *, person: str | int = "largest", cache: str |
         return track
     track = track_video(path, person=person, model=model)
     if note:
+        unsure = (f"; unsure of the person in {int(track.unsure.sum())} (frames {frame_ranges(track.unsure)})"
+                  if track.unsure.any() else "")
         note(f"tracked {path.name} (BlazePose full): the person in {int(track.found.sum())} of "
-             f"{track.num_frames} frames")
+             f"{track.num_frames} frames{unsure}")
     if cached is not None:
         try:
             save_video_track(cached, track)
@@ -129,26 +148,79 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
         try:
             pose = load_video_pose(cached)
             if note:
-                note(f"pose of {path.name} read from the cache {cached}")
+                note(f"pose of {path.name} read from the cache {cached}" + _unsure_note(pose))
             return pose
         except InputError:
             pass  # a damaged cache entry is estimated again and overwritten
     track = None if cache is False else _read_cached_track(track_cache_path(path, person, cache or None))
     if track is not None:  # tracked before by evaluate-frames / train-frames --video: the same landmarks
         pose = poses_from_landmarks([track.landmarks(i) for i in range(track.num_frames)], fps=track.fps,
-                                    width=track.width, height=track.height, source=path)
+                                    width=track.width, height=track.height, unsure=track.unsure, source=path)
     else:
         pose = estimate_video(path, person=person)
     if note:
         how = "from its cached track" if track is not None else "BlazePose full"
         note(f"estimated the pose of {path.name} ({how}): {pose.num_frames} frames at {pose.fps:g} fps"
-             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else ""))
+             + (f", {pose.gaps} gap frames interpolated" if pose.gaps else "") + _unsure_note(pose))
     if cached is not None:
         try:
             save_video_pose(cached, pose)
         except OSError:
             pass  # a read-only cache only costs the next run the estimate
     return pose
+
+
+def _unsure_note(pose: VideoPose) -> str:
+    if not pose.unsure_frames:
+        return ""
+    return (f", the tracker unsure of the person in {pose.unsure_frames} frames "
+            f"({frame_ranges(pose.unsure, pose.first_frame)})")
+
+
+def face_cache_path(video: str | Path, folder: str | Path | None = None) -> Path:
+    """Where the face track of ``video`` is cached: ``<sha256[:16]>-face.<face estimator>.npz`` beside the pose
+    cache."""
+    from motion2video.pose.face_track import FACE_ESTIMATOR
+
+    folder = Path(folder) if folder is not None else cache_dir()
+    return folder / f"{file_sha256(video)[:16]}-face.{FACE_ESTIMATOR}.npz"
+
+
+def face_video_track(path: str | Path, *, cache: str | Path | None | bool = None,
+                     note: Callable[[str], None] | None = None) -> FaceTrack:
+    """The face motion of the (largest) face in a video, read from the cache when it was tracked before.
+
+    Args:
+        path: the video.
+        cache: a folder to cache in; None: the user cache (:func:`cache_dir`); False: no cache.
+        note: called with one line when the face is tracked or read from the cache.
+    Raises:
+        InputError: unreadable video, no face, a face in fewer than two frames.
+    """
+    from motion2video.pose.face_track import load_face_track, save_face_track, track_face_video
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such video file", path)
+    cached = None if cache is False else face_cache_path(path, None if cache is None else cache)
+    if cached is not None and cached.is_file():
+        try:
+            track = load_face_track(cached)
+            if note:
+                note(f"face track of {path.name} read from the cache {cached}")
+            return track
+        except InputError:
+            pass  # a damaged cache entry is tracked again and overwritten
+    track = track_face_video(path)
+    if note:
+        note(f"tracked the face in {path.name} (face mesh + Anny head): {track.num_frames} frames at "
+             f"{track.motion.fps:g} fps" + (f", {track.gaps} gap frames interpolated" if track.gaps else ""))
+    if cached is not None:
+        try:
+            save_face_track(cached, track)
+        except OSError:
+            pass  # a read-only cache only costs the next run the tracking
+    return track
 
 
 @dataclass(frozen=True)
@@ -209,3 +281,28 @@ def write_video_overlay(path: str | Path, video: str | Path, pose: VideoPose) ->
                 break
 
     return write_video(path, frames(), pose.fps, n_frames=pose.num_frames, preset="veryfast")
+
+
+def write_face_overlay(path: str | Path, video: str | Path, track: "FaceTrack") -> Path:
+    """The video with the tracked face landmarks (green) and those re-projected from the fitted head (red) drawn
+    on every kept frame (mp4 at the video's rate)."""
+    import cv2
+
+    from motion2video.formats.video import write_video
+    from motion2video.pose.face_track import fitted_landmarks2d
+
+    fitted = fitted_landmarks2d(track)  # (T, 468, 2)
+    radius = max(1, round(max(track.width, track.height) / 600))
+
+    def frames():
+        for i, frame in enumerate(iter_video_frames(video)):
+            t = i - track.first_frame
+            if not 0 <= t < track.num_frames:
+                continue
+            frame = frame.copy()
+            for points, colour in ((track.landmarks2d[t], (0, 200, 0)), (fitted[t], (230, 0, 0))):
+                for x, y in points:
+                    cv2.circle(frame, (int(x), int(y)), radius, colour, -1)
+            yield frame[None]
+
+    return write_video(path, frames(), track.motion.fps)

@@ -10,10 +10,12 @@ reference image's true pose when it is known, from a *reference pose file* besid
 - face: ``face`` (58,) parameters, ``identity`` and the camera that rendered the image.
 
 Without one, a body reference gets its pose estimated (BlazePose, :mod:`motion2video.pose`; a note says
-so). A face reference, or a body reference where nobody is found, is assumed to show the person in the
-first observed pose, framed as the default renderers frame a single frame (body: a camera fitted to that
-pose; face: the Anny close-up camera), and a note says so. With the true pose, the generated first observed frame matches the
-reference picture; with the assumption, it does when the assumption holds.
+so), and a body reference where nobody is found is refused (InputError naming the picture): there is no person
+to move. A person cut by the picture's edge gets a note; when the estimated joints themselves lie beyond the
+edge, the picture is extended there (its edge repeated, :attr:`Reference.picture` marks those pixels as not the
+file's) so that the pose fits in it. A face reference without a pose file is assumed to show the face in the
+first observed pose, framed by the Anny close-up camera, and a note says so. With the true pose, the generated
+first observed frame matches the reference picture; with the assumption, it does when the assumption holds.
 
 """
 
@@ -314,18 +316,21 @@ def _fit_pose(pose: ReferencePose, fit: ImageFit, size: int, image_shape: tuple[
 
 
 def estimate_reference_pose(image: np.ndarray, path: str | Path
-                            ) -> tuple[ReferencePose, ReferencePerson] | tuple[None, None]:
-    """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`), and
-    that person's mask, eyes and hands; (None, None) when nobody is found."""
+                            ) -> tuple[ReferencePose, ReferencePerson, np.ndarray] | tuple[None, None, None]:
+    """The body pose of the largest person in an (H, W, 3) RGB image (BlazePose, :mod:`motion2video.pose`), that
+    person's mask, eyes and hands, and their (33, 2) BlazePose body landmarks in pixels; (None, None, None) when
+    nobody is found."""
+    from motion2video.pose.blazepose import NUM_BODY_LANDMARKS
     from motion2video.pose.estimate import estimate_image
 
     try:
         person = estimate_image(image, source=path)
     except InputError:
-        return None, None
+        return None, None, None
     pose = ReferencePose("body", image.shape[1], image.shape[0], points=person.points2d,
                          camera_joints=person_camera_joints(person))
-    return pose, ReferencePerson.of(person)
+    landmarks = np.asarray(person.landmarks.xy[:NUM_BODY_LANDMARKS, :2], np.float64)
+    return pose, ReferencePerson.of(person), landmarks
 
 
 def person_camera_joints(person) -> np.ndarray:
@@ -337,6 +342,67 @@ def person_camera_joints(person) -> np.ndarray:
     world = person.landmarks.world[:NUM_BODY_LANDMARKS]
     project_axes, _ = blazepose_to_h36m(world_to_project(world[None]))  # (1, 17, 3): x right, y away, z up
     return project_axes[0][:, [0, 2, 1]].astype(np.float64)
+
+
+# BlazePose landmark names -> the body part a note names (left and right together)
+_PART_OF = {"nose": "head", "eye_inner": "head", "eye": "head", "eye_outer": "head", "ear": "head", "mouth": "head",
+            "shoulder": "shoulders", "elbow": "elbows", "wrist": "hands", "pinky": "hands", "index": "hands",
+            "thumb": "hands", "hip": "hips", "knee": "knees", "ankle": "feet", "heel": "feet", "foot_index": "feet"}
+_EDGES = ("left", "top", "right", "bottom")
+
+
+def cut_edges(landmarks: np.ndarray, *, width: int, height: int) -> dict[str, tuple[str, ...]]:
+    """Where a person runs past a picture's edges: for each edge (``left``, ``top``, ``right``, ``bottom``) the
+    body parts (``head``, ``hands``, ``knees``, ``feet``, ...) whose BlazePose landmarks lie beyond it.
+
+    Args:
+        landmarks: (33, 2) BlazePose body landmarks in the picture's pixels (the model places the ones it cannot
+            see where the body would continue, outside the picture).
+        width, height: the picture's size.
+    Returns:
+        {edge: parts}, only the edges something runs past; {} for a person wholly inside.
+    """
+    from motion2video.pose.blazepose import LANDMARK_NAMES
+
+    xy = np.asarray(landmarks, np.float64)[:len(LANDMARK_NAMES)]
+    beyond = {"left": xy[:, 0] < 0, "top": xy[:, 1] < 0, "right": xy[:, 0] >= width, "bottom": xy[:, 1] >= height}
+    cut = {}
+    for edge in _EDGES:
+        names = [LANDMARK_NAMES[i].removeprefix("left_").removeprefix("right_") for i in np.flatnonzero(beyond[edge])]
+        parts = tuple(dict.fromkeys(_PART_OF[n.removesuffix("_left").removesuffix("_right")] for n in names))
+        if parts:
+            cut[edge] = parts
+    return cut
+
+
+def pose_margins(points: np.ndarray, *, width: int, height: int) -> tuple[int, int, int, int]:
+    """Pixels to add on each side (left, top, right, bottom) of a picture so that every joint of a body pose (17, 2)
+    lies inside it, with 6 % of the pose's height to spare beyond each joint that was outside."""
+    pts = np.asarray(points, np.float64)
+    spare = 0.06 * max(float(np.ptp(pts[:, 1])), 1.0)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    need = (-lo[0], -lo[1], hi[0] - width, hi[1] - height)
+    return tuple(int(np.ceil(v + spare)) if v >= 0 else 0 for v in need)
+
+
+def extend_to_pose(image: np.ndarray, pose: ReferencePose, margins: tuple[int, int, int, int]
+                   ) -> tuple[np.ndarray, ReferencePose]:
+    """A picture extended by ``margins`` (left, top, right, bottom) pixels, its edge repeated, and the body pose
+    moved into it."""
+    left, top, right, bottom = margins
+    h, w = image.shape[:2]
+    grown = cv2.copyMakeBorder(image, top, bottom, left, right, cv2.BORDER_REPLICATE)
+    pts = np.asarray(pose.points, np.float64) * (w / pose.width, h / pose.height) + (left, top)
+    return np.ascontiguousarray(grown), replace(pose, width=grown.shape[1], height=grown.shape[0], points=pts)
+
+
+def cut_note(path: Path, cut: dict[str, tuple[str, ...]], margins: tuple[int, int, int, int]) -> str:
+    """The one line that tells the user their reference person is cut by the picture's edge."""
+    where = "; ".join(f"{', '.join(parts)} past the {edge} edge" for edge, parts in cut.items())
+    grown = [f"{m} px {edge}" for edge, m in zip(_EDGES, margins) if m]
+    how = (f"; the picture is extended ({', '.join(grown)}, its edge repeated) to hold the pose" if grown else "")
+    return (f"the person in {path.name} is cut by the picture's edge ({where}): the frames guess what the picture "
+            f"does not show{how}")
 
 
 def crop_to_person(image: np.ndarray, pose: ReferencePose, *, margin: float = PERSON_CROP_MARGIN
@@ -407,8 +473,9 @@ def load_reference(path: str | Path, *, size: int, domain: str,
                    pose_path: str | Path | None = None, crop_person: bool = False) -> Reference:
     """The reference image at ``size`` x ``size`` and its pose (see the module docstring).
 
-    A body reference with no pose file gets its pose estimated (BlazePose, a note says so); when nobody is
-    found, the image is assumed to show the first observed pose (a note says so too).
+    A body reference with no pose file gets its pose estimated (BlazePose, a note says so); a person cut by the
+    picture's edge gets a note, and the picture is extended (its edge repeated) where the joints lie beyond it. A
+    face reference with no pose file is assumed to show the first observed pose (a note says so too).
 
     Args:
         path: the image.
@@ -418,9 +485,9 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         crop_person: body: cut a square around the person first (:func:`crop_to_person`), so that a person
             small in a large photo fills the generator's frame.
     Raises:
-        InputError: unreadable image, a pose file that is malformed or of the other domain, or (body) a pose
-        with joints outside the image or no person, or an image that shows nothing along the pose's limbs;
-        ``crop_person`` for a face model or with no person found.
+        InputError: unreadable image, a pose file that is malformed or of the other domain, or (body) no pose
+        file and no person found, a pose file with joints outside the image or no person, or an image that shows
+        nothing along the pose's limbs; ``crop_person`` for a face model.
     """
     path = Path(path)
     image, notes = read_reference_image(path)
@@ -436,20 +503,30 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         if pose.kind != domain:
             raise InputError(f"this reference pose is a {pose.kind} pose, but the frame model makes {domain} "
                              "frames", pose_path)
-    elif domain == "body":
-        pose, person = estimate_reference_pose(image, path)
+    picture = np.ones(image.shape[:2], np.float32)  # which pixels are the file's, through every cut and pad
+    if not from_file and domain == "body":
+        pose, person, landmarks = estimate_reference_pose(image, path)
+        if pose is None:
+            raise InputError("no person found in the reference image (BlazePose): give a picture of one person, or "
+                             "its pose with --reference-pose", path)
+        notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
+                     f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "
+                     "saves it and shows it)")
         alpha = reference_alpha(path)
-        if person is not None and alpha is not None:  # a cut-out's own matte is the person, sharper than a segmentation
+        if alpha is not None:  # a cut-out's own matte is the person, sharper than a segmentation
             person = replace(person, mask=alpha)
             notes.append("the person is the image's alpha channel (a cut-out)")
-        if pose is not None:
-            notes.append(f"no reference pose file ({pose_path.name}): estimated the person's pose in the image "
-                         f"(BlazePose; `motion2video pose {path.name} -o {pose_path.name} --overlay check.png` "
-                         "saves it and shows it)")
-    picture = np.ones(image.shape[:2], np.float32)  # which pixels are the file's, through every cut and pad
-    if crop_person:
-        if pose is None:
-            raise InputError("--crop-person: no person found in the reference image", path)
+        h0, w0 = image.shape[:2]
+        cut = cut_edges(landmarks, width=w0, height=h0)
+        margins = pose_margins(pose.points, width=w0, height=h0)
+        if any(margins):
+            image, pose = extend_to_pose(image, pose, margins)
+            offset, grown = (margins[0], margins[1]), (image.shape[1], image.shape[0])
+            picture = move_map(picture, 1.0, offset, grown)
+            person = person.moved(1.0, offset, grown)
+        if cut or any(margins):
+            notes.append(cut_note(path, cut, margins))
+    if crop_person:  # a body pose: from its file, or estimated above
         h0, w0 = image.shape[:2]
         image, pose, (left, top, side) = crop_to_person(image, pose)
         picture = move_map(picture, 1.0, (-left, -top), (side, side))
@@ -472,8 +549,7 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
             check_reference_person(fitted, pose.points, path=path)
     else:
-        nobody = " and no person found in it" if domain == "body" else ""
-        notes.append(f"no reference pose file ({pose_path.name}){nobody}: assuming the reference image shows the "
-                     "first observed pose, framed like the default renderer")
+        notes.append(f"no reference pose file ({pose_path.name}): assuming the reference image shows the first "
+                     "observed face pose, framed like the default renderer")
     return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person,
                      picture=None if picture.min() > 0.5 else picture)
