@@ -1,4 +1,4 @@
-"""Every ``motion2video`` example of the README runs as written (issue 25).
+"""Every ``motion2video`` example of the README runs as written.
 
 The examples are read out of README.md's code blocks at test time (a continued line with its ``\\`` joined),
 and run in README order with the installed command, from a working folder laid out like a fresh clone beside

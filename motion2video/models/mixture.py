@@ -1,5 +1,4 @@
-"""``mixture``: futures drawn in turn from several trained samplers (and multi-future rules) of the same windows
-(issue 24).
+"""``mixture``: futures drawn in turn from several trained samplers (and multi-future rules) of the same windows.
 
 Why: the two best body samplers fail in different places. ``mtvae-add-dlow`` (recurrent decoder) is the better
 one on dances and getting up; ``mixer-cvae-dlow`` (anchored DCT mixer decoder) keeps a walker walking, where the

@@ -1,4 +1,4 @@
-"""``mirror-periodic``: futures that repeat the observed motion every half gait cycle, mirrored (issue 24).
+"""``mirror-periodic``: futures that repeat the observed motion every half gait cycle, mirrored.
 
 A walk or a run is periodic, and its second half-cycle is the first one mirrored: the left leg does what the right
 leg did half a cycle before. The 16 observed frames (0.64 s at 25 fps) hold more than half a gait cycle of most
