@@ -172,7 +172,7 @@ def section(payloads: dict[str, dict], model: str, minutes: float, note: str = "
            f" The previous generator (`{', '.join(left_out)}`) is left out: it was trained on the previous canonical "
            "skeleton (version 1), and the loader refuses it on the new joints until it is fine-tuned on them.")
     clips = "\n".join(f"motion2video evaluate-frames --model {model} --poses ../shared/data/mocap/{c}" for c in payloads)
-    return f"""## Body frames driven by real motion
+    return f"""### Body frames driven by real motion
 
 One run per clip (`python scripts/make_results_frames_real.py` runs the same functions and writes this section):
 
