@@ -1,4 +1,4 @@
-"""Issue 23's pose check: the project's pose estimator against MediaPipe's own BlazePose full pipeline.
+"""The pose check: the project's pose estimator against MediaPipe's own BlazePose full pipeline.
 
     python scripts/compare_pose_mediapipe.py --mediapipe-python /tmp/mpvenv/bin/python PHOTO [PHOTO ...] \
         [--json out/pose_vs_mediapipe.json]
@@ -12,7 +12,7 @@ mediapipe==0.10.21``; ``Pose(static_image_mode=True, model_complexity=1)``, the 
 landmarks per photo as JSON, and both sets are mapped to the canonical H36M-17 joints.
 
 Per photo: the error of each of the 17 joints in pixels and as a fraction of the person's height (MediaPipe's
-head-top-to-lowest-ankle extent), the median over joints (the issue's target: <= 5% of the height) and the limb
+head-top-to-lowest-ankle extent), the median over joints (the target: <= 5% of the height) and the limb
 error (each of the 16 bones' two end points, averaged). Writes JSON; prints one line per photo.
 """
 

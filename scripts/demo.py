@@ -12,12 +12,12 @@ Writes, from the committed ``demo_inputs/`` (and one photo of ``../shared`` when
 - ``out/mesh_body.mp4`` (+ ``-sheet.png``): the same futures as the posed Anny body mesh, same layout;
 - ``out/futures_face.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): K futures of ``smile.npz`` sampled by
   ``mtvae-add-face``, frames of ``reference_face.png`` by ``frames-face-mesh-128`` (moved through the head mesh);
-- ``out/transfer_body.mp4``: behaviour transfer (issue 13): the jump of ``cmu_jump.npz`` (a real CMU jump)
+- ``out/transfer_body.mp4``: behaviour transfer: the jump of ``cmu_jump.npz`` (a real CMU jump)
   re-enacted by ``behavior`` from the standing posture of ``wave.npz``, drawn as the reference person
   ``reference_body.png`` (re-framed to keep the jump in view) by ``frames-body-mesh-256``, side by side
   with the source (skeleton); ``out/transfer_body.npz`` keeps the source and the re-enactment, and
   ``out/transfer_body-sheet.png`` shows its start, crouch, top and landing frames;
-- ``out/photo_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): a real photo as the reference (issue 23):
+- ``out/photo_body.mp4`` (+ ``-structure.mp4``, ``-sheet.png``): a real photo as the reference:
   futures of ``cmu_walk.npz`` drawn as the person of ``../shared/data/photos/PHOTO`` (no pose file: its pose is
   estimated, and the photo cut around the person); only when ``../shared/data/photos`` is beside the repository
   (the photos are not part of it), else skipped with a one-line note (``--photos`` points elsewhere);
@@ -45,13 +45,13 @@ MESH_SIZE = 256
 # Behaviour transfer: the real CMU jump (cmu_jump.npz, CMU 16_02) re-enacted from wave.npz's first (standing)
 # posture. The person jumps higher than the reference picture has room for above the head, so the picture is
 # re-framed to keep the whole jump in view (transfer --fit-view).
-# A real photo as the reference (issue 23): the skier of ../shared/data/photos/skier.jpg (one person, full body, on
+# A real photo as the reference: the skier of ../shared/data/photos/skier.jpg (one person, full body, on
 # plain snow), her pose estimated (no pose file), the photo cut to a square around her (--crop-person: the
 # 640x425 photo would otherwise be padded to a square) and generated at 256 px. Two futures of the CMU walk by the
 # best sampler (mixture-periodic: one of each DLow component), the second of which turns her sideways. The mesh generator
 # draws her (frames-body-mesh-256): the keypoint warp (frames-body-128) tore her legs and jacket into fragments in
 # such a turn; the mesh generator keeps her whole, with grey patches on her trousers, a noisy jacket and red patches
-# on the side of her face (docs/results.md, issue 22). The other photos were tried: man_by_truck.jpg and
+# on the side of her face (docs/results.md). The other photos were tried: man_by_truck.jpg and
 # three_walking.jpg keep their faces, their forearms break into specks when they swing.
 SHARED_PHOTOS = REPO.parent / "shared" / "data" / "photos"
 PHOTO = dict(motion_model="mixture-periodic", frame_model="frames-body-mesh-256", clip="cmu_walk.npz", photo="skier.jpg",

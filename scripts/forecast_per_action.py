@@ -1,4 +1,4 @@
-"""Per-action best-of-K scores of forecasting checkpoints on their held-out windows (issue 24).
+"""Per-action best-of-K scores of forecasting checkpoints on their held-out windows.
 
 For each checkpoint and the zero-velocity / last-step baselines, on the same windows (``evaluate``'s protocol:
 the checkpoint's split and statistics, 16-frame stride, K samples, seed 0, root-relative joints in metres):
@@ -8,7 +8,7 @@ the pooled numbers, the first future frame's best-of-K error, APD and the veloci
     python scripts/forecast_per_action.py --model mixer-cvae-dlow --data ../shared/data/mocap \
         --json out/mixer-cvae-dlow.per_action.json
 
-(``motion2video evaluate --json`` gets ``per_action`` / ``macro`` of its own in issue 24, item 1; this script
+(``motion2video evaluate --json`` gets ``per_action`` / ``macro`` of its own now; this script
 is what the card of mixer-dct, shipped until 2026-11-27, computed its per-action table with.)
 """
 

@@ -126,7 +126,7 @@ def readme_text() -> str:
         "camera's axes; face: `face` (58,) params, `identity` and the camera that rendered it), which",
         "`motion2video synthesize` uses as the reference structure.",
         "",
-        "- `jobs.jsonl`: three batch jobs over these files (the README's `motion2video batch demo_inputs/jobs.jsonl` "
+        "- `jobs.jsonl`: three batch jobs over these files (docs/cli.md's `motion2video batch demo_inputs/jobs.jsonl` "
         "example; input paths are relative to the repository root, where the command runs).",
         "",
     ]

@@ -1,4 +1,4 @@
-"""Issue 3 evidence: regenerate the motion-model sections of docs/results.md from a real run.
+"""Regenerate the motion-model sections of docs/results.md from a real run.
 
     python scripts/make_results.py results            # after scripts/train_shipped.sh
     python scripts/make_results.py card --checkpoint motion2video/weights/mtvae-add.safetensors \\
@@ -16,7 +16,7 @@
 4. times sampling (scripts/bench_sampling.py);
 5. runs every command on bad input and records the exit code and the one-line message.
 
-It writes the section between ``<!-- issue3:begin -->`` and ``<!-- issue3:end -->`` of docs/results.md
+It writes the section between ``<!-- motion-models:begin -->`` and ``<!-- motion-models:end -->`` of docs/results.md
 (the rest of the file is kept) and the raw numbers to out/results_issue3.json.
 
 Cost: about 26,000 training steps (3 x 2,000 comparison + 5 x 4,000 benchmark), two processes at a time,
@@ -58,7 +58,7 @@ from motion2video.models.base import MODEL_REGISTRY  # noqa: E402
 from motion2video.models.baselines import BASELINES  # noqa: E402
 from motion2video.models.training import TrainConfig, train_model  # noqa: E402
 
-BEGIN, END = "<!-- issue3:begin -->", "<!-- issue3:end -->"
+BEGIN, END = "<!-- motion-models:begin -->", "<!-- motion-models:end -->"
 SHIPPED = ("mtvae-add", "mtvae-add-2d", "mtvae-add-face", "lcpvae", "behavior")
 TABLE1 = ("pred-lstm", "cvae", "mtvae-concat", "mtvae-add")
 STOCHASTIC = ("cvae", "mtvae-concat", "mtvae-add", "lcpvae", "behavior")
@@ -431,7 +431,7 @@ def cmd_results(args: argparse.Namespace) -> int:
     runs.mkdir(parents=True, exist_ok=True)
     record: dict = {"started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t0 = time.perf_counter()
-    sections = ["## Issue 3: stochastic motion generators\n\n"
+    sections = ["## Stochastic motion generators\n\n"
                 f"Regenerate with `python scripts/make_results.py {' '.join(sys.argv[1:]) or 'results'}` after "
                 "`scripts/train_shipped.sh` (numbers below are from one real CPU run; checkpoints in "
                 f"motion2video/weights, comparison models in {args.runs}/, trained by the first run of this "
@@ -520,7 +520,7 @@ def cmd_card(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="what", required=True)
-    r = sub.add_parser("results", help="regenerate the issue-3 section of docs/results.md")
+    r = sub.add_parser("results", help="regenerate the motion-model section of docs/results.md")
     r.add_argument("--runs", default="runs/results", help="where comparison models are trained / reused")
     r.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     r.add_argument("--json", default=str(ROOT / "out" / "results_issue3.json"))

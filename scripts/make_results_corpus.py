@@ -1,9 +1,9 @@
-"""Issue 8 evidence: the body models retrained on the whole corpus, against the 5-minute models they replace.
+"""The body models retrained on the whole corpus, against the 5-minute models they replace.
 
     python scripts/make_results_corpus.py                 # after scripts/train_shipped.sh
     python scripts/make_results_corpus.py --skip-known-answer   # only the held-out evaluation and pictures
 
-Writes the section between ``<!-- issue8-models:begin -->`` and ``<!-- issue8-models:end -->`` of
+Writes the section between ``<!-- corpus-models:begin -->`` and ``<!-- corpus-models:end -->`` of
 docs/results.md, docs/images/ade_per_frame_corpus.png, docs/images/futures_heldout_sheet.png and the raw
 numbers to out/results_corpus.json. In order:
 
@@ -44,7 +44,7 @@ from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles  
 from motion2video.stages.sampling import sample_futures  # noqa: E402
 from motion2video.models.baselines import BASELINES  # noqa: E402
 
-BEGIN, END = "<!-- issue8-models:begin -->", "<!-- issue8-models:end -->"
+BEGIN, END = "<!-- corpus-models:begin -->", "<!-- corpus-models:end -->"
 NEW = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior")
 OLD = ("mtvae-add", "lcpvae", "behavior")
 OLD_REV = "805c753"  # the last commit whose motion2video/weights held the 72-clip (5-minute) models
@@ -213,7 +213,7 @@ def old_vs_new_section(weights: Path, runs: Path, rev: str, test: WindowSet, new
         f"windows: the held-out clips that neither set ever trained on ({len(shared)} clips: "
         f"{', '.join(shared[:6])}{', ...' if len(shared) > 6 else ''}). Ratios to zero-velocity on those windows "
         f"(zero-velocity ADE {r_new['zero-velocity']['ade']:.3f} m, FDE {r_new['zero-velocity']['fde']:.3f} m); best of "
-        f"{samples}. The 5-minute models' own table (their held-out clips) is kept in the issue-3 section above.",
+        f"{samples}. The 5-minute models' own table (their held-out clips) is kept in the motion-model section above.",
         "",
         md_table(["model", "5 min: ADE / ZV", "5 min: FDE / ZV", "5 min: APD", "corpus: ADE / ZV", "corpus: FDE / ZV",
                   "corpus: APD"], rows),
@@ -383,7 +383,7 @@ def tried_section(record: dict) -> str:
         + " Trained 1500 instead of 600 steps (`motion2video evaluate --split val` on the validation subjects, best "
         "of 50): ADE 0.976 -> 0.962 m, FDE 0.997 -> 1.006 m; a doubled diversity weight (`lambda_div` 400): ADE "
         "0.977 m; neither shipped.",
-        "- **A liveliness term** (issue 13; `motion_stats_weight`: the generated vs the true mean absolute velocity "
+        "- **A liveliness term** (`motion_stats_weight`: the generated vs the true mean absolute velocity "
         "and acceleration per feature, on the reconstruction): the models without it drew futures at 0.36-0.57x the "
         "speed of the held-out motion (docs/results_transfer.md). Measured on these windows against the checkpoints "
         "shipped before it (git 96e5d78), best of 50: mtvae-add ADE 0.649 -> 0.655 m, FDE 0.662 -> 0.677 m, APD "
@@ -410,7 +410,7 @@ def tried_section(record: dict) -> str:
            if "indian dance" in pa else "")
         + "zero-velocity; on walking "
         + (f"{pa['walk']['mtvae-add-dlow']['ade'] / pa['walk']['zero-velocity']['ade']:.2f}x" if "walk" in pa else "-")
-        + ". The field's ratios in the issue were measured on Human3.6M, whose test actions all occur in training.",
+        + ". The field's published ratios were measured on Human3.6M, whose test actions all occur in training.",
         "- In the first 0.2 s the models' error is zero-velocity's, above last-step's (plot): the decoders do not "
         "carry the observed velocity into the first frames. Feeding the decoder the last step's velocity, starting "
         "from the observed one (`velocity_input`), did not change that: 800-step pilots with and without it (the "
@@ -443,7 +443,7 @@ def main(argv: list[str] | None = None) -> int:
     record: dict = {"started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t0 = time.perf_counter()
     heldout, new, test = heldout_section(weights, record, samples=args.samples, images=images)
-    sections = ["## Issue 8: body models trained on the corpus\n\n"
+    sections = ["## Body models trained on the corpus\n\n"
                 f"Regenerate with `python scripts/make_results_corpus.py` after `scripts/train_shipped.sh`. "
                 f"Targets: {TARGETS}; known-answer coverage and precision >= 0.9.", heldout,
                 old_vs_new_section(weights, runs, args.old_rev, test, new, record, samples=args.samples)]

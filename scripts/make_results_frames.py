@@ -1,4 +1,4 @@
-"""Issue 10 evidence: the body frame generator measured on the person, next to its baselines, in one run.
+"""The body frame generator measured on the person, next to its baselines, in one run.
 
     python scripts/make_results_frames.py [--model frames-body-128] [--cache DIR] [--bench out/bench_pipeline.json]
 
@@ -6,9 +6,9 @@ Runs ``motion2video evaluate-frames --model MODEL`` once on the held-out body pa
 clips; the previous generator ``frames-body-128-v1``, copy-reference and limb-warp scored on the same pairs),
 and writes:
 
-- the section between ``<!-- issue10-frames:begin -->`` and ``<!-- issue10-frames:end -->`` of
+- the section between ``<!-- body-frames:begin -->`` and ``<!-- body-frames:end -->`` of
   docs/results.md: whole-frame PSNR / SSIM, person PSNR / SSIM / sharpness inside the target's silhouette,
-  PSNR / sharpness where the person moved, and the issue's targets met or missed;
+  PSNR / sharpness where the person moved, and the targets met or missed;
 - docs/images/frames_body_person_sheet.png: reference | target | new | old | copy-reference | limb-warp;
 - out/results_frames.json: the evaluation as evaluate-frames writes it.
 
@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from motion2video.core.atomic import write_section  # noqa: E402
 
-BEGIN, END = "<!-- issue10-frames:begin -->", "<!-- issue10-frames:end -->"
+BEGIN, END = "<!-- body-frames:begin -->", "<!-- body-frames:end -->"
 ORDER = ("generator", "frames-body-128-v1", "copy-reference", "limb-warp")
 NAMES = {"generator": "**new** (`{model}`)", "frames-body-128-v1": "old (`frames-body-128-v1`)",
          "copy-reference": "copy-reference", "limb-warp": "limb-warp"}
@@ -131,7 +131,7 @@ def section(evaluation: dict, model: str, command: str, minutes: float, bench: d
                         for k in ORDER[1:] if k in res)
     met = evaluation.get("targets_met", {})
     target_rows = "\n".join(f"| {TARGETS.get(k, k)} | {'met' if v else '**missed**'} |" for k, v in met.items())
-    return f"""## Body frames measured on the person (issue 10)
+    return f"""## Body frames measured on the person
 
 `{command}`: {evaluation['num_pairs']} held-out pairs (held-out identities and clips, data v2: 200 training
 identities with patterned clothing, 26 backgrounds), every method on the same pairs in one run. Person metrics are

@@ -1,4 +1,4 @@
-"""Issue 22 evidence: the body frame generator driven by real mocap it never trained on, with the head measured.
+"""The body frame generator driven by real mocap it never trained on, with the head measured.
 
     python scripts/make_results_frames_real.py [--model frames-body-mesh-256] [--mocap ../shared/data/mocap]
 
@@ -7,9 +7,9 @@ For each clip of :data:`CLIPS` (real CMU captures held out of the frame training
 CLIP`` runs (the same functions, once per clip: the held-out identities posed by 4 windows of the clip, the truth
 the Anny render of each pose) and writes:
 
-- the section between ``<!-- issue22-real-motion:begin -->`` and ``<!-- issue22-real-motion:end -->`` of
+- the section between ``<!-- frames-real-motion:begin -->`` and ``<!-- frames-real-motion:end -->`` of
   docs/results.md: whole-frame, person and head PSNR / SSIM and the person sharpness ratio per clip and method,
-  and issue 22's targets per clip;
+  and the targets per clip;
 - docs/images/frames_real_motion.png: reference | truth | generator | (previous generator, when it loads) |
   limb-warp, two pairs per clip, each frame at twice its size with the head region enlarged beside it;
 - out/results_frames_real.json: the evaluate-frames JSON of each clip.
@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT))
 
 from motion2video.core.atomic import write_json, write_section  # noqa: E402
 
-BEGIN, END = "<!-- issue22-real-motion:begin -->", "<!-- issue22-real-motion:end -->"
+BEGIN, END = "<!-- frames-real-motion:begin -->", "<!-- frames-real-motion:end -->"
 # Held-out real captures (none is in the frame generator's training clips), one walk, one jump, one dance.
 CLIPS = ("cmu/08_01.bvh", "cmu/13_42.bvh", "cmu/05_14.bvh")
 WINDOWS = 4
@@ -172,7 +172,7 @@ def section(payloads: dict[str, dict], model: str, minutes: float, note: str = "
            f" The previous generator (`{', '.join(left_out)}`) is left out: it was trained on the previous canonical "
            "skeleton (version 1), and the loader refuses it on the new joints until it is fine-tuned on them.")
     clips = "\n".join(f"motion2video evaluate-frames --model {model} --poses ../shared/data/mocap/{c}" for c in payloads)
-    return f"""## Body frames driven by real motion (issue 22)
+    return f"""### Body frames driven by real motion
 
 One run per clip (`python scripts/make_results_frames_real.py` runs the same functions and writes this section):
 
@@ -184,7 +184,7 @@ The frame test split's 8 held-out identities, posed by {WINDOWS} windows spread 
 over each real CMU capture (9 frames over 1.2 s each; frame 0 of a window is the reference, the 8 later frames
 the targets), rendered by the Anny body renderer exactly as the training data is (background, camera yaw and
 elevation, light); the truth is the render of each pose. None of these clips is in the frame training data
-(`motion2video.frames.specs.is_test_clip`; `cmu/02_01.bvh`, named in the issue, is a training clip, so a held-out
+(`motion2video.frames.specs.is_test_clip`; `cmu/02_01.bvh` is a training clip, so a held-out
 walk is used instead). The head is the target's visible head: the pixels where Anny's head vertices (dominant
 bone `head` or below it) are the front surface, by a depth test, so a hand in front of the face is not head.{old}
 
@@ -195,7 +195,7 @@ bone `head` or below it) are the front surface, by a depth test, so a hand in fr
 {margins(payloads)}
 
 {held_out_text(held_out, model)}
-Issue 22's targets driven by real motion:
+The targets driven by real motion:
 
 {targets(payloads)}
 

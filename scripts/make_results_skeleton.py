@@ -1,11 +1,11 @@
-"""Issue 21 evidence: the shipped body models before and after the canonical skeleton change, in docs/results.md.
+"""The shipped body models before and after the canonical skeleton change, in docs/results.md.
 
     python scripts/make_results_skeleton.py --evals out/train_shipped     # after scripts/train_shipped.sh
 
 Reads the ``<name>.eval.json`` that ``scripts/train_shipped.sh`` writes for every retrained model (``motion2video
 evaluate --samples 50`` on the pinned held-out test subjects) and the per-source proportions of every reader,
-and writes the section between ``<!-- issue21:begin -->`` and ``<!-- issue21:end -->`` of docs/results.md. The
-version-1 numbers are the ones the same command gave for the models trained on the old joints (the issue-8
+and writes the section between ``<!-- skeleton:begin -->`` and ``<!-- skeleton:end -->`` of docs/results.md. The
+version-1 numbers are the ones the same command gave for the models trained on the old joints (the corpus
 table of docs/results.md, git e22f63c), kept beside the new ones.
 """
 
@@ -19,8 +19,8 @@ from pathlib import Path
 from motion2video.core.atomic import write_section
 
 ROOT = Path(__file__).resolve().parents[1]
-BEGIN, END = "<!-- issue21:begin -->", "<!-- issue21:end -->"
-# `motion2video evaluate --samples 50` of the version-1 corpus models (docs/results.md, issue 8, git e22f63c):
+BEGIN, END = "<!-- skeleton:begin -->", "<!-- skeleton:end -->"
+# `motion2video evaluate --samples 50` of the version-1 corpus models (docs/results.md, git e22f63c):
 # name -> (ADE / ZV, FDE / ZV, APD m)
 VERSION1 = {
     "mtvae-add": (0.825, 0.696, 3.579),
@@ -44,7 +44,7 @@ def model_row(results: dict, name: str) -> dict | None:
 
 def render(evals: Path) -> str:
     lines = [
-        "## Issue 21: one canonical skeleton (version 2)",
+        "## One canonical skeleton (version 2)",
         "",
         "Every reader now lands on Human3.6M's body points (docs/data.md, \"The canonical body points\"; the per-source "
         "proportions before and after are tabled there, and `docs/images/skeletons.png` draws them). The corpus "
@@ -78,7 +78,7 @@ def render(evals: Path) -> str:
                      f"{ratio(row, zv, 'fde')} | {apd} |")
     lines.append("")
     lines.append("The retrained models score within 1-2% of their version-1 selves: the change is in what the joints "
-                 "mean, not in how well the models forecast them. Per action and macro over actions: the issue-24 "
+                 "mean, not in how well the models forecast them. Per action and macro over actions: the per-action "
                  "section (`scripts/make_results_per_action.py`, re-run with the retrained models). "
                  "Regenerate this table: `python scripts/make_results_skeleton.py --evals out/train_shipped`.")
     return "\n".join(lines)
@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results.md")
     args = parser.parse_args(argv)
     write_section(args.out, BEGIN, END, render(args.evals))
-    print(f"wrote the issue-21 section of {args.out}")
+    print(f"wrote the skeleton section of {args.out}")
     return 0
 
 

@@ -1,9 +1,9 @@
-"""Draw docs/images/skeletons.png: every source's canonical H36M-17 skeleton beside Human3.6M's (issue 21).
+"""Draw docs/images/skeletons.png: every source's canonical H36M-17 skeleton beside Human3.6M's.
 
 Each source gives one frame of a walk (mid-stance: the frame whose ankles are closest together), moved so
 its pelvis is at the origin, turned to face -y and scaled so its leg (thigh + shin) is Human3.6M's 897 mm.
 Front (x-z) and side (y-z) views; Human3.6M's own skeleton (subject S1 bone lengths) is drawn grey behind
-every source, and the four proportions of issue 21 are printed under each (1.00 = as in Human3.6M).
+every source, and the four proportions the skeleton is checked on are printed under each (1.00 = as in Human3.6M).
 
     python scripts/make_skeleton_figure.py [--mocap ../shared/data/mocap] [--out docs/images/skeletons.png]
 """

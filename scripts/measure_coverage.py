@@ -1,4 +1,4 @@
-"""How far more futures of the same sampler go (issue 24): best of 50, 100 and 200, and the frame-wise bound.
+"""How far more futures of the same sampler go: best of 50, 100 and 200, and the frame-wise bound.
 
     python scripts/measure_coverage.py --model mixture-periodic --split test --json out/coverage_test.json
 

@@ -1,5 +1,5 @@
-"""The known-answer multimodal benchmark for any shipped latent model and DLow on it (issue 24, item 6: "known-answer
-benchmark, the new model: coverage and precision >= 0.9 at K = 10").
+"""The known-answer multimodal benchmark for any shipped latent model and DLow on it (its target:
+coverage and precision >= 0.9 at K = 10).
 
     python scripts/measure_known_answer.py [--model mixer-cvae] [--steps 4000] [--dlow-steps 600]
         [--runs out/known_answer] [--json out/known_answer.json]

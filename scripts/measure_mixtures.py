@@ -1,4 +1,4 @@
-"""Why mixture-dlow (issue 24): how far the samplers' futures walk, and every equal-share mixture on validation.
+"""Why mixture-dlow: how far the samplers' futures walk, and every equal-share mixture on validation.
 
     python scripts/measure_mixtures.py --json out/mixtures.json
 

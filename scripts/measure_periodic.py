@@ -1,4 +1,4 @@
-"""Why mixture-periodic (issue 24): the mirror-periodic rule alone, its share of a mixture, and its smoothing.
+"""Why mixture-periodic: the mirror-periodic rule alone, its share of a mixture, and its smoothing.
 
     python scripts/measure_periodic.py --json out/periodic.json
 

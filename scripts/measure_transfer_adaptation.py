@@ -1,4 +1,4 @@
-"""How many decoder-adaptation steps behaviour transfer takes (issue 24, item 5): the known-answer transfer
+"""How many decoder-adaptation steps behaviour transfer takes: the known-answer transfer
 benchmark (:mod:`motion2video.evaluation.transfer_benchmark`) of one behaviour checkpoint, its decoder adapted to
 each source for each step count (:func:`motion2video.stages.latents.adapt_to_source`; 0 = the decoder as trained).
 

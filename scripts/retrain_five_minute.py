@@ -1,10 +1,10 @@
-"""Retrain the 5-minute models on today's joints: the per-action comparison of issue 24 needs them.
+"""Retrain the 5-minute models on today's joints: the per-action comparison needs them.
 
     python scripts/retrain_five_minute.py [--out out/five_minute] [--models mtvae-add,lcpvae,behavior]
         [--mocap ../shared/data/mocap] [--rev 805c753]
 
 The 72-clip models of git ``--rev`` (4.7 minutes of motion, the "5-minute models") were trained on canonical
-skeleton version 1; this motion2video refuses them (issue 21: every source now follows Human3.6M's body points).
+skeleton version 1; this motion2video refuses them (every source now follows Human3.6M's body points).
 Each is retrained here with what its checkpoint records: the model name and config, the data config, the exact
 72-clip split (train / val / test clip names; only those clips are loaded) and the training config (2000 steps,
 batch 64, seed 0). The joints are version 2 and the code is today's: config fields added since take their defaults

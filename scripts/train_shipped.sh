@@ -11,13 +11,13 @@
 # (2026-11-25, wall time per model, training + held-out evaluation + card): lane A mtvae-add 4000 steps 14 min,
 # mtvae-add-dlow 600 steps 7 min, behavior 4000 steps 14 min; lane B lcpvae 3000 steps 7 min, mtvae-add-2d
 # 2500 steps 8 min, mtvae-add-face 1200 steps about 5 min. About 35 minutes in all; mixer-cvae
-# and mixer-cvae-dlow (issue 24, lane B) add 21 + 8 min (2026-11-27). (mixer-dct, retired on 2026-11-27, was trained
+# and mixer-cvae-dlow add 21 + 8 min (2026-11-27). (mixer-dct, retired on 2026-11-27, was trained
 # here until then; its command is in its card in git history, commit 696e72f.) Logs and evaluation JSON go
 # to out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
 # Last, the mixtures are composed (nothing trained, seconds): mixture-dlow from the two DLow samplers, and
 # mixture-periodic (the best sampler) from them and the mirror-periodic rule; their cards,
 # motion2video/weights/mixture-*.md, are written by hand from the evaluations printed to their logs.
-# Afterwards: python scripts/make_results_corpus.py (docs/results.md, issue 8).
+# Afterwards: python scripts/make_results_corpus.py (docs/results.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -36,14 +36,14 @@ mkdir -p "$WEIGHTS" "$LOGS"
 # walking, 131, 140, 94 (Indian dance); validation = 3, 85, benchmark basketball, MASS.
 BODY_DATA='"data": {"held_out": "corpus"}'
 MTVAE='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128}'
-# The body models add a liveliness term (issue 13, motion_stats_weight: generated vs true mean |velocity| and
+# The body models add a liveliness term (motion_stats_weight: generated vs true mean |velocity| and
 # |acceleration| per feature); without it their futures moved at 0.2-0.5x the speed of real motion.
 MTVAE_BODY='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128, "motion_stats_weight": 100.0}'
 TRAIN='"train": {"batch_size": 64, "lr": 0.001, "checkpoint_every": 500, "val_every": 500}'
 # LCP-VAE: a wide learned prior (cs_kl_weight, see models/lcpvae.py) and a short teacher-forcing phase
 # (sampling decodes free-running; a long teacher-forced phase left the validation loss 8x above training).
 LCP='"model": {"hidden_dim": 128, "latent_dim": 32, "mlp_dim": 128, "cs_kl_weight": 4.0, "teacher_forcing_steps": 300, "motion_stats_weight": 60.0}'
-# mixer-cvae (issue 24, models/mixer_cvae.py): a CVAE whose decoder is the DCT + MLP-mixer of models/mixer.py, KL weight 0.01,
+# mixer-cvae (models/mixer_cvae.py): a CVAE whose decoder is the DCT + MLP-mixer of models/mixer.py, KL weight 0.01,
 # a liveliness term on prior samples; 21 min on one thread beside another run (2026-11-27). DLow samples it.
 MIXER_CVAE='"model": {"kl_weight": 0.01, "stats_weight": 1.0}, "data": {"held_out": "corpus"}, "train": {"batch_size": 64, "lr": 0.002, "checkpoint_every": 1000, "val_every": 1000}'
 # DLow on top of the trained mtvae-add: K = 50 affine maps of one noise, the base model frozen.
@@ -72,7 +72,7 @@ train_one() {
 lane_a() {
   train_one mtvae-add mtvae-add "$MOCAP" 4000 "{$MTVAE_BODY, $BODY_DATA, $TRAIN}"
   train_one mtvae-add-dlow dlow "$MOCAP" 600 "{$DLOW}" --base "$WEIGHTS/mtvae-add.safetensors"
-  # behaviour model with root-trajectory access (issue 13; see weights/behavior.md): 4000 steps, 10-13 min
+  # behaviour model with root-trajectory access (see weights/behavior.md): 4000 steps, 10-13 min
   train_one behavior behavior "$MOCAP" 4000 \
       "{\"model\": {\"hidden_dim\": 128, \"latent_dim\": 32, \"regressor_dim\": 128, \"decoder_feeds_z\": true, \"encoder_velocities\": true, \"kl_budget\": 100.0, \"root_weight\": 10.0, \"root_trajectory\": true, \"motion_stats_weight\": 60.0}, $BODY_DATA, $TRAIN}"
 }

@@ -1,4 +1,4 @@
-"""Skeleton version 2: "h36m-17" means Human3.6M's body points, whatever the source (issue 21).
+"""Skeleton version 2: "h36m-17" means Human3.6M's body points, whatever the source.
 
 Known answers: Human3.6M's own skeleton is a fixed point of :func:`h36m_body_points`; a rig whose chest
 joint sits mid-chest and whose head joint sits at the neck comes out with Human3.6M's proportions; every

@@ -249,7 +249,7 @@ def test_face_model_samples_a_face_capture(face_dir, tmp_path):
 
 
 def test_sample_help_lists_every_shipped_motion_model_and_names_the_best(capsys):
-    """Issue 24, item 7: `sample --help` lists the shipped motion models (every checkpoint in motion2video/weights
+    """`sample --help` lists the shipped motion models (every checkpoint in motion2video/weights
     that is not a frame generator or the pose estimator), the best body sampler first."""
     from motion2video.models.checkpoint import shipped_names
 

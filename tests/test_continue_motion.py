@@ -1,4 +1,4 @@
-"""Sampled futures continue the observed motion (issue 24): a future's first frame is the last observed frame plus
+"""Sampled futures continue the observed motion: a future's first frame is the last observed frame plus
 the last observed step, for every learned model, and a baseline keeps its own rule.
 
 Real parts: the shipped mtvae-add and the demo's real CMU walk.

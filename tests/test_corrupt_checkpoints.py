@@ -1,4 +1,4 @@
-"""Corrupt checkpoints (issue 12): a truncated file, damaged or missing metadata, and a format version from a
+"""Corrupt checkpoints: a truncated file, damaged or missing metadata, and a format version from a
 later motion2video each give one line naming the file and the problem, exit 2, and no output, from every
 command that loads a checkpoint. The files are made from the real shipped weights."""
 

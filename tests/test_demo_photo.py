@@ -1,4 +1,4 @@
-"""`make demo` and the real photo (issue 23): with ../shared/data/photos beside the repository the demo draws the
+"""`make demo` and the real photo: with ../shared/data/photos beside the repository the demo draws the
 CMU walk's futures as the person of one real photo (pose estimated, cut around the person); without it, one note."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Determinism (issue 12): ``sample`` and ``synthesize`` with the same seed, run in two separate processes, give
+"""Determinism: ``sample`` and ``synthesize`` with the same seed, run in two separate processes, give
 bit-identical npz files and identical decoded video frames, with one torch thread and with two (measured: the
 outputs are identical at --threads 1 and 2 as well; the README says so)."""
 

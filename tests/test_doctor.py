@@ -1,4 +1,4 @@
-"""`motion2video doctor` and the one-line message for a missing GL library (issue 12).
+"""`motion2video doctor` and the one-line message for a missing GL library.
 
 A machine without Debian's libosmesa6 is emulated at the dynamic-loader boundary: a ``sitecustomize`` module on
 the child processes' PYTHONPATH makes every ``ctypes.CDLL`` load of libOSMesa fail with the OSError the loader

@@ -1,4 +1,4 @@
-"""Exact resume (issue 12): a training run killed with SIGKILL after a periodic checkpoint and then resumed ends
+"""Exact resume: a training run killed with SIGKILL after a periodic checkpoint and then resumed ends
 with the same weights and the same optimiser state, bit for bit, as the run that was never interrupted (CPU, one
 torch thread). The data order is a function of (seed, step) in both training loops, and so is torch's random
 state (each step reseeds it), so nothing else needs saving. One test for a motion model (``motion2video train``),

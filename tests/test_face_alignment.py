@@ -1,4 +1,4 @@
-"""The fitted head of a reference picture moved onto the pictured eyes (issue 22): a body fitted to a picture puts
+"""The fitted head of a reference picture moved onto the pictured eyes: a body fitted to a picture puts
 its joints on the picture's joints, not its face on the pictured face.
 
 Real parts: Anny's rest mesh and regions, its inverse kinematics and renders, BlazePose on the demo's reference.

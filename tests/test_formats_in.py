@@ -1,4 +1,4 @@
-"""Formats in (issue 25): DeepMimic files as users have them, joint arrays of the motion-generation field, and
+"""Formats in: DeepMimic files as users have them, joint arrays of the motion-generation field, and
 the refusal of pickles. Real files from ../shared, copied into the layouts users have."""
 
 from __future__ import annotations

@@ -36,7 +36,7 @@ def test_there_are_15_known_answer_pairs():
 @pytest.mark.parametrize("stem", DEEPMIMIC_TWINS)
 def test_deepmimic_file_gives_the_joints_of_its_bvh_twin(mocap_dir, character, stem):
     """deepmimic/txt/X.txt is the original of deepmimic/X.bvh: every canonical joint of every frame agrees
-    (the README measured at most 2.4e-7 m; the issue asks for 1 cm)."""
+    (the README measured at most 2.4e-7 m; the target is 1 cm)."""
     clip = deepmimic.read_deepmimic(mocap_dir / "deepmimic" / "txt" / f"{stem}.txt", character)
     mine = deepmimic.deepmimic_canonical(clip, character)
     twin = bvh.canonical_positions(bvh.read_bvh(mocap_dir / "deepmimic" / f"{stem}.bvh"))

@@ -1,4 +1,4 @@
-"""Formats out (issue 25): ``--bvh DIR`` writes BVH files that the project's own reader reads back onto the
+"""Formats out: ``--bvh DIR`` writes BVH files that the project's own reader reads back onto the
 joints they were written from."""
 
 from __future__ import annotations

@@ -254,7 +254,7 @@ def test_evaluation_json_shape_and_contact_sheet(tmp_path, domain):
         assert set(payload["results"][method]) == {"psnr", "ssim", "head_psnr", "head_ssim"} | person
         # Held-out pairs carry no head masks: the head keys are there, and null.
         assert payload["results"][method]["head_psnr"] is None and payload["results"][method]["head_ssim"] is None
-    # The toy data has silhouettes, so the person targets of issue 10 are reported.
+    # The toy data has silhouettes, so the person targets are reported.
     assert set(payload["targets_met"]) == {"person_psnr_vs_limb_warp_3db", "person_psnr_vs_copy_reference_5db",
                                            "person_sharpness_0.9", "psnr_29db", "ssim_above_every_baseline"}
     sheet = evaluation_contact_sheet(ev, rows=3)

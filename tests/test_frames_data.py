@@ -134,7 +134,7 @@ def test_warp_settings_without_the_warp_model_are_refused_before_any_rendering(t
     assert not cache.exists() and not (tmp_path / "x.safetensors").exists()
 
 
-# --- evaluate-frames --poses: held-out identities posed by real mocap (issue 22) ----------------------------
+# --- evaluate-frames --poses: held-out identities posed by real mocap ----------------------------------
 
 WALK = DATA / "mocap" / "cmu" / "08_01.bvh"  # a held-out clip of the frame data (is_test_clip)
 

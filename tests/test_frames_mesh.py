@@ -148,7 +148,7 @@ def test_an_opening_jaw_read_from_the_triangles_warps_closer_to_the_truth():
     """Real face renders (Anny's head mesh, pyrender): the neutral face warped along its correspondence to the same
     face with the jaw open. Read from the target's triangles, the lower face lands closer to the render of the open
     jaw than read from the nearest vertices, which alternate between the two sides of the jaw's crease (the dashes
-    the face generator drew along the jaw: docs/results.md, issue 22)."""
+    the face generator drew along the jaw)."""
     import cv2
 
     from motion2video.core.motion import ARKIT_NAMES, FaceMotion
@@ -415,7 +415,7 @@ def test_synthesize_through_the_mesh_generator(tmp_path, capsys):
     assert not bad.exists()
 
 
-# --- the face through the face mesh (issue 22, item 3) --------------------------------------------------------
+# --- the face through the face mesh ---------------------------------------------------------------------------
 
 def test_face_renderer_keeps_the_head_mesh_correspondence():
     from motion2video.core.motion import FaceMotion

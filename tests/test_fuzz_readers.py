@@ -1,4 +1,4 @@
-"""Property-based fuzzing of every reader (issue 12).
+"""Property-based fuzzing of every reader.
 
 Each reader starts from a real file of ``../shared/data`` (a short prefix of it, so one example is cheap) and
 hypothesis mutates it: byte flips, truncation, deleted and duplicated lines, numbers replaced by huge, negative,

@@ -1,4 +1,4 @@
-"""SIGINT / SIGTERM in the middle of real work (issue 12): one line, exit 130 / 143, no file at the output path
+"""SIGINT / SIGTERM in the middle of real work: one line, exit 130 / 143, no file at the output path
 and no temporary file left behind. Every test starts the real command in a subprocess, waits until it is
 writing, then signals it: SIGINT to its process group (what Ctrl-C in a terminal does), SIGTERM to the process
 alone (what `kill PID` and schedulers do)."""

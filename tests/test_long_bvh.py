@@ -1,4 +1,4 @@
-"""Long captures (issue 25): the BVH reader streams the motion lines and poses frames in chunks, with results
+"""Long captures: the BVH reader streams the motion lines and poses frames in chunks, with results
 identical to reading and posing the whole clip at once."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Turned limbs and jumps through the mesh generator's path (issue 22): the flow across a fold, a body that leaves the
+"""Turned limbs and jumps through the mesh generator's path: the flow across a fold, a body that leaves the
 observed framing, and a reference picture re-framed to keep a jump in view.
 
 Real parts: the demo's real CMU jump and reference picture, Anny rendered with pyrender/OSMesa.

@@ -1,4 +1,4 @@
-"""Where the mesh generator samples the reference person's colours (issue 22): never the background behind a
+"""Where the mesh generator samples the reference person's colours: never the background behind a
 person's outline, and never a hand for the hidden side of the thigh it rests on.
 
 Real parts: Anny's mesh and rest pose, the demo's rendered reference picture and its pose file.
@@ -166,9 +166,9 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
 
     import motion2video.stages.mesh_frames as mesh_frames
 
-    # the completion's own rules, on the depth test's visibility (the touching-surface rule of session 9, which hides
+    # the completion's own rules, on the depth test's visibility (the touching-surface rule, which hides
     # thigh vertices under a hand in the reference, is tested below: test_a_forearm_against_the_waist_...; the
-    # grazing rule of session 16 at the end of this file)
+    # grazing rule at the end of this file)
     plain = renderers.mesh.behind_a_touching_surface
     monkeypatch.setattr(renderers.mesh, "behind_a_touching_surface",
                         lambda uv, seen, behind, rest: np.zeros(len(uv), bool))
@@ -195,9 +195,9 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
         return int((hidden_trousers & skin).sum()), int((hidden_trousers & white).sum())
 
     sampled = (source[0].permute(1, 2, 0).numpy() * 255).round()
-    # the touching rule and the sampled person, with the completion of any region (as before session 8)
+    # the touching rule and the sampled person, with the completion of any region (the rule it replaced)
     skin, white = counts(complete_reference_uv(uv, seen, by_region=False), sampled)
-    # as the generator completes since session 8: within the clothing region, from its typical colours
+    # as the generator completes now: within the clothing region, from its typical colours
     skin_now, white_now = counts(complete_reference_uv(uv, seen, image=picture), sampled)
     monkeypatch.setattr(mesh_flow, "DOUBT_APART_M", 0.0)
     skin_before, _ = counts(complete_reference_uv(uv, seen, by_region=False), sampled)
@@ -205,7 +205,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     assert skin_before >= 30 and white_before >= 50  # what the rules are for (61 and 114 on 2026-11-26)
     assert skin <= skin_before / 2  # 18
     assert white <= 5  # 0
-    assert skin_now <= 5 and white_now <= 5  # 0 and 0 (session 8)
+    assert skin_now <= 5 and white_now <= 5  # 0 and 0
 
 
 def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():

@@ -1,4 +1,4 @@
-"""mixer-dct (issue 24): the anchored DCT representation, the mixer, best-of-K training and its sampling;
+"""mixer-dct: the anchored DCT representation, the mixer, best-of-K training and its sampling;
 and the action / source balanced window sampling of the dataset."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""mixer-cvae (issue 24): a conditional VAE with the DCT MLP-mixer decoder; its latent interface (encode /
+"""mixer-cvae: a conditional VAE with the DCT MLP-mixer decoder; its latent interface (encode /
 decode) is what DLow samples, and its recognition model must carry the future into the latent."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The ``mixture`` sampler (issue 24): futures drawn in turn from the shipped DLow samplers, its checkpoint
+"""The ``mixture`` sampler: futures drawn in turn from the shipped DLow samplers, its checkpoint
 composed from theirs, and the checks on what may be mixed. Real shipped weights, real CMU walks."""
 
 from __future__ import annotations

@@ -226,7 +226,7 @@ def test_behavior_transfer_api_and_flow_sampling() -> None:
     assert out.shape == (3, 2, 5, F) and torch.isfinite(out).all()
 
 
-def test_behavior_issue13_options_velocities_z_at_every_step_and_root_weight() -> None:
+def test_behavior_options_velocities_z_at_every_step_and_root_weight() -> None:
     """The encoder reads [frames, velocities], the decoder gets z at every step, and the root features' error
     is weighted: the reconstruction error grows by exactly (w - 1) x the root part."""
     obs, future = _batch()

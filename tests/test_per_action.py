@@ -1,4 +1,4 @@
-"""Per-action and macro-averaged forecasting metrics (issue 24): the grouping functions by hand, and
+"""Per-action and macro-averaged forecasting metrics: the grouping functions by hand, and
 ``evaluate_bundles`` on real clips of three actions (a tiny trained model and the baselines)."""
 
 from __future__ import annotations

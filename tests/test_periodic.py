@@ -1,5 +1,5 @@
 """``mirror-periodic`` (a walk's future read off its past, mirrored every half-period) and the shipped
-``mixture-periodic`` that draws some of its futures from it (issue 24). Known answers on synthetic periodic motion,
+``mixture-periodic`` that draws some of its futures from it. Known answers on synthetic periodic motion,
 then the real CMU walk of ``make demo`` and the real shipped weights."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Personalisation (issue 23): `train-frames --video V --init-from frames-body-128` fine-tunes the shipped warp
+"""Personalisation: `train-frames --video V --init-from frames-body-128` fine-tunes the shipped warp
 generator on the first 80% of a real video and scores it and the generic model on the tail by the reconstruction
 protocol; `evaluate-frames --video-start-fraction` scores any model on that tail; the video's track is cached."""
 

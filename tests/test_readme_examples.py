@@ -1,14 +1,15 @@
-"""Every ``motion2video`` example of the README runs as written (issue 25).
+"""Every ``motion2video`` example of the README and of docs/cli.md runs as written.
 
-The examples are read out of README.md's code blocks at test time (a continued line with its ``\\`` joined),
-and run in README order with the installed command, from a working folder laid out like a fresh clone beside
-``../shared``: ``demo_inputs/`` and ``scripts/`` of this checkout are linked in, ``out/`` and ``runs/`` start
-empty, so the examples write their own outputs and never over anything of the checkout.
+The examples are read out of the code blocks of README.md, then docs/cli.md, at test time (a continued line
+with its ``\\`` joined), and run in that order (an example both give runs once) with the installed command, from
+a working folder laid out like a fresh clone beside ``../shared``: ``demo_inputs/`` and ``scripts/`` of this
+checkout are linked in, ``out/`` and ``runs/`` start empty, so the examples write their own outputs and never
+over anything of the checkout.
 
 Training examples run with tiny step counts (``--steps 2``; ``train-frames`` also renders only 8 training
 sequences, unless it fine-tunes on a ``--video``): that is the only change made to any command. The cluster
 example is left out because it needs a running multi-node Ray cluster (``--address auto``); it is listed in
-:data:`NEEDS_A_CLUSTER`, so any other example that is added to the README runs here.
+:data:`NEEDS_A_CLUSTER`, so any other example that is added to these documents runs here.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
 NEEDS_A_CLUSTER = ("--address auto",)
+DOCUMENTS = ("README.md", "docs/cli.md")
 TINY = {"--steps": "2"}
 
 
@@ -37,6 +39,14 @@ def readme_examples(text: str) -> list[str]:
             line = line.split("  #")[0].strip()
             if line.startswith("motion2video "):
                 commands.append(line)
+    return commands
+
+
+def documented_examples() -> list[str]:
+    """The examples of every document in :data:`DOCUMENTS`, in order, each command once."""
+    commands: list[str] = []
+    for name in DOCUMENTS:
+        commands += [c for c in readme_examples((ROOT / name).read_text()) if c not in commands]
     return commands
 
 
@@ -53,7 +63,7 @@ def tiny(argv: list[str]) -> list[str]:
 
 
 def test_readme_examples_are_found():
-    commands = readme_examples((ROOT / "README.md").read_text())
+    commands = documented_examples()
     names = {shlex.split(c)[1] for c in commands}
     assert {"render", "sample", "synthesize", "transfer", "analogy", "train", "evaluate", "pose"} <= names, names
     assert tiny(["motion2video", "train", "--steps", "2000"]) == ["motion2video", "train", "--steps", "2"]
@@ -72,7 +82,7 @@ def test_every_readme_example_runs_as_written(tmp_path):
         os.symlink(ROOT / name, work / name)
     env = {**os.environ, "OMP_NUM_THREADS": "1", "PYOPENGL_PLATFORM": os.environ.get("PYOPENGL_PLATFORM", "osmesa")}
     failures = []
-    commands = readme_examples((ROOT / "README.md").read_text())
+    commands = documented_examples()
     assert len(commands) >= 20
     for command in commands:
         if any(flag in command for flag in NEEDS_A_CLUSTER):

@@ -1,4 +1,4 @@
-"""Real people through the commands (issue 23): a video as the observed clip, a photo with no pose file as the
+"""Real people through the commands: a video as the observed clip, a photo with no pose file as the
 reference, --crop-person, OpenPose folders at their true rate, 2D keypoints for the 2D body model."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The two-sample realism test (issue 24, item 4): features by hand, the classifier, and its behaviour on real
+"""The two-sample realism test: features by hand, the classifier, and its behaviour on real
 mocap windows (real vs real about 0.5, real vs frozen or slowed futures of the same windows about 1.0)."""
 
 from __future__ import annotations

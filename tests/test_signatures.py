@@ -1,4 +1,4 @@
-"""Behaviour signatures on real clips, and the known-answer transfer benchmark's parts (issue 13)."""
+"""Behaviour signatures on real clips, and the known-answer transfer benchmark's parts."""
 
 from __future__ import annotations
 
@@ -141,7 +141,7 @@ def test_feet_above_bends_the_knees_of_a_sinking_body_and_keeps_its_bones(clip):
     assert drop == pytest.approx(0.25, abs=0.03)
 
 
-# --- root-relative signatures (issue 24): hand-made bodies whose answer is known ---------------------------
+# --- root-relative signatures: hand-made bodies whose answer is known ---------------------------
 
 
 def standing(frames: int) -> np.ndarray:
@@ -175,7 +175,7 @@ def test_leg_extension_of_a_crouch_is_its_depth_and_the_ratio_follows():
 
 
 def test_a_stiff_body_lifted_along_the_root_path_keeps_the_pelvis_excursion_not_the_legs():
-    """The failure issue 24 describes: following the source's root path carries the pelvis's range exactly
+    """Why root-relative signatures exist: following the source's root path carries the pelvis's range exactly
     while the legs do nothing; only the root-relative signature tells."""
     source = crouch(0.3)
     stiff = standing(9)

@@ -104,7 +104,7 @@ def test_reenactment_follows_the_target_position_and_heading(ckpts, clips):
 
 
 def test_reenactment_keeps_the_target_start_and_its_bone_lengths(ckpts, clips):
-    """Issue 13: the re-enactment starts at the target's posture and every generated frame has the start
+    """The re-enactment starts at the target's posture and every generated frame has the start
     posture's bone lengths (a tiny, barely trained model's raw joints stretch its bones)."""
     from motion2video.evaluation.signatures import bone_length_spread, bone_lengths
 
@@ -387,7 +387,7 @@ def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys)
 
 
 def test_shipped_behavior_carries_held_out_jumps_kicks_and_speeds(mocap_dir, tmp_path, capsys):
-    """Issues 13 and 24 with the shipped checkpoint: on held-out subjects, re-enacted from other subjects'
+    """The shipped checkpoint: on held-out subjects, re-enacted from other subjects'
     postures as ``motion2video transfer`` does it (the decoder adapted to the source), the median signature
     ratio of jumps (pelvis excursion), kicks (ankle above the knee) and walks / runs (root speed) is within
     0.6-1.4, and so are the jumps' and kicks' root-relative signatures (leg extension, arm swing, knee bend, ankle

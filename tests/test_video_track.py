@@ -1,4 +1,4 @@
-"""The video track (issue 23): every frame's BlazePose landmarks and person segmentation of a video, cached by the
+"""The video track: every frame's BlazePose landmarks and person segmentation of a video, cached by the
 file's sha256 and shared by evaluate-frames --video, train-frames --video and the pose of `pose` / synthesize; the
 frames the reconstruction protocol scores, over the whole video or its tail."""
 

@@ -507,7 +507,7 @@ def run_ray(jobs: list[Job], *, workers: int, retries: int, address: str | None,
 
     Connects to ``address`` (``"auto"``: the cluster started with ``ray start``) or, when None, starts a
     local Ray instance with ``workers`` CPUs (and shuts it down at the end). Outputs must be on a filesystem
-    every node can write (or per-node folders gathered afterwards); see the README.
+    every node can write (or per-node folders gathered afterwards); see docs/cli.md, "batch".
     """
     try:
         import ray

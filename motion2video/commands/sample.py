@@ -38,7 +38,7 @@ shipped motion models (model cards in motion2video/weights/NAME.md):
   mtvae-add       3D body: MT-VAE, the model mtvae-add-dlow samples from
   lcpvae          3D body: LCP-VAE, a learned condition-dependent prior
   behavior        3D body: the behaviour model (flow samples; transfer re-enacts with it)
-  mixer-cvae-dlow 3D body: DLow over a CVAE with a DCT + MLP-mixer decoder (issue 24; not better than
+  mixer-cvae-dlow 3D body: DLow over a CVAE with a DCT + MLP-mixer decoder (no better than
                   mtvae-add-dlow on the macro average)
   mixer-cvae      3D body: that CVAE, sampled from its prior
   mtvae-add-2d    2D keypoints in a virtual camera

@@ -1,4 +1,4 @@
-"""Per-action and macro-averaged metrics (issue 24): one pooled average over windows is dominated by the action
+"""Per-action and macro-averaged metrics: one pooled average over windows is dominated by the action
 with the most windows (salsa, Indian dance) and can hide a regression on the others.
 
 Pure functions on per-window metric arrays: :func:`group_by_action` gives each action's window indices (the
@@ -6,7 +6,7 @@ action is the window's clip label, :func:`motion2video.data.corpus.action_class`
 column), :func:`per_action_means` averages per-window metrics within each action, :func:`macro_average` is the
 unweighted mean over actions and :func:`window_weighted_average` the mean weighted by window counts (which
 equals the pooled mean over all windows for any per-window metric); :func:`ratios_to` divides a model's per-action
-ADE and FDE by a baseline's (zero-velocity, in the issue's tables).
+ADE and FDE by a baseline's (zero-velocity, in docs/results.md's tables).
 """
 
 from __future__ import annotations
@@ -78,7 +78,7 @@ def window_weighted_average(per_action: dict[str, dict[str, float]]) -> dict[str
 def ratios_to(per_action: dict[str, dict[str, float]], reference: dict[str, dict[str, float]]) -> dict[str, list[float]]:
     """action -> [ADE, FDE] of ``per_action`` divided by ``reference``'s for the same action, plus ``macro``: the
     unweighted mean of those ratios over actions. Both as :func:`per_action_means` gives them (``reference`` the
-    zero-velocity baseline's in the issue-24 tables)."""
+    zero-velocity baseline's in docs/results.md's tables)."""
     rows = {a: {"ade": r["ade"] / reference[a]["ade"], "fde": r["fde"] / reference[a]["fde"]}
             for a, r in per_action.items()}
     macro = macro_average(rows)

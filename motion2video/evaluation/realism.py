@@ -1,4 +1,4 @@
-"""Realism as a two-sample test on the same observed windows (issue 24, item 4).
+"""Realism as a two-sample test on the same observed windows.
 
 The retired realism classifier (``metrics.quality`` on the full sequence descriptor) told real motion of the
 held-out subjects from the validation subjects' real motion with accuracy 0.99: it measured who moves and what

@@ -9,7 +9,7 @@ it answers two questions about the evaluation rather than being a model to ship:
   continues each window, captured from other people: the target a generator is held to is only meaningful if
   real motion meets it.
 
-``scripts/measure_retrieved_futures.py`` reports both (docs/results_transfer.md, "Realism measured fairly").
+``scripts/measure_retrieved_futures.py`` reports both (docs/results_transfer.md, "Realism").
 """
 
 from __future__ import annotations

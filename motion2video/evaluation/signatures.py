@@ -1,4 +1,4 @@
-"""Behaviour signatures: one number per body sequence that says how much of a behaviour it holds (issue 13).
+"""Behaviour signatures: one number per body sequence that says how much of a behaviour it holds.
 
 Every function takes world joints ``(T, 17, 3)`` (H36M-17, metres, z up, the floor at z = 0) at ``fps`` and
 returns a float. They are invariant to where the body stands and which way it faces (a rigid motion about
@@ -15,7 +15,7 @@ across in full.
 - turn: :func:`heading_change`, the absolute net change of the hips' heading, radians (unwrapped);
 - dance / martial arts: :func:`limb_speed`, the mean speed of wrists and ankles relative to the pelvis, m/s.
 
-Root-relative signatures (issue 24): a re-enactment that follows the source's root path carries the
+Root-relative signatures: a re-enactment that follows the source's root path carries the
 pelvis excursion of a jump exactly even when the legs and arms do nothing, so these measure the motion
 relative to the body. Each is the range (max - min over the frames) of a per-frame distance, metres: the
 amplitude of that movement, 0 for a body holding one posture.

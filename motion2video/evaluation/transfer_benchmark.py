@@ -1,4 +1,4 @@
-"""Known-answer behaviour transfer on real motion (issue 13): does a re-enacted jump jump?
+"""Known-answer behaviour transfer on real motion: does a re-enacted jump jump?
 
 Behaviours with a measurable signature (:mod:`motion2video.evaluation.signatures`) are cut from real mocap
 clips (:data:`CASES`), each re-enacted from the start postures of clips of OTHER subjects

@@ -263,12 +263,12 @@ class FrameEvaluation:
         }
 
     def targets_met(self) -> dict[str, bool]:
-        """The targets (issue 10 for bodies with person metrics, the earlier whole-frame targets otherwise):
+        """The targets (person targets for bodies with person metrics, whole-frame targets otherwise):
 
         - person PSNR >= limb-warp + 3 dB, >= copy-reference + 5 dB, >= every baseline generator + 2 dB;
         - person sharpness ratio >= 0.9; whole-frame PSNR >= 29 dB; SSIM above every baseline.
         Without person metrics: PSNR >= copy-reference + 3 dB and >= limb-warp + 1 dB; SSIM above both.
-        Posed by real motion (``pairs == "poses"``, issue 22): person and head PSNR >= limb-warp + 3 dB, person
+        Posed by real motion (``pairs == "poses"``): person and head PSNR >= limb-warp + 3 dB, person
         sharpness ratio >= 0.9.
         """
         g, c, w = (self.results[k] for k in METHODS)

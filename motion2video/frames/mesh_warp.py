@@ -138,7 +138,7 @@ def fill_outside_person(image: torch.Tensor, person: torch.Tensor, core_px: int 
     that passes a thigh, which the network's inpainting (a change to the sampled colour) kept. With the outside
     filled, a sample near the outline takes the person's colour. Measured alone on the real-mocap pairs of
     ``evaluate-frames --poses`` (exact meshes, frames-body-mesh-256): person PSNR +0.005 / +0.04 / +0.02 dB on
-    cmu/08_01, 13_42, 05_14, sharpness -0.01 (docs/results.md, "What the generator samples").
+    cmu/08_01, 13_42, 05_14, sharpness -0.01 (docs/results.md, "How the mesh generator colours a fitted body").
 
     With ``core_px`` > 0 the fill takes the colour of the nearest pixel of the person eroded by that many pixels
     (the person as it is where the erosion leaves nothing): the segmented outline of a real photo runs through
@@ -359,7 +359,7 @@ def mesh_source_mask(pairs) -> torch.Tensor | None:
     Until 2026-11-26 (later) the fitted silhouette, grown by the clothes margin, was joined to the segmented
     person. On a real photo that lent the snow beside a skier's legs to her trousers (white patches in every
     frame), and on ``dancer.avi`` the person PSNR of ``evaluate-frames --video`` was 20.64 dB against 21.19 with the
-    segmented person alone (docs/results.md, "The person whose colours are sampled")."""
+    segmented person alone (docs/results.md, "How the mesh generator colours a fitted body")."""
     if pairs.mesh_ref_masks is None:
         return None
     return torch.from_numpy(np.asarray(pairs.ref_masks, bool))[:, None].float()

@@ -16,7 +16,7 @@ updated by dual gradient ascent (:func:`dual_ascent`) after every training-mode 
     gamma_KL <- max(0, gamma_KL + eta (KL - I_KL)).
 gamma_KL is a buffer (``kl_multiplier``), so it is saved in checkpoints.
 
-Options added for issue 13 (all off by default, so older checkpoints load as they were; the shipped checkpoint
+Options for behaviour that comes across (off by default: older checkpoints load as they were; the shipped checkpoint
 uses all of them, see weights/behavior.md): ``decoder_feeds_z`` (z at every decoder step),
 ``encoder_velocities`` (the encoder reads frame differences too), ``root_weight`` (the root trajectory's share
 of the reconstruction error), ``root_trajectory`` (:class:`RootTrajectoryDecoder`: the decoder can be given the
@@ -77,8 +77,8 @@ class BehaviorConfig:
     kl_multiplier_lr: float = 1e-3  # dual ascent step size eta
     flow_blocks: int = 6
     flow_hidden: int = 128
-    # Issue 13 (measured: the shipped model could not even reconstruct a jump from its own start posture,
-    # its z only set the decoder's initial state): feed z to the decoder at every step, and give the
+    # Measured: without these the model could not even reconstruct a jump from its own start posture,
+    # as its z only set the decoder's initial state. So: feed z to the decoder at every step, and give the
     # behaviour encoder the frame-to-frame velocities beside the frames. Both off = the old architecture.
     decoder_feeds_z: bool = False
     encoder_velocities: bool = False
@@ -94,7 +94,7 @@ class BehaviorConfig:
     # decoder also generates its own root (flow samples, and ``decode`` without a trajectory).
     root_trajectory: bool = False
     root_given_prob: float = 0.5
-    # Liveliness (issue 13, item 3): weight of a moment-matching term, the squared difference between the
+    # Liveliness: weight of a moment-matching term, the squared difference between the
     # generated and the true sequence's mean absolute velocity and acceleration per feature (summed over
     # features, times the sequence length). The squared error alone is minimised by smooth, slow motion.
     motion_stats_weight: float = 0.0

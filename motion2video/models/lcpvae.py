@@ -62,9 +62,9 @@ class LCPVAEConfig:
     # Weight of KL(q(z_c | obs) || N(0, I)) relative to the other terms (1 = Eq. 9). The learned prior is
     # what inference samples from; with weight 1 the CS-VAE's observation reconstruction (summed MSE over
     # 16 frames x 51 features) outweighs it and q(z_c | obs) shrinks to sigma_c ~ 0.3: a collapsed sampler
-    # (docs/results.md, "Why LCP-VAE collapsed"). A larger weight keeps the prior wide.
+    # (docs/results.md, "LCP-VAE's learned prior"). A larger weight keeps the prior wide.
     cs_kl_weight: float = 1.0
-    # Liveliness (issue 13): weight of :func:`~motion2video.models.blocks.motion_stats_error` on the future
+    # Liveliness: weight of :func:`~motion2video.models.blocks.motion_stats_error` on the future
     # reconstruction (0 = the paper's loss, whose summed MSE favours slow, smooth futures).
     motion_stats_weight: float = 0.0
 

@@ -1,4 +1,4 @@
-"""``mixer-dct``: a stochastic forecaster built like the 2023-2026 methods (issue 24): a DCT representation
+"""``mixer-dct``: a stochastic forecaster built like the 2023-2026 methods: a DCT representation
 anchored at the last observed pose, an MLP-mixer over DCT coefficients and joint features, and a noise
 sampler trained for best-of-K coverage.
 

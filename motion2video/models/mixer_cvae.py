@@ -1,8 +1,8 @@
-"""``mixer-cvae``: a conditional VAE whose decoder is ``mixer-dct``'s DCT MLP-mixer (issue 24).
+"""``mixer-cvae``: a conditional VAE whose decoder is ``mixer-dct``'s DCT MLP-mixer.
 
 Why: the recurrent decoders of MT-VAE / LCP-VAE draw a held-out future poorly even from the latent of its own
-recognition model (docs/results.md, "The decoder is the limit, not the sampler"), so no sampler over them
-reaches the issue's targets. This model keeps the latent-variable interface (``encode`` / ``decode``, so DLow
+recognition model (docs/results.md, "More futures, and what limits the forecast"), so no sampler over them
+reaches the forecasting targets. This model keeps the latent-variable interface (``encode`` / ``decode``, so DLow
 samples it like ``mtvae-add``: ``motion2video train --model dlow --base mixer-cvae.safetensors``) and replaces the
 decoder with the representation and backbone of the 2023-2026 forecasters.
 

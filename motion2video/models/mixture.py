@@ -1,12 +1,11 @@
-"""``mixture``: futures drawn in turn from several trained samplers (and multi-future rules) of the same windows
-(issue 24).
+"""``mixture``: futures drawn in turn from several trained samplers (and multi-future rules) of the same windows.
 
 Why: the two best body samplers fail in different places. ``mtvae-add-dlow`` (recurrent decoder) is the better
 one on dances and getting up; ``mixer-cvae-dlow`` (anchored DCT mixer decoder) keeps a walker walking, where the
 recurrent one slows to a shuffle. A mixture with equal weights, p(future | obs) = sum_c w_c p_c(future | obs),
 is itself a conditional generative model, and its K futures cover what either covers
-(docs/results.md, "Two samplers in one"). ``mixture-periodic`` adds the ``mirror-periodic`` rule, which keeps a
-walker's gait, at a share of 12 in 50 (docs/results.md, "Walks that keep their step").
+(docs/results.md, "Forecasting body motion"). ``mixture-periodic`` adds the ``mirror-periodic`` rule, which keeps a
+walker's gait, at a share of 12 in 50 (docs/results.md, "Forecasting body motion").
 
 Sampling: with equal shares (the default), future k comes from component ``k mod C`` (so the first C futures show
 every component, and K = 50 gives each of two components 25). With ``shares`` w_c, future k comes from the

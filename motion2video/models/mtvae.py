@@ -68,11 +68,11 @@ class MTVAEConfig:
     lambda_cycle: float = 5.0
     lambda_motion: float = 5.0
     coherence_steps: int = 8
-    # Liveliness (issue 13): weight of :func:`~motion2video.models.blocks.motion_stats_error` on the
+    # Liveliness: weight of :func:`~motion2video.models.blocks.motion_stats_error` on the
     # reconstruction (generated vs true mean absolute velocity and acceleration per feature). 0 = the paper's
     # loss; the L1 reconstruction alone is minimised by futures slower and smoother than real motion.
     motion_stats_weight: float = 0.0
-    # The sequence decoder also reads the last step's velocity, from the observed one on (issue 8: without it
+    # The sequence decoder also reads the last step's velocity, from the observed one on (without it
     # the first future frames were as far off as standing still). False = the paper's decoder input.
     velocity_input: bool = False
 

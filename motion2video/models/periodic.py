@@ -1,4 +1,4 @@
-"""``mirror-periodic``: futures that repeat the observed motion every half gait cycle, mirrored (issue 24).
+"""``mirror-periodic``: futures that repeat the observed motion every half gait cycle, mirrored.
 
 A walk or a run is periodic, and its second half-cycle is the first one mirrored: the left leg does what the right
 leg did half a cycle before. The 16 observed frames (0.64 s at 25 fps) hold more than half a gait cycle of most
@@ -18,7 +18,7 @@ observed frames before it) spreads those jumps, which raw gave the futures 2.3 t
 The half-period is not known: future k takes the k-th of K half-periods spread evenly over
 [``min_half_period``, ``max_half_period``], which covers what a best-of-K measure rewards. A single future (K = 1)
 takes the whole half-period that best fits the observed frames instead (:func:`fitted_half_period`), the closer one
-future on held-out walks (docs/results.md, "Walks that keep their step"). Like the learned models'
+future on held-out walks (docs/results.md, "Forecasting body motion"). Like the learned models'
 futures (:func:`motion2video.stages.sampling.continue_observed`), each future is then shifted to start at the last
 observed frame plus the last observed step, the shift fading over ``decay_frames``.
 

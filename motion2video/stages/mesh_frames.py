@@ -362,7 +362,7 @@ def clothes_margin(person: np.ndarray, silhouette: np.ndarray) -> int:
 
 # on_person: the person's mask is eroded by this many pixels at 128. 0: a 1-2 px erosion hid 40% of the shown
 # vertices (a limb's sides crowd into its silhouette's edge) and cost 1.6 dB of person PSNR on pictures of Anny
-# people fitted as synthesize fits them (docs/results.md, "Turned legs, touching hands and jumps").
+# people fitted as synthesize fits them (docs/results.md, "How the mesh generator colours a fitted body").
 PERSON_EDGE_PX = 0
 
 
@@ -454,7 +454,7 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
     sideways offset), blended over the forehead (:func:`face_weights`); the neck follows the face part of the way
     (:func:`head_weights`). Without ``crown_dy`` the whole head takes the eyes' shift. Only where the colours are
     sampled changes: not the fitted body, nor the targets. Measured on held-out identities fitted as ``synthesize``
-    fits them: head PSNR +2.6 to +3.3 dB where it applies (docs/results.md, "The fitted face on the pictured eyes").
+    fits them: head PSNR +2.6 to +3.3 dB where it applies (docs/results.md, "How the mesh generator colours a fitted body").
 
     Args:
         uv: (V, 2) the fitted reference vertices' pixels; visible: (V,) bool which of them the mesh shows.
