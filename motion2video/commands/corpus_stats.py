@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from motion2video.core.atomic import write_json
 from motion2video.commands.common import CHARACTER_HELP, add_command
-from motion2video.core.errors import InputError
+from motion2video.data.corpus_stats import CorpusStatsSettings, corpus_report
 
 HELP = "print minutes per source, action and split of a mocap folder as the trainer uses it"
 
@@ -40,18 +38,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.data.corpus_stats import corpus_stats, stats_markdown
-    from motion2video.data.dataset import DatasetConfig
-
-    data = Path(args.data)
-    if not data.is_dir():
-        raise InputError("not a folder (corpus-stats takes a mocap folder)", data)
-    if args.json is not None and not Path(args.json).parent.exists():
-        raise InputError("the folder for --json does not exist", args.json)
-    config = DatasetConfig(held_out=args.held_out, drop_duplicates=not args.keep_duplicates)
-    stats = corpus_stats(data, config, character=args.character)
-    print(stats_markdown(stats), end="")
-    if args.json is not None:
-        write_json(args.json, stats)
-        print(f"wrote {args.json}")
+    settings = CorpusStatsSettings(data=args.data, json=args.json, held_out=args.held_out,
+                                   keep_duplicates=args.keep_duplicates, character=args.character)
+    report = corpus_report(settings)
+    print(report.markdown, end="")
+    if report.json is not None:
+        print(f"wrote {report.json}")
     return 0

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
+from motion2video.apps.pose import PoseSettings, VideoPoseFile, estimate_pose_file
 from motion2video.commands.common import add_command
 from motion2video.core.errors import InputError
+from motion2video.pose.estimate import parse_person
 
 HELP = "estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose"
 
@@ -42,57 +43,27 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.core.atomic import check_output_path
-    from motion2video.pose.estimate import parse_person
-    from motion2video.stages import people
-
-    src = Path(args.input)
     try:
         person = parse_person(args.person)
     except ValueError as err:
         raise InputError(str(err)) from None
-    if not src.exists():
-        raise InputError("no such file", src)
-    video = people.is_video(src)
-    if not video and not people.is_image(src):
-        raise InputError(f"unsupported input extension {src.suffix or '(none)'!r}: a photo (.png, .jpg, ...) or a "
-                         "video (.mp4, .avi, .mov, ...)", src)
-    out = check_output_path(args.output, (".npz",))
-    if args.overlay is not None:
-        check_output_path(args.overlay, (".mp4",) if video else (".png",))
-    if video:
-        return _video(src, out, person, args.overlay)
-    return _photo(src, out, person, args.overlay)
-
-
-def _photo(src: Path, out: Path, person, overlay: str | None) -> int:
-    from motion2video.stages.reference import reference_pose_path, save_reference_pose
-    from motion2video.stages import people
-
-    photo = people.photo_pose(src, person=person)
-    save_reference_pose(out, people.reference_pose_of(photo.pose))
-    which = "the largest" if person == "largest" else f"person {person} from the left"
-    print(f"found {photo.people} {'person' if photo.people == 1 else 'people'}; took {which}")
-    print(f"wrote {out} (17 joints in {photo.pose.width}x{photo.pose.height} pixels, mean confidence "
-          f"{photo.pose.confidence.mean():.2f})")
-    if out.resolve() != reference_pose_path(src).resolve():
-        print(f"note: synthesize and transfer look for {reference_pose_path(src).name} beside the image; "
-              f"pass --reference-pose {out} to use this file")
-    if overlay is not None:
-        print(f"wrote {people.write_photo_overlay(overlay, photo)}")
-    return 0
-
-
-def _video(src: Path, out: Path, person, overlay: str | None) -> int:
-    from motion2video.pose.files import save_video_pose
-    from motion2video.stages import people
-
-    pose = people.video_pose(src, person=person, cache=False)
-    save_video_pose(out, pose)
-    trimmed_end = pose.video_frames - pose.first_frame - pose.num_frames
-    print(f"wrote {out} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
-          f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
-          f"{trimmed_end} at the end of {pose.video_frames})")
-    if overlay is not None:
-        print(f"wrote {people.write_video_overlay(overlay, src, pose)}")
+    result = estimate_pose_file(PoseSettings(input=args.input, output=args.output, person=person,
+                                             overlay=args.overlay))
+    if isinstance(result, VideoPoseFile):
+        pose = result.pose
+        trimmed_end = pose.video_frames - pose.first_frame - pose.num_frames
+        print(f"wrote {result.output} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
+              f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
+              f"{trimmed_end} at the end of {pose.video_frames})")
+    else:
+        photo = result.photo
+        which = "the largest" if person == "largest" else f"person {person} from the left"
+        print(f"found {photo.people} {'person' if photo.people == 1 else 'people'}; took {which}")
+        print(f"wrote {result.output} (17 joints in {photo.pose.width}x{photo.pose.height} pixels, mean confidence "
+              f"{photo.pose.confidence.mean():.2f})")
+        if result.output.resolve() != result.expected.resolve():
+            print(f"note: synthesize and transfer look for {result.expected.name} beside the image; "
+                  f"pass --reference-pose {result.output} to use this file")
+    if result.overlay is not None:
+        print(f"wrote {result.overlay}")
     return 0
