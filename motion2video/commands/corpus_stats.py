@@ -7,8 +7,6 @@ import argparse
 from motion2video.commands.common import CHARACTER_HELP, add_command
 from motion2video.data.corpus_stats import CorpusStatsSettings, corpus_report
 
-HELP = "print minutes per source, action and split of a mocap folder as the trainer uses it"
-
 DESCRIPTION = """\
 Load every clip of a mocap folder as the dataset builder does (all formats, true frame rates, duplicate copies
 of one trial dropped, the subject-disjoint split) and print Markdown tables: minutes per source, per split and
@@ -27,7 +25,7 @@ the default data config (25 fps, 16 observed + 48 future frames).
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "corpus-stats", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "corpus-stats", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--data", required=True, help="mocap folder (with manifest.csv)")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("--json", default=None, help="also write the statistics as JSON here")

@@ -7,8 +7,6 @@ import argparse
 from motion2video.commands.common import CHARACTER_HELP, add_command, add_threads_argument, check_at_least, set_threads
 from motion2video.evaluation.forecasting import ForecastEvalSettings, evaluate_models
 
-HELP = "score a motion model and the zero-velocity / last-step / sequence-motion baselines"
-
 DESCRIPTION = """\
 Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
 MMFDE (DLow protocol), pooled over all windows, as the macro average over actions (every action counts once)
@@ -37,7 +35,7 @@ Metrics (best of K for ADE/FDE) on root-relative poses, metres (face models: par
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "evaluate", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "evaluate", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, action="append",
                    help="checkpoint path or shipped model name; repeat to compare models on the same windows "
                    "(they must share the layout and data settings; the first one's split picks the windows); "

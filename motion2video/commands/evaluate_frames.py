@@ -9,8 +9,6 @@ import sys
 from motion2video.commands.common import add_command, check_at_least
 from motion2video.evaluation.frame_generators import FrameEvalSettings, evaluate_frame_generator
 
-HELP = "score a frame generator against copy-reference and limb-warp on held-out pairs"
-
 DESCRIPTION = """\
 Render (or reuse from the cache) the held-out split (held-out identities and clips) for the model's domain and
 size, and report whole-frame PSNR and SSIM (scikit-image) and person metrics (PSNR, SSIM and sharpness ratio
@@ -45,7 +43,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "evaluate-frames", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "evaluate-frames", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="a checkpoint file or a shipped name (frames-body-128)")
     p.add_argument("--json", default=None, help="write the results here as JSON")
     p.add_argument("--cache", default=None,

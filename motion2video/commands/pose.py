@@ -9,8 +9,6 @@ from motion2video.commands.common import add_command
 from motion2video.core.errors import InputError
 from motion2video.pose.estimate import parse_person
 
-HELP = "estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose"
-
 DESCRIPTION = """\
 Estimate the pose of one person with the bundled BlazePose full model (no download). A photo gives its
 reference pose file (IMAGE.pose.npz: the canonical H36M-17 joints in its pixels), which synthesize and
@@ -31,7 +29,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "pose", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "pose", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("input", help="a photo (.png, .jpg, ...) or a video (.mp4, .avi, .mov, .mkv, .webm)")
     p.add_argument("-o", "--output", required=True,
                    help="output .npz: a photo's reference pose file (name it IMAGE.pose.npz beside the image for "

@@ -7,8 +7,6 @@ import argparse
 from motion2video.apps.train import LAYOUTS, MotionTrainingSettings, train_motion_model
 from motion2video.commands.common import CHARACTER_HELP, add_command, add_threads_argument, check_at_least, set_threads
 
-HELP = "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)"
-
 DESCRIPTION = """\
 Train a stochastic motion model on real motion capture. Writes a safetensors checkpoint with the model config,
 normalisation statistics and data split in its metadata; periodic checkpoints (OUT.last.safetensors +
@@ -32,7 +30,7 @@ and "train" (TrainConfig: batch_size, lr, weight_decay, grad_clip, checkpoint_ev
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "train", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "train", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="registered model name, e.g. mtvae-add")
     p.add_argument("--data", required=True, help="folder of BVH files (with manifest.csv), or face captures")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)

@@ -14,8 +14,6 @@ from motion2video.core.atomic import check_output_path, write_json
 from motion2video.core.errors import InputError
 from motion2video.evaluation.personalise import PersonaliseSettings, personalise
 
-HELP = "train the keypoint-conditioned frame generator (body or face)"
-
 DESCRIPTION = """\
 Render (or reuse from the cache) a synthetic appearance dataset with the Anny body or face renderer, posed by
 real captures, then train the frame generator with L1 + SSIM. Checkpoints (safetensors) are written
@@ -41,7 +39,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "train-frames", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "train-frames", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--domain", choices=("body", "face"), default=None,
                    help="body or face frames (required, except with --video: body)")
     p.add_argument("-o", "--output", required=True, help="checkpoint to write (.safetensors)")
