@@ -217,7 +217,7 @@ def test_a_128_model_runs_at_256_with_the_same_weights():
 
 
 def test_eroded_silhouettes_erode_about_half_of_them():
-    from motion2video.frames.train import eroded_silhouettes
+    from motion2video.frames.training import eroded_silhouettes
 
     masks = np.zeros((40, 16, 16), bool)
     masks[:, 3:13, 3:13] = True

@@ -11,7 +11,7 @@ another file (or a non-adjacent part of the same one) it is first placed after A
 rotated about the vertical so its first frame has A's last heading and translated so its root continues
 A's last root step; face parameters are simply concatenated (head pose is absolute).
 
-The known-answer protocol is :mod:`motion2video.evaluation.analogy`; :func:`analogy_to_files` is the
+The known-answer protocol is :mod:`motion2video.evaluation.analogy_benchmark`; :func:`analogy_to_files` is the
 ``analogy`` command's work.
 """
 
@@ -38,7 +38,7 @@ from motion2video.stages.structure import (
     TARGET_LOOK,
     iter_sequence,
 )
-from motion2video.stages.video import check_bvh_output, check_cell_size, check_video_and_npz, iter_mark_segments
+from motion2video.stages.layout import check_bvh_output, check_cell_size, check_video_and_npz, iter_mark_segments
 from motion2video.formats.video import GREEN, RED, iter_grid
 from renderers.registry import check_style
 

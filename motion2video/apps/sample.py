@@ -28,7 +28,7 @@ from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_mo
 from motion2video.models.periodic import RULES
 from motion2video.stages.clips import load_clip
 from motion2video.stages.sampling import Forecast, forecast
-from motion2video.stages.video import check_bvh_output, check_cell_size, check_video_and_npz
+from motion2video.stages.layout import check_bvh_output, check_cell_size, check_video_and_npz
 from renderers.registry import check_style, renderer_for
 
 STYLES = ("skeleton", "mesh")

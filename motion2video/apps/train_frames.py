@@ -1,6 +1,6 @@
 """Training a frame generator on synthetic Anny renders from the command's settings (the ``train-frames``
 command's work): the generator's config checked before the data, the appearance dataset rendered (or read from
-the cache), and :func:`motion2video.frames.train.train_frames` run. Fine-tuning on one person's video is
+the cache), and :func:`motion2video.frames.training.train_frames` run. Fine-tuning on one person's video is
 :func:`motion2video.evaluation.personalise.personalise`."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from motion2video.core.errors import InputError
 from motion2video.frames.data import default_cache_dir, load_or_generate, structure_channels
 from motion2video.frames.mesh_warp import MeshWarpConfig
 from motion2video.frames.specs import default_spec
-from motion2video.frames.train import TrainFramesConfig, TrainFramesResult, train_frames
+from motion2video.frames.training import TrainFramesConfig, TrainFramesResult, train_frames
 from motion2video.frames.warp import WarpGeneratorConfig
 
 MODEL_KINDS = ("analogy", "warp", "mesh")
@@ -26,7 +26,7 @@ class FrameTrainingSettings:
         domain: ``body`` or ``face``.
         output: the checkpoint (``.safetensors``; its ``.state`` resume file beside it).
         steps, batch_size, lr, adversarial, checkpoint_every, seed: as
-            :class:`motion2video.frames.train.TrainFramesConfig` (``seed`` also seeds the rendered data).
+            :class:`motion2video.frames.training.TrainFramesConfig` (``seed`` also seeds the rendered data).
         size: frame size (64, 128 or 256).
         cache: folder of the rendered npz shards (None: :func:`motion2video.frames.data.default_cache_dir`).
         data_root: folder with mocap/ and face/ captures (None: ../shared/data beside the repository).

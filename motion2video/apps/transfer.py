@@ -78,7 +78,7 @@ from motion2video.stages.structure import (
     reference_in_view,
     render_structures,
 )
-from motion2video.stages.video import check_bvh_output, check_cell_size, check_video_and_npz, iter_mark_segments
+from motion2video.stages.layout import check_bvh_output, check_cell_size, check_video_and_npz, iter_mark_segments
 from motion2video.formats.video import GREEN, RED, iter_chunks, iter_grid
 from renderers.registry import renderer_for
 
