@@ -13,11 +13,10 @@ from typing import Callable
 
 from safetensors import safe_open
 
-import motion2video.models.checkpoint  # noqa: F401  (registers every model)
 from motion2video.core.errors import InputError
 from motion2video.data.dataset import DatasetConfig, MotionDataset, build_dataset
 from motion2video.models.base import MODEL_REGISTRY
-from motion2video.models.checkpoint import read_meta, resolve_checkpoint
+from motion2video.models.checkpoint import read_meta, resolve_checkpoint  # importing it registers every model
 from motion2video.models.mixture import NOT_TRAINED
 from motion2video.models.training import TrainConfig, TrainResult, train_model
 
