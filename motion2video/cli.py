@@ -1,6 +1,10 @@
 """`motion2video ...`: a thin command line. Each sub-command lives in ``motion2video/commands/<name>.py``
 with two functions, ``add_parser(subparsers)`` and ``run(args) -> int``; this file only dispatches and turns
-:class:`~motion2video.core.errors.InputError` into a one-line message with exit code 2."""
+:class:`~motion2video.core.errors.InputError` into a one-line message with exit code 2.
+
+The command modules import their applications (and with them torch, OpenCV, the renderers) at their top, so the
+CLI imports only the module of the sub-command a command line names; ``motion2video --help`` lists the commands
+from :data:`SUMMARIES` without importing any."""
 
 from __future__ import annotations
 
@@ -15,27 +19,65 @@ from motion2video import __version__
 from motion2video.core import interrupts
 from motion2video.core.errors import InputError
 
-# Sub-command modules, in the order `--help` lists them. A module that does not exist yet is skipped.
-COMMANDS = ("render", "pose", "train", "evaluate", "sample", "train_frames", "evaluate_frames", "synthesize",
-            "transfer", "analogy", "corpus_stats", "batch", "doctor", "app")
+# Every sub-command's line in `motion2video --help`, in the order listed there. The table is here, not in the command
+# modules, so that `--help` lists the commands without importing them (and with them torch and the renderers).
+SUMMARIES = {
+    "render": ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) to "
+               "mp4/GIF"),
+    "pose": ("estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose; --face: "
+             "a face video's face motion"),
+    "train": "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)",
+    "evaluate": "score a motion model and the zero-velocity / last-step / sequence-motion baselines",
+    "sample": "sample K futures of a clip from a motion model and render them as a grid video",
+    "train-frames": "train the keypoint-conditioned frame generator (body or face)",
+    "evaluate-frames": "score a frame generator against copy-reference and limb-warp on held-out pairs",
+    "synthesize": "sample K futures of a clip and render them as RGB video of a reference person",
+    "transfer": "re-enact the behaviour of one clip from another clip's posture (behaviour model)",
+    "analogy": "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D",
+    "corpus-stats": "print minutes per source, action and split of a mocap folder as the trainer uses it",
+    "batch": ("run many render/sample/synthesize jobs (JSONL job file, or a folder/glob and a template) on a process "
+              "pool or Ray, resumable, with results.jsonl and an HTML gallery"),
+    "doctor": "check the installation: torch, ffmpeg, GL backends, the Anny cache, the shipped checkpoints",
+    "app": "start the local web app: animate a photo with a clip or a video, transfer a behaviour (needs .[app])",
+}
+
+# Sub-command modules (motion2video/commands/<name>.py), in the same order.
+COMMANDS = tuple(name.replace("-", "_") for name in SUMMARIES)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def named_command(argv: list[str]) -> str | None:
+    """The sub-command module a command line names (its first argument that is not an option, when it is one of
+    :data:`COMMANDS` with ``-`` for ``_``), or None."""
+    first = next((arg for arg in argv if not arg.startswith("-")), None)
+    module = None if first is None else first.replace("-", "_")
+    return module if module in COMMANDS else None
+
+
+def _top_parser() -> tuple[argparse.ArgumentParser, argparse._SubParsersAction]:
     parser = argparse.ArgumentParser(
         prog="motion2video",
         description="Human motion in, video out.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"motion2video {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"motion2video.commands.{name}")
-        except ModuleNotFoundError as err:
-            if err.name == f"motion2video.commands.{name}":
-                continue
-            raise
-        module.add_parser(sub)
+    return parser, parser.add_subparsers(dest="command", metavar="COMMAND")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every sub-command, or of ``command`` alone (a module name of :data:`COMMANDS`): only the
+    modules of the parsers built are imported."""
+    parser, sub = _top_parser()
+    for name in COMMANDS if command is None else (command,):
+        importlib.import_module(f"motion2video.commands.{name}").add_parser(sub)
+    return parser
+
+
+def listing_parser() -> argparse.ArgumentParser:
+    """The parser of a command line that names no sub-command (``--help``, ``--version``, a misspelt command):
+    every sub-command listed with its summary, none imported."""
+    parser, sub = _top_parser()
+    for name, summary in SUMMARIES.items():
+        sub.add_parser(name, help=summary)
     return parser
 
 
@@ -95,7 +137,9 @@ def install_signal_handlers() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = named_command(argv)
+    parser = listing_parser() if command is None else build_parser(command)
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()

@@ -65,15 +65,15 @@ def evaluate_clip(model_name: str, clip: Path):
     """The evaluation of ``evaluate-frames --model model_name --poses clip --windows WINDOWS``, its JSON payload
     (the same functions the command runs) and (N, 2, H, W) bool head masks of each pair's target and reference."""
     from motion2video.frames.data import evaluation_pair_index
-    from motion2video.commands.evaluate_frames import evaluate_posed, load_baselines
+    from motion2video.evaluation.frame_generators import evaluate_posed, load_baselines
     from motion2video.frames.checkpoint import load_frame_model
     from motion2video.frames.evaluate import json_payload
     from motion2video.frames.poses import load_body_clips
 
     loaded = load_frame_model(model_name)
     baselines, left_out = load_baselines(None, loaded)
-    args = argparse.Namespace(poses=str(clip), windows=WINDOWS, pairs=None, no_progress=True)
-    posed = evaluate_posed(loaded.model, load_body_clips(clip), args, baselines)
+    posed = evaluate_posed(loaded.model, load_body_clips(clip), poses_path=clip, windows=WINDOWS, baselines=baselines,
+                           progress=False)
     evaluation, rendered = posed.evaluation, posed.rendered
     index = evaluation_pair_index(rendered.sequences)  # (N, 3) sequence, reference, target: the evaluated pairs
     heads = np.stack([rendered.head_masks[index[:, 0], index[:, 2]], rendered.head_masks[index[:, 0], index[:, 1]]],

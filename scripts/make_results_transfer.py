@@ -98,7 +98,7 @@ def train_variants(dataset, *, steps: int, batch_size: int, workdir: Path, seed:
 def known_answer(*, steps: int, seeds: int, workdir: Path, seed: int) -> dict:
     """Train the procedural mtvae-add and label D (analogy) and a prior sample from C for each pair."""
     from motion2video.stages.latents import analogy_windows
-    from motion2video.evaluation.analogy import procedural_analogy_case, procedural_transition_dataset
+    from motion2video.evaluation.analogy_benchmark import procedural_analogy_case, procedural_transition_dataset
     from motion2video.models.checkpoint import load_model
     from motion2video.data.dataset import decode_samples, encode_windows
     from motion2video.data.multimodal import default_classifier

@@ -6,8 +6,8 @@
 
 ``evaluate-frames --poses`` poses the held-out identities by real CMU clips and gives the generator each reference
 frame's exact mesh. ``synthesize`` never has it. It lifts the picture's 2D joints to 3D
-(:func:`motion2video.stages.mesh_frames.lift_reference`) and poses Anny's default body on them by IK. It keeps as
-shown only the vertices that land on the segmented person (:func:`motion2video.stages.mesh_frames.on_person`).
+(:func:`motion2video.frames.mesh_fit.lift_reference`) and poses Anny's default body on them by IK. It keeps as
+shown only the vertices that land on the segmented person (:func:`motion2video.frames.mesh_reference.on_person`).
 
 This script scores the same pairs with the reference's mesh replaced by such a fit:
 
@@ -22,9 +22,9 @@ This script scores the same pairs with the reference's mesh replaced by such a f
 
 Four rules decide which fitted vertices lend their colour: the depth test alone, and ``on_person`` with the mask
 eroded by 2 px, by 1 px (both at 256) or as it is (``--rules`` picks some). The fitted face is moved onto
-BlazePose's eyes as ``synthesize`` moves it (:func:`motion2video.stages.mesh_frames.align_face`; ``--face fitted``
+BlazePose's eyes as ``synthesize`` moves it (:func:`motion2video.frames.mesh_reference.align_face`; ``--face fitted``
 leaves it where the fit puts it). A fitted hand vertex that lands beside the pictured hand samples the pictured hand
-(:func:`motion2video.stages.mesh_frames.hand_colour_sources`; ``--hands off`` leaves it). Here that is applied to
+(:func:`motion2video.frames.mesh_reference.hand_colour_sources`; ``--hands off`` leaves it). Here that is applied to
 the reference's pixels before the surface completion, where ``synthesize`` applies it after (the completion's test of
 a thigh under the hand then sees the moved hand). ``hands_colour_de`` is the mean colour difference (CIE76) over the
 target's hand pixels (each silhouette pixel labelled by its nearest visible vertex).
@@ -90,7 +90,7 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: s
     import renderers.body as body
     from renderers import anny_model
     from motion2video.core.camera import project
-    from motion2video.stages import mesh_frames
+    from motion2video.frames import mesh_fit, mesh_reference
 
     plain = body.BodyRenderer.render_with_masks
 
@@ -102,19 +102,19 @@ def fitted_renders(rule: int | None, lift: str, mask: str = "blazepose", face: s
         points = project(motion.joints[0], camera)[:, :2]
         reference = np.asarray(motion.joints[0], np.float64)
         pictured = (reference - np.asarray(camera.position)) @ camera.axes().T if lift == "pictured" else None
-        lifted = mesh_frames.lift_reference(points, other_person(reference), camera, 1.0, np.zeros(2),
-                                            pictured=pictured)
+        lifted = mesh_fit.lift_reference(points, other_person(reference), camera, 1.0, np.zeros(2),
+                                         pictured=pictured)
         # synthesize poses the reference together with the clip (one body size, the clip's neck turn): the window's
         # other frames stand in for the clip
         posed = np.concatenate([lifted[None], np.asarray(motion.joints[1:], np.float64)]) if with_clip else lifted[None]
-        track = mesh_frames.render_mesh_track(posed, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
-                                              size=camera.width, clear_arms=np.arange(len(posed)) > 0)
+        track = mesh_fit.render_mesh_track(posed, phenotype={}, camera=camera, transform=(1.0, np.zeros(2)),
+                                           size=camera.width, clear_arms=np.arange(len(posed)) > 0)
         person, rest = person_found(out, mask), anny_model.anny_rest({})
-        uv, shown = mesh_frames.reference_sampling(  # as synthesize does (stages.mesh_frames.mesh_video)
+        uv, shown = mesh_reference.reference_sampling(  # as synthesize does (stages.mesh_frames.mesh_video)
             track.uv[0], track.visible[0], track.masks[0], person, rest=rest, edge_px=rule, align=face == "aligned")
         if hands == "colour" and person is not None:  # synthesize applies them after the surface completion
-            sources = mesh_frames.hand_colour_sources(uv, shown, out.frames[0], person.hands, person.hand_visibility,
-                                                      rest=rest)
+            sources = mesh_reference.hand_colour_sources(uv, shown, out.frames[0], person.hands, person.hand_visibility,
+                                                         rest=rest)
             uv = uv if sources is None else uv[sources]
         out.vertex_uv[0] = uv
         out.vertex_visible[0] = shown
@@ -137,11 +137,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="which of the shown-vertex rules, by index (0: depth test alone, 1: eroded 2 px, "
                         "2: eroded 1 px, 3: the mask as it is, shipped)")
     parser.add_argument("--face", choices=("aligned", "fitted"), default="aligned",
-                        help="the fitted face moved onto BlazePose's eyes (stages.mesh_frames.align_face, as "
+                        help="the fitted face moved onto BlazePose's eyes (frames.mesh_reference.align_face, as "
                         "synthesize does) or left where the fit puts it")
     parser.add_argument("--hands", choices=("colour", "off"), default="colour",
                         help="a fitted hand vertex beside the pictured hand samples the pictured hand "
-                        "(stages.mesh_frames.hand_colour_sources, as synthesize does), or not")
+                        "(frames.mesh_reference.hand_colour_sources, as synthesize does), or not")
     parser.add_argument("--posed", choices=("with-clip", "alone"), default="with-clip",
                         help="pose the fitted reference together with the window's other frames, as synthesize poses "
                         "it with the clip, or on its own (before 2026-11-26, later)")

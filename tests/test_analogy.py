@@ -8,7 +8,8 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from motion2video.evaluation.analogy import known_answer_labels, procedural_analogy_case, procedural_transition_dataset
+from motion2video.evaluation.analogy_benchmark import (known_answer_labels, procedural_analogy_case,
+                                                      procedural_transition_dataset)
 from motion2video.stages.latents import stitch_after
 from motion2video.models.checkpoint import load_model
 from motion2video.cli import main

@@ -3,7 +3,10 @@ exit code 2 and no output file."""
 
 from __future__ import annotations
 
+import ast
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -160,3 +163,32 @@ def test_every_mocap_clip_converts_and_renders(mocap_dir):
         for style in ("skeleton", "mesh"):
             frames = render_motion(pair, style=style, size=48)
             assert frames.shape == (2, 48, 48, 3) and frames.std() > 2.0, (name, style)
+
+
+def _modules_after(code: str) -> list[str]:
+    """The command modules and heavy packages loaded by ``code`` in a fresh interpreter."""
+    probe = (f"import sys\n{code}\nprint(sorted(m for m in sys.modules if m.startswith('motion2video.commands.') "
+             "or m in ('torch', 'cv2', 'renderers')))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True, cwd=REPO,
+                         env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
+    return ast.literal_eval(out.stdout.strip().splitlines()[-1])
+
+
+def test_help_lists_every_command_without_importing_one():
+    """The command modules import their applications (torch, OpenCV, the renderers) at their top: `--help` lists
+    the commands from the CLI's table, a command line imports its own command's module only."""
+    from motion2video.cli import COMMANDS, SUMMARIES
+
+    listing = "from motion2video.cli import main\ntry:\n    main(['--help'])\nexcept SystemExit:\n    pass"
+    assert _modules_after(listing) == []
+    doctor = "from motion2video.cli import main\ntry:\n    main(['doctor', '--help'])\nexcept SystemExit:\n    pass"
+    assert _modules_after(doctor) == ["motion2video.commands.common", "motion2video.commands.doctor"]
+    assert {path.stem for path in (REPO / "motion2video" / "commands").glob("*.py")} - {"__init__", "common"} \
+        == set(COMMANDS) and len(SUMMARIES) == len(COMMANDS)
+
+
+def test_a_misspelt_command_is_one_usage_error(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["sampel", "--samples", "3"])
+    assert exit_info.value.code == 2
+    assert "invalid choice: 'sampel'" in capsys.readouterr().err

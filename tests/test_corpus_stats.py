@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from motion2video.cli import main
-from motion2video.data.corpus_stats import corpus_stats
+from motion2video.data.corpus_stats import CorpusStatsSettings, corpus_report, corpus_stats
 from motion2video.data.dataset import DatasetConfig
 
 CLIPS = ("cmu/02_01.bvh", "deepmimic-cmu/02_01.txt", "cmu-bench/train/walking/walking_1.txt",
@@ -58,6 +58,9 @@ def test_corpus_stats_command(small_corpus, tmp_path, capsys):
     assert sum(v["total"] for v in stats["per_action"].values()) == pytest.approx(total)
     assert stats["per_action"]["salsa"]["train"] == pytest.approx(2 * 2238 / 60 / 60, rel=0.01)
     assert f"{total:.1f} minutes" in printed
+    # The command prints what its function returns: the same tables from Python, without the CLI.
+    report = corpus_report(CorpusStatsSettings(data=small_corpus))
+    assert report.json is None and json.loads(json.dumps(report.stats)) == stats and report.markdown in printed
 
 
 def test_corpus_stats_options_and_bad_input(small_corpus, tmp_path, capsys):

@@ -79,7 +79,7 @@ FRAMES_DRIVER = """
 import sys
 from motion2video.frames.data import toy_sequences
 from motion2video.frames.model import FrameGeneratorConfig
-from motion2video.frames.train import TrainFramesConfig, train_frames
+from motion2video.frames.training import TrainFramesConfig, train_frames
 import torch
 torch.set_num_threads(1)
 seqs = toy_sequences("body", num_sequences=6, frames_per_sequence=4, image_size=32)

@@ -10,9 +10,9 @@ import os
 
 import numpy as np
 
-from motion2video.stages import mesh_frames
-from motion2video.stages.mesh_frames import (FACE_HAIRLINE_M, MAX_FACE_SHIFT, align_face, crown_offset, face_weights,
-                                             head_weights)
+from motion2video.frames import mesh_reference
+from motion2video.frames.mesh_reference import (FACE_HAIRLINE_M, MAX_FACE_SHIFT, align_face, crown_offset,
+                                                face_weights, head_weights)
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
@@ -121,7 +121,7 @@ def test_the_demo_references_fitted_irises_land_on_its_eyes(monkeypatch):
     assert (visibility > 0.5).all()
     x0, y0, side = video.crop
     eyes = (eyes - [x0, y0]) * 256 / side
-    monkeypatch.setattr(mesh_frames, "align_face", lambda uv, *args, **kwargs: (uv, None))
+    monkeypatch.setattr(mesh_reference, "align_face", lambda uv, *args, **kwargs: (uv, None))
     _, fitted = fitted_reference(root / "demo_inputs" / "reference_body.png")
     before, after = iris_offset(fitted, eyes), iris_offset(video, eyes)
     assert before > 3.0  # where the fit alone puts them

@@ -25,7 +25,7 @@ from motion2video.frames.specs import identities
 from motion2video.frames.evaluate import (METHODS, contact_sheet, evaluate_sequences, evaluation_contact_sheet,
                                           frame_metrics, write_json)
 from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate, ssim)
-from motion2video.frames.train import TrainFramesConfig, train_frames
+from motion2video.frames.training import TrainFramesConfig, train_frames
 from motion2video.core.schedule import learning_rate
 from motion2video.core.skeletons import H36M_17
 
@@ -175,7 +175,7 @@ class Interrupt(Exception):
 
 @pytest.mark.slow
 def test_resume_continues_an_interrupted_run_exactly(tmp_path, monkeypatch):
-    import motion2video.frames.train as train_mod
+    import motion2video.frames.training as train_mod
 
     seqs = toy_sequences("body", num_sequences=6, frames_per_sequence=4, image_size=32)
     cfg = TrainFramesConfig(steps=12, batch_size=4, warmup_steps=3, log_every=3, checkpoint_every=6)

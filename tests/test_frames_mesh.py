@@ -217,7 +217,7 @@ def test_a_128_model_runs_at_256_with_the_same_weights():
 
 
 def test_eroded_silhouettes_erode_about_half_of_them():
-    from motion2video.frames.train import eroded_silhouettes
+    from motion2video.frames.training import eroded_silhouettes
 
     masks = np.zeros((40, 16, 16), bool)
     masks[:, 3:13, 3:13] = True
@@ -346,7 +346,7 @@ def test_mesh_settings_are_checked(tmp_path, capsys):
 def test_lifted_reference_projects_onto_the_reference_pose():
     from motion2video.core.camera import fit_camera, project
     from motion2video.formats.io import load_motion
-    from motion2video.stages.mesh_frames import lift_reference
+    from motion2video.frames.mesh_fit import lift_reference
 
     from motion2video.core.skeletons import H36M_17
 
@@ -374,7 +374,7 @@ def test_lifted_reference_projects_onto_the_reference_pose():
 def test_width_fit_finds_a_stocky_body():
     from motion2video.core.camera import fit_camera
     from motion2video.formats.io import load_motion
-    from motion2video.stages.mesh_frames import fit_width, render_mesh_track
+    from motion2video.frames.mesh_fit import fit_width, render_mesh_track
 
     joints = load_motion(ROOT / "demo_inputs" / "cmu_walk.npz").joints[:1].astype(np.float64)
     camera = fit_camera(joints, 96, 96)
@@ -487,7 +487,7 @@ def test_unsharp_keeps_flat_colour_and_steepens_edges():
 
 
 def test_only_fitted_vertices_that_land_on_the_person_count_as_shown():
-    from motion2video.stages.mesh_frames import on_person
+    from motion2video.frames.mesh_reference import on_person
 
     person = np.zeros((128, 128), bool)
     person[40:90, 50:80] = True

@@ -16,7 +16,7 @@ from motion2video.frames.data import body_structures, evaluation_pair_index, mak
 from motion2video.frames.evaluate import (evaluate_sequences, gradient_energy, person_metrics, region_psnr,
                                           sharpness_ratio)
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
-from motion2video.frames.train import TrainFramesConfig, train_frames
+from motion2video.frames.training import TrainFramesConfig, train_frames
 from motion2video.frames.warp import (NUM_COMPONENTS, WarpGenerator, WarpGeneratorConfig, part_logits, part_maps,
                                       person_crop, pixel_centres, warp_generate)
 

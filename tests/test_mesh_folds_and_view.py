@@ -44,7 +44,7 @@ def test_flow_across_a_fold_never_lands_between_the_two_surfaces():
 
 
 def test_the_render_camera_widens_to_cover_a_body_above_the_framing():
-    from motion2video.stages.mesh_frames import camera_covering
+    from motion2video.frames.mesh_fit import camera_covering
 
     camera = PinholeCamera((0.0, -5.0, 1.0), (0.0, 0.0, 1.0), 0.6, 256, 256)
     points = np.random.default_rng(0).normal([0, 0, 1], 0.3, (20, 3))

@@ -164,7 +164,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     from motion2video.frames.mesh_warp import mesh_plate, sampled_colours
     from motion2video.stages.mesh_frames import sampled_person
 
-    import motion2video.stages.mesh_frames as mesh_frames
+    import motion2video.frames.mesh_reference as mesh_reference
 
     # the completion's own rules, on the depth test's visibility (the touching-surface rule, which hides
     # thigh vertices under a hand in the reference, is tested below: test_a_forearm_against_the_waist_...; the
@@ -172,7 +172,7 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     plain = renderers.mesh.behind_a_touching_surface
     monkeypatch.setattr(renderers.mesh, "behind_a_touching_surface",
                         lambda uv, seen, behind, rest: np.zeros(len(uv), bool))
-    monkeypatch.setattr(mesh_frames, "GRAZING_FACING", 0.0)
+    monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)
     reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
     monkeypatch.setattr(renderers.mesh, "behind_a_touching_surface", plain)
     monkeypatch.undo()
@@ -246,7 +246,7 @@ def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():
 
 def test_clothes_margin_measures_how_far_a_person_reaches_past_the_fitted_body():
     from motion2video.frames.mesh_flow import grow_masks
-    from motion2video.stages.mesh_frames import clothes_margin
+    from motion2video.frames.mesh_reference import clothes_margin
 
     silhouette = np.zeros((128, 128), bool)
     silhouette[30:100, 50:70] = True
@@ -320,7 +320,7 @@ def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     that lands on it; the pictured hand's colour is read at BlazePose's hand points, so a glove stays a glove."""
     from renderers import anny_model
 
-    from motion2video.stages.mesh_frames import hand_colour_sources
+    from motion2video.frames.mesh_reference import hand_colour_sources
 
     rest = anny_model.anny_rest({})
     left = anny_model.hand_vertices("L")
@@ -367,9 +367,9 @@ def test_the_demo_pictures_hands_sample_skin(monkeypatch):
 
     from motion2video.frames.mesh_flow import complete_reference_uv
 
-    import motion2video.stages.mesh_frames as mesh_frames
+    import motion2video.frames.mesh_reference as mesh_reference
 
-    monkeypatch.setattr(mesh_frames, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
+    monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
 
     reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
     x0, y0, side = video.crop
@@ -468,9 +468,9 @@ def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypa
     from motion2video.frames.checkpoint import load_frame_model
     from motion2video.stages.mesh_frames import generate_mesh_frames
 
-    import motion2video.stages.mesh_frames as mesh_frames
+    import motion2video.frames.mesh_reference as mesh_reference
 
-    monkeypatch.setattr(mesh_frames, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
+    monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
     monkeypatch.setattr(mesh_flow, "bilinear_footprint", own_pixel)  # nor the footprint test (end of file)
 
     away = np.array([[0.53, 0.57, 0.87], [0.588, 0.583, 0.865], [0.608, 0.705, 0.476], [0.618, 0.576, 0.07],
@@ -507,9 +507,9 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
     one the depth test hid."""
     import renderers.mesh as mesh
 
-    import motion2video.stages.mesh_frames as mesh_frames
+    import motion2video.frames.mesh_reference as mesh_reference
 
-    monkeypatch.setattr(mesh_frames, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
+    monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
 
     turned = np.array([[0.53, 0.57, 0.872], [0.56, 0.502, 0.872], [0.676, 0.582, 0.49], [0.503, 0.483, 0.089],
                        [0.502, 0.652, 0.874], [0.612, 0.678, 0.531], [0.418, 0.61, 0.16], [0.543, 0.603, 1.093],
@@ -532,7 +532,7 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
 def test_facing_reads_how_squarely_a_surface_is_seen():
     """Two flat patches of one mesh, one square to the view and one turned 70 degrees about the vertical axis,
     projected orthographically: :func:`facing` gives 1 and cos(70) = 0.34 (relative to the square patch)."""
-    from motion2video.stages.mesh_frames import facing
+    from motion2video.frames.mesh_reference import facing
 
     def patch(angle_deg: float, x_offset: float) -> tuple[np.ndarray, np.ndarray]:
         ys, xs = np.mgrid[0:6, 0:6].astype(np.float64) * 0.02  # 10 cm square, 2 cm apart
@@ -565,7 +565,7 @@ def test_the_demo_pictures_limbs_do_not_lend_their_grazing_sides_where_they_touc
     fingers of make demo's future 2 at +41); with it, none."""
     from renderers import anny_model
 
-    import motion2video.stages.mesh_frames as mesh_frames
+    import motion2video.frames.mesh_reference as mesh_reference
     from motion2video.frames.mesh_flow import complete_reference_uv
 
     regions = anny_model.vertex_regions()
@@ -587,7 +587,7 @@ def test_the_demo_pictures_limbs_do_not_lend_their_grazing_sides_where_they_touc
         return int((trousers & skin).sum()), int((limb_skin & dark).sum()), int(seen.sum())
 
     with_rule = wrong_colours()
-    monkeypatch.setattr(mesh_frames, "GRAZING_FACING", 0.0)
+    monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)
     without = wrong_colours()
     assert without[1] >= 8 and without[0] + without[1] >= 10  # 3 and 15 on 2026-11-27
     assert with_rule[0] == 0 and with_rule[1] <= 2  # 0 and 0

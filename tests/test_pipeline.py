@@ -81,7 +81,7 @@ def train_frame_model(domain: str, folder: Path) -> Path:
     """A tiny 64 px generator trained for 2 steps on the toy set by the real training loop."""
     from motion2video.frames.data import structure_channels, toy_sequences
     from motion2video.frames.model import FrameGeneratorConfig
-    from motion2video.frames.train import TrainFramesConfig, train_frames
+    from motion2video.frames.training import TrainFramesConfig, train_frames
 
     seqs = toy_sequences(domain, num_sequences=2, frames_per_sequence=3, image_size=FRAME_SIZE)
     config = FrameGeneratorConfig(domain=domain, image_size=FRAME_SIZE, structure_channels=structure_channels(domain),

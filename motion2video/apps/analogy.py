@@ -11,20 +11,25 @@ another file (or a non-adjacent part of the same one) it is first placed after A
 rotated about the vertical so its first frame has A's last heading and translated so its root continues
 A's last root step; face parameters are simply concatenated (head pose is absolute).
 
-The known-answer protocol is :mod:`motion2video.evaluation.analogy`.
+The known-answer protocol is :mod:`motion2video.evaluation.analogy_benchmark`; :func:`analogy_to_files` is the
+``analogy`` command's work.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
+from pathlib import Path
 from typing import Iterator
 
 import numpy as np
 
-from motion2video.models.checkpoint import ModelBundle
+from motion2video.core.atomic import save_npz
 from motion2video.core.errors import InputError
-from motion2video.stages.clips import LoadedClip, model_frame
+from motion2video.formats.bvh_write import write_bvh_files
+from motion2video.formats.video import VideoWriter
+from motion2video.models.baselines import BASELINES
+from motion2video.models.checkpoint import ModelBundle, load_model
+from motion2video.stages.clips import LoadedClip, load_clip, model_frame
 from motion2video.stages.latents import analogy_model, analogy_windows, stitch_after, window_config
 from motion2video.stages.structure import (
     ALT_FACE_COLOURS,
@@ -33,8 +38,9 @@ from motion2video.stages.structure import (
     TARGET_LOOK,
     iter_sequence,
 )
-from motion2video.stages.video import iter_mark_segments
+from motion2video.stages.layout import check_bvh_output, check_cell_size, check_video_and_npz, iter_mark_segments
 from motion2video.formats.video import GREEN, RED, iter_grid
+from renderers.registry import check_style
 
 STYLES = ("skeleton", "mesh")
 
@@ -145,8 +151,87 @@ def iter_analogy(result: AnalogyResult, *, style: str = "skeleton", size: int = 
 
 
 def _stem(path: str) -> str:
-    from pathlib import Path
-
     return Path(path).stem
 
 
+
+
+@dataclass(frozen=True)
+class AnalogySettings:
+    """One ``analogy`` run: A : B :: C : D from three clip files, drawn as a video.
+
+    Attributes:
+        model: a latent model's checkpoint path or shipped name.
+        a, b, c: the clips of A, B and C (B often A's file).
+        output: the video (.mp4 or .gif).
+        a_start, b_start, c_start: first frames of A, B (None: right after A when B is A's file, else 0) and C.
+        observed, horizon: frames of A and C, of B and D (None: the model's).
+        style: ``skeleton`` or ``mesh`` (3D body models). size: cell width and height in pixels.
+        npz: also write A->B, C->D and z here, or None.
+        character, input_fps: how the clips are read (:func:`motion2video.stages.clips.load_clip`).
+        bvh: also write C then the generated D as a BVH file into this folder, or None.
+    """
+
+    model: str | Path
+    a: str | Path
+    b: str | Path
+    c: str | Path
+    output: str | Path
+    a_start: int = 0
+    b_start: int | None = None
+    c_start: int = 0
+    observed: int | None = None
+    horizon: int | None = None
+    style: str = "skeleton"
+    size: int = 256
+    npz: str | Path | None = None
+    character: str | Path | None = None
+    input_fps: float | None = None
+    bvh: str | Path | None = None
+
+
+@dataclass
+class AnalogyFiles:
+    """What :func:`analogy_to_files` wrote: the analogy, the model's label, the video and its frame size, the npz
+    (or None) and the BVH files (empty without a folder)."""
+
+    result: AnalogyResult
+    label: str
+    video: Path
+    width: int
+    height: int
+    npz: Path | None = None
+    bvh: list[Path] = field(default_factory=list)
+
+
+def analogy_to_files(settings: AnalogySettings) -> AnalogyFiles:
+    """Load the model and the clips, make D and write the video (and the npz and BVH files asked for). The outputs,
+    the cell size, the model's kind and the style are checked before any clip is read (InputError)."""
+    s = settings
+    check_cell_size(s.size)
+    out = check_video_and_npz(s.output, s.npz)
+    if s.model in BASELINES:
+        raise InputError(f"analogy needs a latent-variable model (mtvae-add, ...); {s.model!r} is a baseline "
+                         "without a latent space")
+    bundle = load_model(s.model)
+    check_bvh_output(s.bvh, bundle.data_config.layout)
+    analogy_model(bundle)  # the wrong kind of model fails before any clip is read
+    check_style(bundle.data_config.layout, s.style)  # mesh needs a 3D body model
+    options = {"character": s.character, "fps": s.input_fps}
+    a = load_clip(bundle, s.a, **options)
+    b = a if s.b == s.a else load_clip(bundle, s.b, **options)
+    c = load_clip(bundle, s.c, **options)
+    result = analogy(bundle, a, b, c, a_start=s.a_start, b_start=s.b_start, c_start=s.c_start,
+                     observed=s.observed, horizon=s.horizon)
+    chunks = iter_analogy(result, style=s.style, size=s.size)
+    with VideoWriter(out, result.fps) as writer:
+        for chunk in chunks:
+            writer.write(chunk)
+    files = AnalogyFiles(result, bundle.label, out, writer.width, writer.height)
+    if s.npz:
+        files.npz = save_npz(s.npz, {"ab": result.ab, "cd": result.cd, "z": result.z,
+                                     "observed": np.int64(result.observed), "fps": np.float64(result.fps),
+                                     "layout": np.str_(result.layout), "model": np.str_(bundle.name)})
+    if s.bvh:
+        files.bvh = write_bvh_files(s.bvh, "analogy", result.cd[None], result.fps)
+    return files

@@ -599,6 +599,20 @@ def read_results(path: str | Path) -> list[JobResult]:
     return [JobResult(**json.loads(line)) for line in Path(path).read_text().splitlines() if line.strip()]
 
 
+def load_jobs(source: str, out_dir: str | Path, *, template: str | None = None, suffix: str = ".mp4") -> list[Job]:
+    """The jobs of ``motion2video batch``: from a command ``template`` over the files of ``source`` (a folder or
+    a glob), or from ``source`` as a JSONL job file. InputError for an output folder that is a file, or a source
+    that is neither."""
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError("the output folder is a file", out_dir)
+    if template is not None:
+        return jobs_from_template(source, template, out_dir, suffix=suffix)
+    if str(source).endswith(".jsonl"):
+        return jobs_from_jsonl(source, out_dir)
+    raise InputError("give a .jsonl job file, or a folder / glob with --template", source)
+
+
 def describe(jobs: Iterable[Job]) -> str:
     """One line per job, for ``--dry-run``."""
     return "\n".join(f"{job.name}: motion2video {job.command} {shlex.join(job.args)} -o {job.output}" for job in jobs)

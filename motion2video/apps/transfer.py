@@ -26,22 +26,32 @@ Frame indices given by the user (``--target-frame``, ``--behavior-start``) count
 own rate; clips are resampled to the model's rate (25 fps by default) and indices converted
 (:func:`model_frame`).
 
-The Table 1 / Table 3 protocol is :mod:`motion2video.evaluation.transfer`.
+The Table 1 / Table 3 protocol is :mod:`motion2video.evaluation.transfer`; :func:`transfer_to_files` is the
+``transfer`` command's work.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
+import cv2
 import numpy as np
 import torch
 
-from motion2video.models.checkpoint import ModelBundle
+from motion2video.core.atomic import save_npz
+from motion2video.core.camera import fit_camera
 from motion2video.core.errors import InputError
 from motion2video.data import windows as W
-from motion2video.stages.clips import LoadedClip, model_frame
+from motion2video.formats.bvh_write import write_bvh_files
+from motion2video.formats.video import VideoWriter
+from motion2video.frames.checkpoint import load_frame_model
+from motion2video.models.baselines import BASELINES
+from motion2video.models.checkpoint import ModelBundle, load_model
+from motion2video.stages.clips import LoadedClip, load_clip, model_frame
+from motion2video.stages.frames import generate_video_frames
+from motion2video.stages.reference import Reference, ReferencePose, load_reference
 from motion2video.stages.latents import (
     ADAPT_STEPS,
     adapt_to_source,
@@ -53,16 +63,24 @@ from motion2video.stages.latents import (
     reenact,
     rigid_bones,
 )
-from motion2video.stages.sampling import as_model_input
+from motion2video.stages.sampling import Forecast, as_model_input
 from motion2video.stages.structure import (
     ALT_FACE_COLOURS,
     ALT_FACE_IDENTITY,
+    BODY_ELEVATION_DEG,
+    BODY_MARGIN,
+    BODY_YFOV_DEG,
+    DOMAIN_OF_LAYOUT,
     SOURCE_LOOK,
     TARGET_LOOK,
     iter_sequence,
+    place_body,
+    reference_in_view,
+    render_structures,
 )
-from motion2video.stages.video import iter_mark_segments
+from motion2video.stages.layout import check_bvh_output, check_cell_size, check_video_and_npz, iter_mark_segments
 from motion2video.formats.video import GREEN, RED, iter_chunks, iter_grid
+from renderers.registry import renderer_for
 
 STYLES = ("mesh", "frames", "skeleton")
 
@@ -85,7 +103,6 @@ class TransferResult:
         target_frame: the start frame in the target file's own frame numbering.
         source_identity, target_identity: face identities (faces only).
     """
-
     source: np.ndarray | None
     reenacted: np.ndarray
     z: np.ndarray
@@ -212,10 +229,6 @@ def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, r
     Raises:
         InputError: a frame generator of the other domain, or no reference for a model that cannot render one.
     """
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.stages.reference import load_reference
-    from motion2video.stages.structure import DOMAIN_OF_LAYOUT
-
     layout = bundle.data_config.layout
     frame_name = frame_model or f"frames-{DOMAIN_OF_LAYOUT[layout]}-128"
     loaded = load_frame_model(frame_name)
@@ -288,8 +301,6 @@ def iter_transfer(result: TransferResult, *, style: str = "mesh", size: int = 25
 def transfer_forecast(result: TransferResult):
     """The re-enactments as a :class:`motion2video.stages.sampling.Forecast`: the target's start posture is the one
     observed frame, each re-enactment a future (what the frame generator's structures are placed from)."""
-    from motion2video.stages.sampling import Forecast
-
     return Forecast(observed=result.reenacted[0, :1], futures=result.reenacted[:, 1:], fps=result.fps,
                     layout=result.layout, model="behavior", seed=0)
 
@@ -309,11 +320,6 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
     Returns:
         K arrays (1 + H, size, size, 3) uint8.
     """
-    import cv2
-
-    from motion2video.stages.frames import generate_video_frames
-    from motion2video.stages.structure import DOMAIN_OF_LAYOUT, render_structures
-
     if frame_model is None:
         raise InputError("--style frames needs a frame generator (--frame-model)")
     cfg = frame_model.model.config
@@ -341,11 +347,6 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
 def rendered_reference(fc, size: int):
     """A reference for the frame generator made from the start posture (``fc.observed[0]``): the target's Anny
     look rendered through the camera a single-frame placement uses, with that exact 2D pose."""
-    from motion2video.stages.structure import BODY_ELEVATION_DEG, BODY_MARGIN, BODY_YFOV_DEG, place_body
-    from motion2video.core.camera import fit_camera
-    from motion2video.stages.reference import Reference, ReferencePose
-    from renderers.registry import renderer_for
-
     placement = place_body(fc.observed, fc.futures, size=size)
     start = placement.world_observed[0]  # (17, 3) front-facing start posture
     camera = fit_camera(start, size, size, elevation_deg=BODY_ELEVATION_DEG, yfov_deg=BODY_YFOV_DEG,
@@ -357,3 +358,122 @@ def rendered_reference(fc, size: int):
                                                     "Anny body is the reference",), path=Path("(rendered)"))
 
 
+
+# --- the command's work ---------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TransferSettings:
+    """One ``transfer`` run: a behaviour re-enacted from a target's posture, drawn as a video.
+
+    Attributes:
+        model: a behaviour model's checkpoint path or shipped name.
+        target: the clip whose posture re-enacts the behaviour; target_frame: its start frame (file frames).
+        output: the video (.mp4 or .gif).
+        behavior: the clip whose behaviour is transferred, or None with ``sample``.
+        sample: draw this many new behaviours through the flow instead (None with ``behavior``).
+        behavior_start: the source's first frame. horizon: generated frames (None: the model's).
+        adapt_steps: steps fitting the decoder to the source first (None: :data:`ADAPT_STEPS`; ``behavior`` only).
+        style: ``mesh``, ``frames`` or ``skeleton`` (None: :func:`requested_style` and :func:`style_for`).
+        reference, reference_pose, crop_person, fit_view, frame_model: ``frames`` only: the target person's picture,
+            its pose file, cutting it to its person, zooming it out to keep every body in view, the frame generator.
+        seed: the flow samples' seed. size: cell width and height in pixels.
+        npz: also write source, re-enactments and latents here, or None.
+        character, input_fps: how the clips are read (:func:`motion2video.stages.clips.load_clip`).
+        bvh: also write each re-enactment as a BVH file into this folder, or None.
+    """
+
+    model: str | Path
+    target: str | Path
+    output: str | Path
+    behavior: str | Path | None = None
+    sample: int | None = None
+    target_frame: int = 0
+    behavior_start: int = 0
+    horizon: int | None = None
+    adapt_steps: int | None = None
+    style: str | None = None
+    reference: str | Path | None = None
+    reference_pose: str | Path | None = None
+    crop_person: bool = False
+    fit_view: bool = False
+    frame_model: str | Path | None = None
+    seed: int = 0
+    size: int = 256
+    npz: str | Path | None = None
+    character: str | Path | None = None
+    input_fps: float | None = None
+    bvh: str | Path | None = None
+
+
+@dataclass
+class TransferFiles:
+    """What :func:`transfer_to_files` wrote: the transfer, the style drawn, the video and its frame size, the npz
+    (or None) and the BVH files (empty without a folder)."""
+
+    result: TransferResult
+    style: str
+    video: Path
+    width: int
+    height: int
+    npz: Path | None = None
+    bvh: list[Path] = field(default_factory=list)
+
+
+def transfer_to_files(settings: TransferSettings, *, note: Callable[[str], None] | None = None) -> TransferFiles:
+    """Load the model and the clips, transfer (or sample) the behaviour and write the video (and the npz and BVH
+    files asked for); ``note`` hears what the reference's framing changed. The outputs, the model's kind, the style
+    and its options are checked before any clip is read (InputError)."""
+    s = settings
+    check_cell_size(s.size)
+    out = check_video_and_npz(s.output, s.npz)
+    if (s.behavior is None) == (s.sample is None):
+        raise InputError("give a behaviour source (--behavior) or a number of flow samples (--sample), not both")
+    if s.adapt_steps is not None:
+        if s.adapt_steps < 0:
+            raise InputError(f"--adapt-steps must be >= 0, got {s.adapt_steps}")
+        if s.sample is not None:
+            raise InputError("--adapt-steps fits the decoder to a --behavior source; --sample has none")
+    style = requested_style(s.style, s.reference)
+    if s.model in BASELINES:
+        raise InputError(f"behaviour transfer needs a 'behavior' model; {s.model!r} is a baseline")
+    bundle = load_model(s.model)
+    check_bvh_output(s.bvh, bundle.data_config.layout)
+    behavior_model(bundle)  # the wrong kind of model fails before any clip is read
+    style = style_for(bundle.data_config.layout, style)
+    frame_model = reference = None
+    if style == "frames":
+        frame_model, reference = frame_style_inputs(bundle, frame_model=s.frame_model, reference=s.reference,
+                                                    reference_pose=s.reference_pose, crop_person=s.crop_person)
+    elif s.reference_pose or s.frame_model or s.crop_person or s.fit_view:
+        raise InputError("--frame-model, --reference-pose, --crop-person and --fit-view are only used with --style "
+                         "frames")
+    target = load_clip(bundle, s.target, character=s.character, fps=s.input_fps)
+    if s.behavior is not None:
+        source = load_clip(bundle, s.behavior, character=s.character, fps=s.input_fps)
+        result = transfer_behavior(bundle, source, target, source_start=s.behavior_start,
+                                   target_frame=s.target_frame, horizon=s.horizon,
+                                   adapt_steps=ADAPT_STEPS if s.adapt_steps is None else s.adapt_steps)
+    else:
+        result = sample_behaviors(bundle, target, num_samples=s.sample, target_frame=s.target_frame,
+                                  horizon=s.horizon, seed=s.seed)
+    if reference is not None:
+        reference = reference_in_view(transfer_forecast(result), reference, size=frame_model.model.config.image_size,
+                                      fit_view=s.fit_view)
+    chunks = iter_transfer(result, style=style, size=s.size, frame_model=frame_model, reference=reference)
+    for line in (reference.notes if reference is not None and note is not None else ()):
+        note(line)
+    with VideoWriter(out, result.fps) as writer:
+        for chunk in chunks:
+            writer.write(chunk)
+    files = TransferFiles(result, style, out, writer.width, writer.height)
+    if s.npz:
+        arrays = {"reenacted": result.reenacted, "z": result.z, "fps": np.float64(result.fps),
+                  "layout": np.str_(result.layout), "model": np.str_(bundle.name),
+                  "target_frame": np.int64(result.target_frame)}
+        if result.source is not None:
+            arrays["source"] = result.source
+        files.npz = save_npz(s.npz, arrays)
+    if s.bvh:
+        files.bvh = write_bvh_files(s.bvh, "reenacted", result.reenacted, result.fps)
+    return files

@@ -4,12 +4,9 @@ from __future__ import annotations
 
 import argparse
 
+from motion2video.apps.analogy import STYLES, AnalogySettings, analogy_to_files
 from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
-                                          add_video_output_arguments, check_bvh_output, check_video_and_npz,
-                                          set_threads)
-from motion2video.core.errors import InputError
-
-HELP = "transfer the transition A -> B to C (MT-VAE analogy): A : B :: C : D"
+                                          add_video_output_arguments, set_threads)
 
 DESCRIPTION = """\
 Analogy-based motion transfer (MT-VAE, Sec. 4.2): the transformation latent of A followed by B, decoded from
@@ -36,7 +33,7 @@ model's rate.
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "analogy", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "analogy", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="latent model checkpoint or shipped name (mtvae-add, ...)")
     p.add_argument("a", metavar="A", help="clip of the window before the transition")
     p.add_argument("b", metavar="B", help="clip of the window after it (often A's file)")
@@ -47,7 +44,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--c-start", type=int, default=0, help="C's first frame (default 0)")
     p.add_argument("--observed", type=int, default=None, help="frames of A and C (default: the model's, 16)")
     p.add_argument("--horizon", type=int, default=None, help="frames of B and D (default: the model's, 48)")
-    p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
+    p.add_argument("--style", choices=STYLES, default="skeleton",
                    help="skeleton maps or Anny bodies (body models; face models draw the Anny face)")
     add_video_output_arguments(p, npz_help="also write A->B, C->D and z to this .npz")
     add_motion_input_arguments(p)
@@ -55,48 +52,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-    from motion2video.apps.analogy import analogy, iter_analogy
-    from motion2video.stages.latents import analogy_model
-    from renderers.registry import check_style
-    from motion2video.models.checkpoint import load_model
-    from motion2video.core.atomic import save_npz
-    from motion2video.models.baselines import BASELINES
-    from motion2video.stages.clips import load_clip
-    from motion2video.stages.video import check_cell_size
-    from motion2video.formats.video import VideoWriter
-
     set_threads(args.threads)
-    check_cell_size(args.size)
-    out = check_video_and_npz(args.output, args.npz)
-    if args.model in BASELINES:
-        raise InputError(f"analogy needs a latent-variable model (mtvae-add, ...); {args.model!r} is a baseline "
-                         "without a latent space")
-    bundle = load_model(args.model)
-    check_bvh_output(args.bvh, bundle.data_config.layout)
-    analogy_model(bundle)  # the wrong kind of model fails before any clip is read
-    check_style(bundle.data_config.layout, args.style)  # mesh needs a 3D body model
-    options = {"character": args.character, "fps": args.input_fps}
-    a = load_clip(bundle, args.a, **options)
-    b = a if args.b == args.a else load_clip(bundle, args.b, **options)
-    c = load_clip(bundle, args.c, **options)
-    result = analogy(bundle, a, b, c, a_start=args.a_start, b_start=args.b_start, c_start=args.c_start,
-                     observed=args.observed, horizon=args.horizon)
-    chunks = iter_analogy(result, style=args.style, size=args.size)
-    with VideoWriter(out, result.fps) as writer:
-        for chunk in chunks:
-            writer.write(chunk)
-    print(f"wrote {out} (A:B::C:D with {bundle.label}; {result.observed} observed + "
-          f"{result.cd.shape[0] - result.observed} generated frames, {writer.width}x{writer.height}, "
+    settings = AnalogySettings(model=args.model, a=args.a, b=args.b, c=args.c, output=args.output,
+                               a_start=args.a_start, b_start=args.b_start, c_start=args.c_start,
+                               observed=args.observed, horizon=args.horizon, style=args.style, size=args.size,
+                               npz=args.npz, character=args.character, input_fps=args.input_fps, bvh=args.bvh)
+    files = analogy_to_files(settings)
+    result = files.result
+    print(f"wrote {files.video} (A:B::C:D with {files.label}; {result.observed} observed + "
+          f"{result.cd.shape[0] - result.observed} generated frames, {files.width}x{files.height}, "
           f"{result.fps:g} fps{'' if result.consecutive else '; B placed after A'})")
-    if args.npz:
-        save_npz(args.npz, {"ab": result.ab, "cd": result.cd, "z": result.z, "observed": np.int64(result.observed),
-                            "fps": np.float64(result.fps), "layout": np.str_(result.layout),
-                            "model": np.str_(bundle.name)})
-        print(f"wrote {args.npz}")
-    if args.bvh:
-        from motion2video.formats.bvh_write import write_bvh_files
-
-        paths = write_bvh_files(args.bvh, "analogy", result.cd[None], result.fps)
-        print(f"wrote {paths[0]}")
+    if files.npz is not None:
+        print(f"wrote {files.npz}")
+    if files.bvh:
+        print(f"wrote {files.bvh[0]}")
     return 0

@@ -8,7 +8,6 @@ from pathlib import Path
 from motion2video.commands.common import add_command, check_at_least
 from motion2video.core.errors import InputError
 
-HELP = "start the local web app: animate a photo with a clip or a video, transfer a behaviour (needs .[app])"
 
 DESCRIPTION = """\
 Serve the web app on this machine and print its address: drop a photo (or pick a demo one), pick a bundled clip
@@ -27,7 +26,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "app", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "app", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=7860, help="port (default 7860; 0: the first free one from 7860)")
     p.add_argument("--motion-model", default="mixture-periodic", help="the motion model the page starts with")

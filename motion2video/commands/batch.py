@@ -5,11 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from motion2video.apps.batch import ENGINES, BatchConfig, describe, load_jobs, run_batch
 from motion2video.commands.common import add_command
 from motion2video.core.errors import InputError
-
-HELP = ("run many render/sample/synthesize jobs (JSONL job file, or a folder/glob and a template) on a process "
-        "pool or Ray, resumable, with results.jsonl and an HTML gallery")
 
 DESCRIPTION = """\
 Run independent jobs in parallel: each is one sub-command with its own arguments and output. Bad inputs fail
@@ -35,9 +33,7 @@ Exit status: 0 when no job failed, 1 when some failed, 2 for a bad batch (no job
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from motion2video.apps.batch import ENGINES
-
-    p = add_command(sub, "batch", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "batch", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("jobs", help="a .jsonl job file, or a folder of motion files / a glob pattern (with --template)")
     p.add_argument("--template", help='command for each input, e.g. "render {input} -o {output} --style skeleton" '
                    "(fields {input} {output} {stem} {name})")
@@ -55,23 +51,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.apps.batch import BatchConfig, describe, jobs_from_jsonl, jobs_from_template, run_batch
-
-    out_dir = Path(args.out)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError("the output folder is a file", out_dir)
-    if args.template is not None:
-        jobs = jobs_from_template(args.jobs, args.template, out_dir, suffix=args.ext)
-    elif args.jobs.endswith(".jsonl"):
-        jobs = jobs_from_jsonl(args.jobs, out_dir)
-    else:
-        raise InputError("give a .jsonl job file, or a folder / glob with --template", args.jobs)
     if args.engine == "local" and args.address is not None:
         raise InputError("--address needs --engine ray")
+    jobs = load_jobs(args.jobs, args.out, template=args.template, suffix=args.ext)
     if args.dry_run:
         print(describe(jobs))
         return 0
-    config = BatchConfig(out_dir=out_dir, engine=args.engine, workers=args.workers, address=args.address,
+    config = BatchConfig(out_dir=Path(args.out), engine=args.engine, workers=args.workers, address=args.address,
                          retries=args.retries, force=args.force, progress=not args.no_progress)
     summary = run_batch(jobs, config)
     print(f"{summary.line()}; results {summary.results_path}, gallery {summary.gallery_path}")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Callable
 
 from motion2video.core.errors import InputError
@@ -17,16 +16,15 @@ THREADS_HELP = ("torch CPU threads (default 1: the small recurrent models and th
 
 
 def add_command(sub: argparse._SubParsersAction, name: str, run: Callable[[argparse.Namespace], int], *,
-                help: str, description: str, examples: str) -> argparse.ArgumentParser:
+                description: str, examples: str) -> argparse.ArgumentParser:
     """Register the sub-command ``name`` and return its parser, for the caller to add its arguments.
 
-    ``help`` is its line in ``motion2video --help``. ``description`` is the paragraph at the top of its own
-    ``--help``: a module writes it wrapped in a triple-quoted string, and its line breaks and indentation are
-    joined into single spaces here (``--help`` prints it as one line, which the terminal wraps). ``examples``
-    is the block after the options, printed exactly as written. ``run(args)`` is what
-    :func:`motion2video.cli.main` calls with the parsed arguments.
+    Its line in ``motion2video --help`` is :data:`motion2video.cli.SUMMARIES`'s. ``description`` is the paragraph
+    at the top of its own ``--help``: a module writes it wrapped in a triple-quoted string, and its line breaks and
+    indentation are joined into single spaces here (``--help`` prints it as one line, which the terminal wraps). ``examples`` is the block after the options, printed exactly as written. ``run(args)`` is
+    what :func:`motion2video.cli.main` calls with the parsed arguments.
     """
-    parser = sub.add_parser(name, help=help, description=" ".join(description.split()), epilog=examples,
+    parser = sub.add_parser(name, description=" ".join(description.split()), epilog=examples,
                             formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.set_defaults(run=run)
     return parser
@@ -72,16 +70,6 @@ def add_bvh_argument(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument("--bvh", metavar="DIR", default=None, help=BVH_HELP.format(what=what))
 
 
-def check_bvh_output(folder: str | Path | None, layout: str) -> Path | None:
-    """Validate ``--bvh DIR`` for a model of ``layout`` before any work (InputError unless 3D body motion)."""
-    from motion2video.formats.bvh_write import check_bvh_dir
-
-    out = check_bvh_dir(folder)
-    if out is not None and layout != "body3d":
-        raise InputError(f"--bvh writes 3D body motion; this model's output is {layout}")
-    return out
-
-
 def add_video_output_arguments(parser: argparse.ArgumentParser, *, npz_help: str) -> None:
     """``--size`` (cell size, default 256), ``-o/--output`` (the video), ``--npz`` (``npz_help`` says what it
     holds) and ``--threads``: the output options of the commands that write a grid of motion cells."""
@@ -97,17 +85,6 @@ def check_at_least(option: str, value: int, minimum: int = 1) -> None:
         raise InputError(f"{option} must be >= {minimum}, got {value}")
 
 
-def check_video_and_npz(output: str | Path, npz: str | Path | None) -> Path:
-    """Validate ``-o OUT.mp4|.gif`` and an optional ``--npz OUT.npz`` before any work; returns the video path."""
-    from motion2video.core.atomic import check_output_path
-    from motion2video.formats.video import VIDEO_SUFFIXES
-
-    out = check_output_path(output, VIDEO_SUFFIXES)
-    if npz is not None:
-        check_output_path(npz, (".npz",))
-    return out
-
-
 def add_threads_argument(parser: argparse.ArgumentParser) -> None:
     """``--threads N`` (default 1)."""
     parser.add_argument("--threads", type=int, default=1, help=THREADS_HELP)
@@ -115,6 +92,7 @@ def add_threads_argument(parser: argparse.ArgumentParser) -> None:
 
 def set_threads(threads: int) -> None:
     """Check ``--threads`` and apply it to torch (InputError when below 1)."""
+    # Imported here, not at the top: `motion2video doctor` imports this module and must run where torch is missing.
     import torch
 
     check_at_least("--threads", threads)

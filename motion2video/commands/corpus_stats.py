@@ -3,13 +3,9 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from motion2video.core.atomic import write_json
 from motion2video.commands.common import CHARACTER_HELP, add_command
-from motion2video.core.errors import InputError
-
-HELP = "print minutes per source, action and split of a mocap folder as the trainer uses it"
+from motion2video.data.corpus_stats import CorpusStatsSettings, corpus_report
 
 DESCRIPTION = """\
 Load every clip of a mocap folder as the dataset builder does (all formats, true frame rates, duplicate copies
@@ -29,7 +25,7 @@ the default data config (25 fps, 16 observed + 48 future frames).
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "corpus-stats", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "corpus-stats", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--data", required=True, help="mocap folder (with manifest.csv)")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("--json", default=None, help="also write the statistics as JSON here")
@@ -40,18 +36,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.data.corpus_stats import corpus_stats, stats_markdown
-    from motion2video.data.dataset import DatasetConfig
-
-    data = Path(args.data)
-    if not data.is_dir():
-        raise InputError("not a folder (corpus-stats takes a mocap folder)", data)
-    if args.json is not None and not Path(args.json).parent.exists():
-        raise InputError("the folder for --json does not exist", args.json)
-    config = DatasetConfig(held_out=args.held_out, drop_duplicates=not args.keep_duplicates)
-    stats = corpus_stats(data, config, character=args.character)
-    print(stats_markdown(stats), end="")
-    if args.json is not None:
-        write_json(args.json, stats)
-        print(f"wrote {args.json}")
+    settings = CorpusStatsSettings(data=args.data, json=args.json, held_out=args.held_out,
+                                   keep_duplicates=args.keep_duplicates, character=args.character)
+    report = corpus_report(settings)
+    print(report.markdown, end="")
+    if report.json is not None:
+        print(f"wrote {report.json}")
     return 0

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import asdict
 
+from motion2video.apps.doctor import report, run_checks
 from motion2video.commands.common import add_command
-
-HELP = "check the installation: torch, ffmpeg, GL backends, the Anny cache, the shipped checkpoints"
+from motion2video.core.atomic import check_output_path, write_text
 
 DESCRIPTION = """\
 Print what is available and what is missing, each missing thing with its fix.
@@ -25,16 +26,11 @@ everything essential works (GL is not essential: skeleton and heatmap styles nee
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "doctor", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "doctor", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--json", default=None, help="also write the checks as JSON here")
 
 
 def run(args: argparse.Namespace) -> int:
-    from dataclasses import asdict
-
-    from motion2video.core.atomic import check_output_path, write_text
-    from motion2video.apps.doctor import report, run_checks
-
     if args.json:
         check_output_path(args.json, (".json",))
     checks = run_checks()

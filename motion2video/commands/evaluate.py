@@ -3,13 +3,9 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from motion2video.core.atomic import write_json
 from motion2video.commands.common import CHARACTER_HELP, add_command, add_threads_argument, check_at_least, set_threads
-from motion2video.core.errors import InputError
-
-HELP = "score a motion model and the zero-velocity / last-step / sequence-motion baselines"
+from motion2video.evaluation.forecasting import ForecastEvalSettings, evaluate_models
 
 DESCRIPTION = """\
 Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
@@ -39,7 +35,7 @@ Metrics (best of K for ADE/FDE) on root-relative poses, metres (face models: par
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "evaluate", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "evaluate", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, action="append",
                    help="checkpoint path or shipped model name; repeat to compare models on the same windows "
                    "(they must share the layout and data settings; the first one's split picks the windows); "
@@ -69,56 +65,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.models.checkpoint import baseline_bundle, load_model
-    from motion2video.data.dataset import build_dataset
-    from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
-    from motion2video.models.baselines import BASELINES
-    from motion2video.models.periodic import RULES
-
     set_threads(args.threads)
     check_at_least("--samples", args.samples)
     check_at_least("--stride", args.stride)
-    for option in ("json", "plot"):
-        target = getattr(args, option)
-        if target is not None:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
-    if args.plot is not None and not args.plot.lower().endswith(".png"):
-        raise InputError("--plot writes a .png file", args.plot)
-    rules = [name for name in args.model if name in RULES]
-    learned = [name for name in args.model if name not in RULES]
-    if not learned:
-        raise InputError(f"{rules[0]} is a rule: name a trained model too, whose windows, statistics and split it "
-                         "is scored on")
-    models = [load_model(name) for name in learned]
-    bundle = models[0]
-    for other in models[1:]:
-        if other.data_config != bundle.data_config:
-            raise InputError(f"{other.label} was trained with other data settings than {bundle.label}: "
-                             "compare models of one layout and window length", other.path)
-    names = [m.label for m in models]
-    if len(set(names)) != len(names):
-        raise InputError(f"two models share the name {names!r}: give checkpoints with distinct file names")
-    cfg = bundle.data_config
-    if rules and cfg.feature_layout.kind != "body3d":
-        raise InputError(f"{rules[0]} works on 3D body motion, not the {cfg.feature_layout.kind} layout of "
-                         f"{bundle.label}")
-    dataset = build_dataset(args.data, cfg, split=bundle.meta.split, stats=bundle.stats,
-                            recorded_only=args.recorded_only, character=args.character)
-    windows = dataset.windows(args.split, stride=args.stride)
-    if len(windows) == 0:
-        longest = max((c.num_frames for c in dataset.clips_of(args.split)), default=0)
-        raise InputError(f"no clip of the {args.split} split is long enough: a window needs {cfg.length} frames "
-                         f"at {cfg.fps:g} fps ({cfg.observed} observed + {cfg.future} future), the longest has "
-                         f"{longest}", args.data)
-    bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in tuple(rules) + BASELINES]
-    protocol = EvalProtocol(samples=args.samples, stride=args.stride, split=args.split, seed=args.seed,
-                            rigid_bones=args.rigid_bones, continue_motion=not args.raw_futures)
-    val = dataset.windows("val", stride=args.stride) if args.extended else None
-    result = evaluate_bundles(bundles, windows, protocol=protocol, extended=args.extended, val_windows=val)
-    result.protocol["checkpoint"] = str(bundle.path)
-    result.protocol["data"] = str(args.data)
+    settings = ForecastEvalSettings(models=tuple(args.model), data=args.data, samples=args.samples,
+                                    stride=args.stride, split=args.split, seed=args.seed,
+                                    rigid_bones=args.rigid_bones, raw_futures=args.raw_futures,
+                                    recorded_only=args.recorded_only, extended=args.extended, json=args.json,
+                                    plot=args.plot, character=args.character)
+    evaluation = evaluate_models(settings)
+    result = evaluation.result
     columns = ("ade", "fde", "mmade", "mmfde", "apd") + (("s_mse", "r_mse", "cll") if args.extended else ())
-    print(f"{len(windows)} windows from {len(result.protocol['clips'])} clip(s), best of {args.samples}, "
+    print(f"{evaluation.windows} windows from {len(result.protocol['clips'])} clip(s), best of {args.samples}, "
           f"units: {result.protocol['units']}")
     print(result.table(columns))
     actions = result.protocol["actions"]
@@ -126,14 +84,7 @@ def run(args: argparse.Namespace) -> int:
     print(result.macro_table(columns))
     print("\nper action (windows):")
     print(result.per_action_table(columns))
-    if args.json is not None:
-        out = write_json(args.json, result.to_json())
-        print(f"wrote {out}")
-    if args.plot is not None:
-        from motion2video.evaluation.plots import plot_ade_per_frame
-
-        out = plot_ade_per_frame(result.ade_per_frame, args.plot, fps=cfg.fps, units=result.protocol["units"].split(" (")[0],
-                                 best_of=args.samples,
-                                 title=f"{len(windows)} {args.split} windows from {len(result.protocol['clips'])} clips")
-        print(f"wrote {out}")
+    for out in (evaluation.json, evaluation.plot):
+        if out is not None:
+            print(f"wrote {out}")
     return 0

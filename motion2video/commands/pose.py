@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
+import numpy as np
+
+from motion2video.apps.pose import FacePoseFile, PoseSettings, VideoPoseFile, estimate_pose_file
 from motion2video.commands.common import add_command
 from motion2video.core.errors import InputError
-
-HELP = ("estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose; --face: a "
-        "face video's face motion")
+from motion2video.pose.estimate import parse_person
+from motion2video.stages.people import frame_ranges
 
 DESCRIPTION = """\
 Estimate the pose of one person with the bundled BlazePose full model (no download). A photo gives its
@@ -42,7 +43,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "pose", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "pose", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("input", help="a photo (.png, .jpg, ...) or a video (.mp4, .avi, .mov, .mkv, .webm)")
     p.add_argument("-o", "--output", required=True,
                    help="output .npz: a photo's reference pose file (name it IMAGE.pose.npz beside the image for "
@@ -56,88 +57,41 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.core.atomic import check_output_path
-    from motion2video.pose.estimate import parse_person
-    from motion2video.stages import people
-
-    src = Path(args.input)
     try:
         person = parse_person(args.person)
     except ValueError as err:
         raise InputError(str(err)) from None
-    if not src.exists():
-        raise InputError("no such file", src)
-    video = people.is_video(src)
-    if not video and not people.is_image(src):
-        raise InputError(f"unsupported input extension {src.suffix or '(none)'!r}: a photo (.png, .jpg, ...) or a "
-                         "video (.mp4, .avi, .mov, ...)", src)
-    if args.face and not video:
-        raise InputError("--face takes a video (.mp4, .avi, .mov, ...)", src)
-    if args.face and args.person != "largest":
-        raise InputError("--person picks a body; --face follows the largest face")
-    out = check_output_path(args.output, (".npz",))
-    if args.overlay is not None:
-        check_output_path(args.overlay, (".mp4",) if video else (".png",))
-    if args.face:
-        return _face(src, out, args.overlay)
-    if video:
-        return _video(src, out, person, args.overlay)
-    return _photo(src, out, person, args.overlay)
-
-
-def _photo(src: Path, out: Path, person, overlay: str | None) -> int:
-    from motion2video.stages.reference import reference_pose_path, save_reference_pose
-    from motion2video.stages import people
-
-    photo = people.photo_pose(src, person=person)
-    save_reference_pose(out, people.reference_pose_of(photo.pose))
-    which = "the largest" if person == "largest" else f"person {person} from the left"
-    print(f"found {photo.people} {'person' if photo.people == 1 else 'people'}; took {which}")
-    print(f"wrote {out} (17 joints in {photo.pose.width}x{photo.pose.height} pixels, mean confidence "
-          f"{photo.pose.confidence.mean():.2f})")
-    if out.resolve() != reference_pose_path(src).resolve():
-        print(f"note: synthesize and transfer look for {reference_pose_path(src).name} beside the image; "
-              f"pass --reference-pose {out} to use this file")
-    if overlay is not None:
-        print(f"wrote {people.write_photo_overlay(overlay, photo)}")
-    return 0
-
-
-def _video(src: Path, out: Path, person, overlay: str | None) -> int:
-    from motion2video.pose.files import save_video_pose
-    from motion2video.stages import people
-
-    pose = people.video_pose(src, person=person, cache=False)
-    save_video_pose(out, pose)
-    trimmed_end = pose.video_frames - pose.first_frame - pose.num_frames
-    print(f"wrote {out} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
-          f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
-          f"{trimmed_end} at the end of {pose.video_frames})")
-    if pose.unsure_frames:
-        print(f"unsure of the person in {pose.unsure_frames} frames (video frames "
-              f"{people.frame_ranges(pose.unsure, pose.first_frame)}): another person near them, a jump or a "
-              "low presence; gaps among them are interpolated (the npz's `unsure` marks them all)")
+    result = estimate_pose_file(PoseSettings(input=args.input, output=args.output, person=person,
+                                             overlay=args.overlay, face=args.face))
+    if isinstance(result, FacePoseFile):
+        track = result.track
+        trimmed_end = track.video_frames - track.first_frame - track.num_frames
+        print(f"wrote {result.output} ({track.num_frames} frames at {track.motion.fps:g} fps, "
+              f"{track.width}x{track.height}; {track.gaps} gap frames interpolated; trimmed {track.first_frame} "
+              f"frames at the start and {trimmed_end} at the end of {track.video_frames}; landmarks re-projected "
+              f"from the fitted head within {100 * float(np.median(track.relative_error())):.2f}% of the face size "
+              "(median))")
+    elif isinstance(result, VideoPoseFile):
+        pose = result.pose
+        trimmed_end = pose.video_frames - pose.first_frame - pose.num_frames
+        print(f"wrote {result.output} ({pose.num_frames} frames at {pose.fps:g} fps, {pose.width}x{pose.height}; "
+              f"{pose.gaps} gap frames interpolated; trimmed {pose.first_frame} frames at the start and "
+              f"{trimmed_end} at the end of {pose.video_frames})")
+        if pose.unsure_frames:
+            print(f"unsure of the person in {pose.unsure_frames} frames (video frames "
+                  f"{frame_ranges(pose.unsure, pose.first_frame)}): another person near them, a jump or a "
+                  "low presence; gaps among them are interpolated (the npz's `unsure` marks them all)")
+        else:
+            print("followed one person in every frame: no unsure frames")
     else:
-        print("followed one person in every frame: no unsure frames")
-    if overlay is not None:
-        print(f"wrote {people.write_video_overlay(overlay, src, pose)}")
-    return 0
-
-
-def _face(src: Path, out: Path, overlay: str | None) -> int:
-    import numpy as np
-
-    from motion2video.pose.face_track import save_face_track
-    from motion2video.stages import people
-
-    track = people.face_video_track(src, cache=False)
-    save_face_track(out, track)
-    trimmed_end = track.video_frames - track.first_frame - track.num_frames
-    error = track.relative_error()
-    print(f"wrote {out} ({track.num_frames} frames at {track.motion.fps:g} fps, {track.width}x{track.height}; "
-          f"{track.gaps} gap frames interpolated; trimmed {track.first_frame} frames at the start and "
-          f"{trimmed_end} at the end of {track.video_frames}; landmarks re-projected from the fitted head within "
-          f"{100 * float(np.median(error)):.2f}% of the face size (median))")
-    if overlay is not None:
-        print(f"wrote {people.write_face_overlay(overlay, src, track)}")
+        photo = result.photo
+        which = "the largest" if person == "largest" else f"person {person} from the left"
+        print(f"found {photo.people} {'person' if photo.people == 1 else 'people'}; took {which}")
+        print(f"wrote {result.output} (17 joints in {photo.pose.width}x{photo.pose.height} pixels, mean confidence "
+              f"{photo.pose.confidence.mean():.2f})")
+        if result.output.resolve() != result.expected.resolve():
+            print(f"note: synthesize and transfer look for {result.expected.name} beside the image; "
+                  f"pass --reference-pose {result.output} to use this file")
+    if result.overlay is not None:
+        print(f"wrote {result.overlay}")
     return 0

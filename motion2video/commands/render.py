@@ -7,9 +7,6 @@ import argparse
 from motion2video.commands.common import add_command, add_motion_input_arguments
 from motion2video.apps.render import STYLES, RenderRequest, render_file
 
-HELP = ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) to "
-        "mp4/GIF")
-
 DESCRIPTION = """\
 Render a motion clip offscreen: skeleton maps, Gaussian heatmaps, the Anny body mesh, or the Anny face. Body
 inputs are converted to the canonical H36M-17 skeleton first.
@@ -30,7 +27,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "render", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "render", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("input", help="a .bvh, DeepMimic motion file (.txt/.json with \"Frames\"), exp-map text file "
                    "(.txt with a skeleton.json beside or above it), .npz (Motion or FaceMotion), joint array .npy "
                    "(or .npz with one array) of shape (T, 22, 3) SMPL, (T, 17, 3) H36M or (K, T, J, 3) futures, "

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from motion2video.apps.sample import STYLES, SampleSettings, sample_to_files
 from motion2video.commands.common import (RIGID_BONES_HELP, add_bvh_argument, add_command,
                                           add_motion_input_arguments, add_threads_argument, check_at_least,
-                                          check_bvh_output, check_video_and_npz, set_threads)
-
-HELP = "sample K futures of a clip from a motion model and render them as a grid video"
+                                          set_threads)
 
 DESCRIPTION = """\
 Observe the first --observed frames of a clip (from --start), sample K futures from a checkpoint or shipped
@@ -47,7 +46,7 @@ shipped motion models (model cards in motion2video/weights/NAME.md):
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "sample", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "sample", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="checkpoint path, shipped model name, or a baseline name")
     p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (body models; 2D body "
                    "models also an OpenPose JSON folder), .csv / FaceMotion .npz (face)")
@@ -59,7 +58,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rigid-bones", action="store_true", help=RIGID_BONES_HELP)
     p.add_argument("-o", "--output", required=True, help="output video (.mp4 or .gif)")
     p.add_argument("--npz", default=None, help="also write observed + futures to this .npz")
-    p.add_argument("--style", choices=("skeleton", "mesh"), default="skeleton",
+    p.add_argument("--style", choices=STYLES, default="skeleton",
                    help="skeleton maps or the Anny body mesh (body models; face models draw the Anny face)")
     p.add_argument("--size", type=int, default=256, help="cell width and height in pixels (default 256)")
     add_threads_argument(p)
@@ -68,43 +67,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.models.checkpoint import baseline_bundle, load_model
-    from motion2video.data.dataset import DatasetConfig
-    from motion2video.stages.sampling import forecast
-    from motion2video.apps.sample import iter_forecast, load_clip_for, save_forecast_npz
-    from motion2video.models.baselines import BASELINES
-    from motion2video.models.periodic import RULES
-    from motion2video.stages.video import check_cell_size
-    from motion2video.formats.video import VideoWriter
-
     set_threads(args.threads)
     check_at_least("--samples", args.samples)
-    check_cell_size(args.size)
-    out = check_video_and_npz(args.output, args.npz)
-    if args.model in BASELINES + RULES:
-        bundle = baseline_bundle(args.model, DatasetConfig())
-    else:
-        bundle = load_model(args.model)
-    check_bvh_output(args.bvh, bundle.data_config.layout)
-    clip = load_clip_for(bundle, args.input, character=args.character, fps=args.input_fps)
-    fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
-                  start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
-    chunks = iter_forecast(fc, style=args.style, size=args.size)
-    with VideoWriter(out, fc.fps) as writer:
-        for chunk in chunks:
-            writer.write(chunk)
-    print(f"wrote {out} ({args.samples} futures of {fc.futures.shape[1]} frames after {fc.observed.shape[0]} "
-          f"observed, {writer.width}x{writer.height}, {fc.fps:g} fps)")
-    if args.npz:
-        save_forecast_npz(fc, args.npz)
-        print(f"wrote {args.npz}")
-    if args.bvh:
-        import numpy as np
-
-        from motion2video.formats.bvh_write import write_bvh_files
-
-        clips = np.concatenate([np.broadcast_to(fc.observed, (len(fc.futures),) + fc.observed.shape), fc.futures],
-                               axis=1)  # (K, To + Tf, 17, 3)
-        paths = write_bvh_files(args.bvh, "sample", clips, fc.fps)
-        print(f"wrote {len(paths)} BVH files to {args.bvh} ({paths[0].name} ...)")
+    settings = SampleSettings(model=args.model, input=args.input, output=args.output, samples=args.samples,
+                              observed=args.observed, horizon=args.horizon, start=args.start, seed=args.seed,
+                              rigid_bones=args.rigid_bones, npz=args.npz, style=args.style, size=args.size,
+                              character=args.character, input_fps=args.input_fps, bvh=args.bvh)
+    result = sample_to_files(settings)
+    fc = result.forecast
+    print(f"wrote {result.video} ({args.samples} futures of {fc.futures.shape[1]} frames after "
+          f"{fc.observed.shape[0]} observed, {result.width}x{result.height}, {fc.fps:g} fps)")
+    if result.npz is not None:
+        print(f"wrote {result.npz}")
+    if result.bvh:
+        print(f"wrote {len(result.bvh)} BVH files to {args.bvh} ({result.bvh[0].name} ...)")
     return 0

@@ -5,11 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from motion2video.apps.synthesize import SynthesisConfig, synthesize
 from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_motion_input_arguments,
                                           add_reference_photo_arguments, check_at_least)
 from motion2video.core.errors import InputError
-
-HELP = "sample K futures of a clip and render them as RGB video of a reference person"
 
 DESCRIPTION = """\
 Observe the first --observed frames of a clip, sample K futures with a motion model, render their structure
@@ -44,7 +43,7 @@ observed clip has its person's pose estimated (cached in ~/.cache/motion2video/p
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "synthesize", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "synthesize", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--motion-model", required=True, help="motion checkpoint path or shipped name (mtvae-add, ...)")
     p.add_argument("--frame-model", required=True,
                    help="frame-generator checkpoint path or shipped name (frames-body-128, frames-face-128)")
@@ -69,8 +68,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motion2video.apps.synthesize import SynthesisConfig, synthesize
-
     check_at_least("--samples", args.samples)
     check_at_least("--batch-size", args.batch_size)
     if args.size is not None and not 32 <= args.size <= 1024:

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from dataclasses import replace
 from pathlib import Path
 
+from motion2video.apps.train_frames import MODEL_KINDS, FrameTrainingSettings, train_frame_generator
 from motion2video.commands.common import add_command, add_threads_argument, check_at_least, set_threads
-
-HELP = "train the keypoint-conditioned frame generator (body or face)"
+from motion2video.core.atomic import check_output_path, write_json
+from motion2video.core.errors import InputError
+from motion2video.evaluation.personalise import PersonaliseSettings, personalise
 
 DESCRIPTION = """\
 Render (or reuse from the cache) a synthetic appearance dataset with the Anny body or face renderer, posed by
@@ -35,7 +39,7 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "train-frames", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "train-frames", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--domain", choices=("body", "face"), default=None,
                    help="body or face frames (required, except with --video: body)")
     p.add_argument("-o", "--output", required=True, help="checkpoint to write (.safetensors)")
@@ -53,7 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="train on CROP x CROP windows holding both poses of a pair (0: whole frames; "
                    "default size/2, about 8x less compute per step than whole frames for the same quality; "
                    "with --video 0)")
-    p.add_argument("--model-kind", choices=("analogy", "warp", "mesh"), default=None,
+    p.add_argument("--model-kind", choices=MODEL_KINDS, default=None,
                    help="analogy (default): the feature-analogy generator; warp: the generator that warps the "
                    "reference person along per-limb transforms (body only); mesh: the generator that moves it "
                    "along the correspondence of one Anny mesh in both poses (body, or face: the head mesh); with --video: the "
@@ -89,20 +93,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
-def default_crop(domain: str, size: int) -> int:
-    """Training crop: half the frame (measured: body, 400 steps on 64 crops reach the PSNR of 400 steps on
-    whole 128 frames in 1/8 of the time; faces train well on them too)."""
-    return size // 2
-
-
 def run(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
-    from motion2video.core.errors import InputError
-    from motion2video.frames.data import default_cache_dir, load_or_generate
-    from motion2video.frames.specs import default_spec
-    from motion2video.frames.train import TrainFramesConfig, train_frames
-
     set_threads(args.threads)
     if args.video is not None:
         return _run_video(args)
@@ -113,61 +104,21 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{', '.join(video_only)}: only with --video")
     if args.domain is None:
         raise InputError("--domain body|face is required (unless fine-tuning on a --video)")
-    args.model_kind = args.model_kind or "analogy"
-    args.steps = 3000 if args.steps is None else args.steps
-    args.lr = 1e-3 if args.lr is None else args.lr
-    check_at_least("--steps", args.steps)
-    if args.model_kind == "warp" and args.domain != "body":
-        raise InputError(f"--model-kind {args.model_kind} makes body frames only (use --domain body)")
-    check_at_least("--batch-size", args.batch_size)
-    if args.silhouette_erosion < 0 or (args.silhouette_erosion and args.model_kind != "mesh"):
-        raise InputError("--silhouette-erosion is a setting of --model-kind mesh (0 or more pixels)")
-    output = Path(args.output)
-    if output.suffix != ".safetensors":
-        raise InputError("the checkpoint name must end in .safetensors", output)
-    spec = default_spec(args.domain, "train", args.size, seed=args.seed)
-    if args.train_sequences is not None:
-        check_at_least("--train-sequences", args.train_sequences)
-        spec = replace(spec, num_sequences=args.train_sequences,
-                       num_identities=min(spec.num_identities, args.train_sequences))
-    crop = default_crop(args.domain, args.size) if args.crop is None else args.crop
-    if crop < 0 or crop > args.size or crop % 16:
-        raise InputError(f"--crop must be 0 or a multiple of 16 up to --size, got {crop}")
-    warp = args.model_kind in ("warp", "mesh")
-    edge = args.edge_weight if args.edge_weight is not None else (1.0 if warp else 0.0)
-    person = args.person_weight if args.person_weight is not None else (2.0 if warp else 0.0)
-    model_config = None  # checked before the data, which may take minutes to render
-    if args.model_kind == "mesh":
-        from motion2video.frames.data import structure_channels
-        from motion2video.frames.mesh_warp import MeshWarpConfig
-
-        if args.flow_correction:
-            raise InputError("--model-kind mesh: its flow residual is always on (leave out --flow-correction)")
-        net_scale = args.net_scale or max(1, args.size // 64)  # the network at 64 px: 2 at 128, 4 at 256
-        if crop % (net_scale * 8):
-            raise InputError(f"--crop {crop} must be a multiple of {net_scale * 8} at --net-scale {net_scale}")
-        model_config = MeshWarpConfig(domain=args.domain, image_size=args.size,
-                                      structure_channels=structure_channels(args.domain),
-                                      net_scale=net_scale, sample_mode=args.sample_mode or "bicubic")
-        spec = replace(spec, vertices=True)  # the mesh correspondence of every frame
-    elif warp:
-        from motion2video.frames.data import structure_channels
-        from motion2video.frames.warp import WarpGeneratorConfig
-
-        model_config = WarpGeneratorConfig(image_size=args.size, structure_channels=structure_channels("body"),
-                                           net_scale=args.net_scale or 4, flow_correction=args.flow_correction,
-                                           sample_mode=args.sample_mode or "bilinear")
-    elif args.net_scale is not None or args.flow_correction or args.sample_mode is not None:
-        raise InputError("--net-scale, --flow-correction and --sample-mode are settings of --model-kind warp or mesh")
-    cache = Path(args.cache) if args.cache else default_cache_dir()
-    seqs = load_or_generate(spec, cache_dir=cache, data_root=args.data_root, progress=not args.no_progress)
-    config = TrainFramesConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, crop=crop,
-                               adversarial=args.adversarial, checkpoint_every=args.checkpoint_every,
-                               seed=args.seed, model_kind=args.model_kind, edge_weight=edge, person_weight=person,
-                               silhouette_erosion=args.silhouette_erosion)
-    result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
-                          progress=not args.no_progress, init_from=args.init_from,
-                          extra_metadata={"dataset_spec": spec.key()})
+    defaults = FrameTrainingSettings(domain=args.domain, output=args.output)
+    settings = replace(
+        defaults, steps=defaults.steps if args.steps is None else args.steps, size=args.size,
+        batch_size=args.batch_size, lr=defaults.lr if args.lr is None else args.lr, cache=args.cache,
+        data_root=args.data_root, train_sequences=args.train_sequences, crop=args.crop,
+        model_kind=args.model_kind or defaults.model_kind, net_scale=args.net_scale,
+        flow_correction=args.flow_correction, sample_mode=args.sample_mode, init_from=args.init_from,
+        edge_weight=args.edge_weight, person_weight=args.person_weight, adversarial=args.adversarial,
+        silhouette_erosion=args.silhouette_erosion, checkpoint_every=args.checkpoint_every, resume=args.resume,
+        seed=args.seed, progress=not args.no_progress)
+    check_at_least("--steps", settings.steps)
+    check_at_least("--batch-size", settings.batch_size)
+    if settings.train_sequences is not None:
+        check_at_least("--train-sequences", settings.train_sequences)
+    result = train_frame_generator(settings)
     last = result.history[-1] if result.history else {}
     print(json.dumps({"checkpoint": str(result.path), "steps": result.steps,
                       "wall_s": round(result.wall_s, 1), "total_wall_s": round(result.total_wall_s, 1),
@@ -179,12 +130,6 @@ def run(args: argparse.Namespace) -> int:
 def _run_video(args: argparse.Namespace) -> int:
     """``--video``: fine-tune ``--init-from`` on the video and score it and the model it started from on the
     video's tail (:mod:`motion2video.evaluation.personalise`)."""
-    import sys
-
-    from motion2video.core.atomic import check_output_path, write_json
-    from motion2video.core.errors import InputError
-    from motion2video.evaluation.personalise import PersonaliseSettings, personalise
-
     if args.init_from is None:
         raise InputError("--video fine-tunes a trained body generator: give it with --init-from (e.g. "
                          "--init-from frames-body-128)")

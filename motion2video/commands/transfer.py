@@ -5,13 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motion2video.core.atomic import save_npz
+from motion2video.apps.transfer import STYLES, TransferSettings, transfer_to_files
 from motion2video.commands.common import (add_bvh_argument, add_command, add_motion_input_arguments,
-                                          add_reference_photo_arguments, add_video_output_arguments, check_at_least,
-                                          check_bvh_output, check_video_and_npz, set_threads)
-from motion2video.core.errors import InputError
-
-HELP = "re-enact the behaviour of one clip from another clip's posture (behaviour model)"
+                                          add_reference_photo_arguments, add_video_output_arguments, set_threads)
 
 DESCRIPTION = """\
 Behaviour transfer (Blattmann et al. 2021): extract the behaviour of SOURCE with the behaviour model's
@@ -42,7 +38,7 @@ position and heading. Clips at other frame rates are resampled to the model's ra
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = add_command(sub, "transfer", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
+    p = add_command(sub, "transfer", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="behaviour checkpoint path or shipped model name")
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--behavior", metavar="SOURCE", help="clip whose behaviour is transferred")
@@ -54,7 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--adapt-steps", type=int, default=None, metavar="N",
                    help="fit the decoder to the source for N steps before re-enacting it, so that large, rare limb "
                    "motions (a kick) come across (default 300, about 6 s; 0: the model as trained)")
-    p.add_argument("--style", choices=("mesh", "frames", "skeleton"), default=None,
+    p.add_argument("--style", choices=STYLES, default=None,
                    help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
                    "(default when --reference is given); skeleton: limb maps")
     p.add_argument("--reference", default=None, help="reference image of the target person (--style frames)")
@@ -69,74 +65,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-    from motion2video.models.checkpoint import load_model
-    from motion2video.models.baselines import BASELINES
-    from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
-                                            style_for, transfer_behavior, transfer_forecast)
-    from motion2video.stages.clips import load_clip
-    from motion2video.stages.latents import ADAPT_STEPS, behavior_model
-    from motion2video.stages.video import check_cell_size
-    from motion2video.formats.video import VideoWriter
-
     set_threads(args.threads)
-    check_cell_size(args.size)
-    out = check_video_and_npz(args.output, args.npz)
-    if args.adapt_steps is not None:
-        check_at_least("--adapt-steps", args.adapt_steps, 0)
-        if args.sample is not None:
-            raise InputError("--adapt-steps fits the decoder to a --behavior source; --sample has none")
-    style = requested_style(args.style, args.reference)
-    if args.model in BASELINES:
-        raise InputError(f"behaviour transfer needs a 'behavior' model; {args.model!r} is a baseline")
-    bundle = load_model(args.model)
-    check_bvh_output(args.bvh, bundle.data_config.layout)
-    behavior_model(bundle)  # the wrong kind of model fails before any clip is read
-    style = style_for(bundle.data_config.layout, style)
-    frame_model = reference = None
-    if style == "frames":
-        frame_model, reference = frame_style_inputs(bundle, frame_model=args.frame_model, reference=args.reference,
-                                                    reference_pose=args.reference_pose,
-                                                    crop_person=args.crop_person)
-    elif args.reference_pose or args.frame_model or args.crop_person or args.fit_view:
-        raise InputError("--frame-model, --reference-pose, --crop-person and --fit-view are only used with --style "
-                         "frames")
-    target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
-    if args.behavior is not None:
-        source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
-        result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
-                                   target_frame=args.target_frame, horizon=args.horizon,
-                                   adapt_steps=ADAPT_STEPS if args.adapt_steps is None else args.adapt_steps)
-    else:
-        result = sample_behaviors(bundle, target, num_samples=args.sample, target_frame=args.target_frame,
-                                  horizon=args.horizon, seed=args.seed)
-    if reference is not None:
-        from motion2video.stages.structure import reference_in_view
-
-        reference = reference_in_view(transfer_forecast(result), reference, size=frame_model.model.config.image_size,
-                                      fit_view=args.fit_view)
-    chunks = iter_transfer(result, style=style, size=args.size, frame_model=frame_model, reference=reference)
-    for note in (reference.notes if reference is not None else ()):
-        print(f"motion2video transfer: note: {note}", file=sys.stderr)
-    with VideoWriter(out, result.fps) as writer:
-        for chunk in chunks:
-            writer.write(chunk)
+    settings = TransferSettings(
+        model=args.model, target=args.target, output=args.output, behavior=args.behavior, sample=args.sample,
+        target_frame=args.target_frame, behavior_start=args.behavior_start, horizon=args.horizon,
+        adapt_steps=args.adapt_steps, style=args.style, reference=args.reference,
+        reference_pose=args.reference_pose, crop_person=args.crop_person, fit_view=args.fit_view,
+        frame_model=args.frame_model, seed=args.seed, size=args.size, npz=args.npz, character=args.character,
+        input_fps=args.input_fps, bvh=args.bvh)
+    files = transfer_to_files(settings,
+                              note=lambda line: print(f"motion2video transfer: note: {line}", file=sys.stderr))
+    result = files.result
     what = (f"behaviour of {args.behavior}" if args.behavior is not None
             else f"{args.sample} flow-sampled behaviours (seed {args.seed})")
-    print(f"wrote {out} ({what} re-enacted from {args.target} frame {args.target_frame}: "
-          f"{result.reenacted.shape[1] - 1} generated frames, {style}, {writer.width}x{writer.height}, "
+    print(f"wrote {files.video} ({what} re-enacted from {args.target} frame {args.target_frame}: "
+          f"{result.reenacted.shape[1] - 1} generated frames, {files.style}, {files.width}x{files.height}, "
           f"{result.fps:g} fps)")
-    if args.npz:
-        arrays = {"reenacted": result.reenacted, "z": result.z, "fps": np.float64(result.fps),
-                  "layout": np.str_(result.layout), "model": np.str_(bundle.name),
-                  "target_frame": np.int64(result.target_frame)}
-        if result.source is not None:
-            arrays["source"] = result.source
-        save_npz(args.npz, arrays)
-        print(f"wrote {args.npz}")
-    if args.bvh:
-        from motion2video.formats.bvh_write import write_bvh_files
-
-        paths = write_bvh_files(args.bvh, "reenacted", result.reenacted, result.fps)
-        print(f"wrote {len(paths)} BVH files to {args.bvh} ({paths[0].name} ...)")
+    if files.npz is not None:
+        print(f"wrote {files.npz}")
+    if files.bvh:
+        print(f"wrote {len(files.bvh)} BVH files to {args.bvh} ({files.bvh[0].name} ...)")
     return 0

@@ -2,13 +2,16 @@
 uses it (every clip at the dataset rate, duplicates dropped, the subject-disjoint split).
 
 :func:`corpus_stats` returns a JSON-able dict; :func:`stats_markdown` renders it as the Markdown tables
-``motion2video corpus-stats`` prints (and docs/results.md shows).
+``motion2video corpus-stats`` prints (and docs/results.md shows); :func:`corpus_report` is that command's work.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
+from motion2video.core.atomic import write_json
+from motion2video.core.errors import InputError
 from motion2video.data.corpus import corpus_index, source_of
 from motion2video.data.dataset import DatasetConfig, build_dataset
 from motion2video.data.windows import sliding_starts
@@ -104,3 +107,46 @@ def stats_markdown(stats: dict) -> str:
         lines.append(f"- {s}: " + ", ".join(f"`{g}`" for g in stats["groups"][s]))
     return "\n".join(lines) + "\n"
 
+
+
+@dataclass(frozen=True)
+class CorpusStatsSettings:
+    """What ``motion2video corpus-stats`` reports on.
+
+    Attributes:
+        data: the mocap folder (with manifest.csv).
+        json: also write the statistics as JSON here (None: no file).
+        held_out: the split rule, ``corpus`` (the pinned held-out subjects and sources) or ``hash``.
+        keep_duplicates: keep every copy of a trial found in several folders.
+        character: DeepMimic motion files' character file.
+    """
+
+    data: str | Path
+    json: str | Path | None = None
+    held_out: str = "corpus"
+    keep_duplicates: bool = False
+    character: str | Path | None = None
+
+
+@dataclass(frozen=True)
+class CorpusReport:
+    """The statistics (:func:`corpus_stats`), their Markdown tables and the JSON file written (or None)."""
+
+    stats: dict
+    markdown: str
+    json: Path | None
+
+
+def corpus_report(settings: CorpusStatsSettings) -> CorpusReport:
+    """The statistics of ``settings.data`` under the default data config with the settings' split rule and
+    duplicate handling; written as JSON when ``settings.json`` is given. InputError for a missing folder or a
+    JSON path whose folder does not exist, before any clip is read."""
+    data = Path(settings.data)
+    if not data.is_dir():
+        raise InputError("not a folder (corpus-stats takes a mocap folder)", data)
+    if settings.json is not None and not Path(settings.json).parent.exists():
+        raise InputError("the folder for --json does not exist", settings.json)
+    config = DatasetConfig(held_out=settings.held_out, drop_duplicates=not settings.keep_duplicates)
+    stats = corpus_stats(data, config, character=settings.character)
+    out = write_json(settings.json, stats) if settings.json is not None else None
+    return CorpusReport(stats=stats, markdown=stats_markdown(stats), json=out)

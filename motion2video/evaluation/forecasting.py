@@ -3,20 +3,28 @@
 :func:`evaluate_bundles` runs every model on every window of a split, K samples each, and computes the
 metrics of :mod:`motion2video.evaluation.metrics` on un-normalised, root-relative frame vectors
 (:func:`motion2video.data.windows.metric_vectors`: metres for body3d, virtual-camera image heights for
-body2d, parameter units for faces). The ``evaluate`` command and ``scripts/make_results.py`` call it.
+body2d, parameter units for faces). :func:`evaluate_models` is the ``evaluate`` command's work (models loaded
+by name, their windows built from a data folder, the results written as JSON and a plot);
+``scripts/make_results.py`` calls :func:`evaluate_bundles` directly.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import torch
 
+from motion2video.core.atomic import write_json
+from motion2video.core.errors import InputError
 from motion2video.evaluation import metrics as M
-from motion2video.models.checkpoint import ModelBundle
-from motion2video.data.dataset import WindowSet
+from motion2video.evaluation.plots import plot_ade_per_frame
+from motion2video.models.baselines import BASELINES
+from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_model
+from motion2video.models.periodic import RULES
+from motion2video.data.dataset import WindowSet, build_dataset
 from motion2video.data.windows import FeatureLayout, metric_vectors
 from motion2video.evaluation.per_action import COUNT_KEY, group_by_action, macro_average, per_action_means
 from motion2video.stages.sampling import as_model_input, keep_bone_lengths
@@ -264,3 +272,107 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
         result.per_action[bundle.label] = by_action
         result.macro[bundle.label] = macro_average(by_action)
     return result
+
+
+@dataclass(frozen=True)
+class ForecastEvalSettings:
+    """One ``evaluate`` run: the models, the data and the protocol.
+
+    Attributes:
+        models: checkpoint paths or shipped names (the first one's split and statistics pick the windows);
+            ``mirror-periodic``, a rule with no weights, is scored in the first trained model's windows.
+        data: BVH folder or motion file (face models: .csv / .npz captures).
+        samples, stride, split, seed, rigid_bones: as in :class:`EvalProtocol`.
+        raw_futures: score the networks' futures as they come out (``EvalProtocol.continue_motion`` off).
+        recorded_only: only the clips the checkpoint's recorded split names.
+        extended: also S-MSE, R-MSE and the Parzen conditional log-likelihood (needs the val windows).
+        json: write the results as JSON here (None: no file).
+        plot: draw ADE per future frame into this PNG (None: no plot).
+        character: DeepMimic motion files' character file.
+    """
+
+    models: tuple[str, ...]
+    data: str | Path
+    samples: int = 50
+    stride: int = 16
+    split: str = "test"
+    seed: int = 0
+    rigid_bones: bool = False
+    raw_futures: bool = False
+    recorded_only: bool = False
+    extended: bool = False
+    json: str | Path | None = None
+    plot: str | Path | None = None
+    character: str | Path | None = None
+
+
+@dataclass
+class ForecastEvaluation:
+    """What :func:`evaluate_models` measured: the results (protocol, pooled, macro and per-action tables), the
+    number of windows, and the files written (None where not asked for)."""
+
+    result: EvalResult
+    windows: int
+    json: Path | None
+    plot: Path | None
+
+
+def _load_models(names: tuple[str, ...]) -> tuple[list[ModelBundle], list[str]]:
+    """The trained models of ``names`` (InputError unless they share data settings and have distinct names) and
+    the rules among the names."""
+    rules = [name for name in names if name in RULES]
+    learned = [name for name in names if name not in RULES]
+    if not learned:
+        raise InputError(f"{rules[0]} is a rule: name a trained model too, whose windows, statistics and split it "
+                         "is scored on")
+    models = [load_model(name) for name in learned]
+    bundle = models[0]
+    for other in models[1:]:
+        if other.data_config != bundle.data_config:
+            raise InputError(f"{other.label} was trained with other data settings than {bundle.label}: "
+                             "compare models of one layout and window length", other.path)
+    labels = [m.label for m in models]
+    if len(set(labels)) != len(labels):
+        raise InputError(f"two models share the name {labels!r}: give checkpoints with distinct file names")
+    layout = bundle.data_config.feature_layout.kind
+    if rules and layout != "body3d":
+        raise InputError(f"{rules[0]} works on 3D body motion, not the {layout} layout of {bundle.label}")
+    return models, rules
+
+
+def evaluate_models(settings: ForecastEvalSettings) -> ForecastEvaluation:
+    """Score ``settings.models`` and the three baselines on the same windows of ``settings.data`` and write the
+    JSON and the plot asked for. InputError for models that cannot be compared, a plot that is not a .png, or no
+    window long enough."""
+    for target in (settings.json, settings.plot):
+        if target is not None:
+            Path(target).parent.mkdir(parents=True, exist_ok=True)
+    if settings.plot is not None and not str(settings.plot).lower().endswith(".png"):
+        raise InputError("--plot writes a .png file", settings.plot)
+    models, rules = _load_models(tuple(settings.models))
+    bundle = models[0]
+    cfg = bundle.data_config
+    dataset = build_dataset(settings.data, cfg, split=bundle.meta.split, stats=bundle.stats,
+                            recorded_only=settings.recorded_only, character=settings.character)
+    windows = dataset.windows(settings.split, stride=settings.stride)
+    if len(windows) == 0:
+        longest = max((c.num_frames for c in dataset.clips_of(settings.split)), default=0)
+        raise InputError(f"no clip of the {settings.split} split is long enough: a window needs {cfg.length} "
+                         f"frames at {cfg.fps:g} fps ({cfg.observed} observed + {cfg.future} future), the longest "
+                         f"has {longest}", settings.data)
+    bundles = models + [baseline_bundle(name, cfg, stats=bundle.stats) for name in tuple(rules) + BASELINES]
+    protocol = EvalProtocol(samples=settings.samples, stride=settings.stride, split=settings.split,
+                            seed=settings.seed, rigid_bones=settings.rigid_bones,
+                            continue_motion=not settings.raw_futures)
+    val = dataset.windows("val", stride=settings.stride) if settings.extended else None
+    result = evaluate_bundles(bundles, windows, protocol=protocol, extended=settings.extended, val_windows=val)
+    result.protocol["checkpoint"] = str(bundle.path)
+    result.protocol["data"] = str(settings.data)
+    json_out = write_json(settings.json, result.to_json()) if settings.json is not None else None
+    plot_out = None
+    if settings.plot is not None:
+        plot_out = plot_ade_per_frame(result.ade_per_frame, settings.plot, fps=cfg.fps,
+                                      units=result.protocol["units"].split(" (")[0], best_of=settings.samples,
+                                      title=f"{len(windows)} {settings.split} windows from "
+                                            f"{len(result.protocol['clips'])} clips")
+    return ForecastEvaluation(result=result, windows=len(windows), json=json_out, plot=plot_out)

@@ -86,7 +86,7 @@ class PersonaliseSettings:
 
     Attributes:
         steps, batch_size, lr, crop, edge_weight, person_weight, seed, checkpoint_every: as
-            :class:`motion2video.frames.train.TrainFramesConfig`; ``crop`` 0 trains on whole frames, as the
+            :class:`motion2video.frames.training.TrainFramesConfig`; ``crop`` 0 trains on whole frames, as the
             protocol generates them (the warp generator's inference crop is then the whole square; a smaller
             training crop is centred on the pair's joints when they do not fit, so it would seldom see the hands).
         flip: mirror pairs left-right (off: a person is not symmetric, e.g. gloves of two colours).
@@ -119,7 +119,7 @@ class PersonaliseResult:
         evaluation: the protocol on the tail: ``generator`` is the fine-tuned model, ``generic_name`` the
             one it started from, next to copy-reference and limb-warp.
         data: the training part.
-        train: the :class:`motion2video.frames.train.TrainFramesResult`.
+        train: the :class:`motion2video.frames.training.TrainFramesResult`.
         wall_s: seconds of the whole run (tracking, data, training, scoring).
         settings: how it was fine-tuned.
     """
@@ -185,7 +185,7 @@ def personalise(video: str | Path, *, init_from: str | Path, output: str | Path,
         InputError: not a body generator, an unreadable video, no person, a video too short to split.
     """
     from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.train import TrainFramesConfig, train_frames
+    from motion2video.frames.training import TrainFramesConfig, train_frames
     from motion2video.stages.people import video_track
 
     t0 = time.perf_counter()

@@ -183,14 +183,15 @@ def video_pairs(frames: VideoFrames) -> FramePairs:
 def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     """The pairs with the correspondence of Anny fitted to every frame (:func:`stages.mesh_frames.video_mesh_track`),
     for the mesh generator: the fitted mesh's silhouettes, grown by the person's clothes margin in frame 0
-    (:func:`stages.mesh_frames.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
+    (:func:`frames.mesh_reference.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
     person masks). As in ``synthesize``, a vertex frame 0 shows counts as shown only where it lands on the person
-    (:func:`stages.mesh_frames.on_person`), and the colours are sampled from the segmented person
+    (:func:`frames.mesh_reference.on_person`), and the colours are sampled from the segmented person
     (:func:`frames.mesh_warp.mesh_source_mask`)."""
     from dataclasses import replace
 
     from motion2video.frames.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.stages.mesh_frames import clothes_margin, on_person, video_mesh_track
+    from motion2video.frames.mesh_reference import clothes_margin, on_person
+    from motion2video.stages.mesh_frames import video_mesh_track
 
     size = frames.images.shape[1]
     track = video_mesh_track(frames.joints3d, frames.points, size=size, person_mask=frames.masks[0])

@@ -555,8 +555,8 @@ def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshT
         ref_uv: (V, 2) the reference vertices' pixels, already completed (:func:`complete_reference_uv`: done once
             per reference, not once per target); ref_visible: (V,) bool.
         targets: the target frames; rows: indices into them.
-        margin: pixels the person's silhouettes are grown by (:func:`motion2video.stages.mesh_frames.clothes_margin`):
-            the flow is carried :func:`band_width` past the silhouette, or half that past the margin when further.
+        margin: pixels the person's silhouettes are grown by
+            (:func:`motion2video.frames.mesh_reference.clothes_margin`): the flow is carried :func:`band_width` past the silhouette, or half that past the margin when further.
     Returns:
         flow (R, H, W, 2) float32, visibility (R, H, W) float32.
     """

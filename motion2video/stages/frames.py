@@ -39,8 +39,8 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     reference person's Anny body (the reference pose file's phenotype; without one, Anny's weight fitted to the
     person BlazePose segments) in the reference pose and in every target pose; only the reference vertices that land
     on that segmented person count as shown, the fitted head is moved onto the eyes BlazePose finds
-    (:func:`~motion2video.stages.mesh_frames.align_face`) and a fitted hand vertex that lands beside the pictured hand
-    samples the pictured hand (:func:`~motion2video.stages.mesh_frames.hand_colour_sources`). Face: None (the face
+    (:func:`~motion2video.frames.mesh_reference.align_face`) and a fitted hand vertex that lands beside the pictured
+    hand samples the pictured hand (:func:`~motion2video.frames.mesh_reference.hand_colour_sources`). Face: None (the face
     structures carry their head mesh)."""
     from motion2video.core.errors import InputError
     from motion2video.stages.mesh_frames import mesh_video

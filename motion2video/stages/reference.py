@@ -59,7 +59,7 @@ class ReferencePose:
         camera_joints: body, optional: (17, 3) the pictured pose in 3D, in the picture camera's axes (metres; x
             right, y up, z away from the camera; any origin): BlazePose's world landmarks for a photo, the known
             pose for a render. The mesh generator's body fit takes its bone lengths and depth from it
-            (:func:`motion2video.stages.mesh_frames.lift_reference`).
+            (:func:`motion2video.frames.mesh_fit.lift_reference`).
     """
 
     kind: str
