@@ -32,8 +32,38 @@ from typing import Callable, Iterable
 
 import numpy as np
 
+from safetensors import SafetensorError, safe_open
+
+from motion2video.apps.analogy import analogy as analogy_app
+from motion2video.apps.analogy import iter_analogy
+from motion2video.apps.sample import iter_forecast, load_clip_for, save_forecast_npz
+from motion2video.apps.synthesize import SynthesisConfig
+from motion2video.apps.synthesize import synthesize as synthesize_app
+from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors, style_for,
+                                        transfer_behavior, transfer_forecast)
+from motion2video.core.atomic import check_output_path
 from motion2video.core.errors import InputError
 from motion2video.core.motion import FaceMotion, Motion
+from motion2video.data.dataset import DatasetConfig
+from motion2video.formats.bvh_write import check_bvh_dir, write_bvh_files
+from motion2video.formats.video import VIDEO_SUFFIXES, VideoWriter
+from motion2video.frames.checkpoint import FORMAT as FRAMES_FORMAT
+from motion2video.frames.checkpoint import LoadedFrameModel, load_frame_model
+from motion2video.models import checkpoint
+from motion2video.models.baselines import BASELINES
+from motion2video.models.checkpoint import ModelBundle
+from motion2video.models.periodic import RULES
+from motion2video.pose.estimate import open_video
+from motion2video.pose.files import save_video_pose
+from motion2video.stages import people
+from motion2video.stages.clips import load_clip
+from motion2video.stages.latents import ADAPT_STEPS, analogy_model, behavior_model
+from motion2video.stages.layout import check_cell_size
+from motion2video.stages.people import is_video, reference_pose_of
+from motion2video.stages.reference import save_reference_pose
+from motion2video.stages.sampling import Forecast, sample_forecast
+from motion2video.stages.structure import reference_in_view
+from renderers.registry import check_style
 
 Progress = Callable[[str, float], None]
 
@@ -60,13 +90,7 @@ def load_model(name_or_path: str | Path, *, device: str = "cpu"):
     Raises:
         InputError: no such file or name, or not a motion2video checkpoint.
     """
-    from safetensors import SafetensorError, safe_open
 
-    from motion2video.data.dataset import DatasetConfig
-    from motion2video.frames.checkpoint import FORMAT as FRAMES_FORMAT, load_frame_model
-    from motion2video.models import checkpoint
-    from motion2video.models.baselines import BASELINES
-    from motion2video.models.periodic import RULES
 
     if str(name_or_path) in BASELINES + RULES:
         return checkpoint.baseline_bundle(str(name_or_path), DatasetConfig())
@@ -83,7 +107,6 @@ def load_model(name_or_path: str | Path, *, device: str = "cpu"):
 
 def _motion_model(model):
     """A loaded motion model (a ModelBundle) from whatever :func:`load_model` takes or returned."""
-    from motion2video.models.checkpoint import ModelBundle
 
     bundle = model if isinstance(model, ModelBundle) else load_model(model)
     if not isinstance(bundle, ModelBundle):
@@ -93,7 +116,6 @@ def _motion_model(model):
 
 def _frame_model(model):
     """A loaded frame generator from a name, a path or what :func:`load_model` returned."""
-    from motion2video.frames.checkpoint import LoadedFrameModel
 
     loaded = model if isinstance(model, LoadedFrameModel) else load_model(model)
     if not isinstance(loaded, LoadedFrameModel):
@@ -110,7 +132,6 @@ def _motions(sequences: np.ndarray, fps: float, layout: str, source: str | None)
 
 
 def _write_bvh(folder: str | Path, stem: str, sequences: np.ndarray, fps: float, layout: str) -> list[Path]:
-    from motion2video.formats.bvh_write import check_bvh_dir, write_bvh_files
 
     if layout != "body3d":
         raise InputError(f"BVH files hold 3D body motion; this model's output is {layout}", folder)
@@ -121,7 +142,6 @@ def _render(chunks: Iterable[np.ndarray], fps: float, output: str | Path | None,
             progress: Progress = _no_progress) -> tuple[np.ndarray, Path | None]:
     """A stream of (t, H, W, 3) uint8 chunks as one (T, H, W, 3) array, written to ``output`` (mp4 / GIF) too when
     given (atomically, as it is drawn); ``progress("frames", done / frames)`` after every chunk."""
-    from motion2video.formats.video import VideoWriter
 
     kept: list[np.ndarray] = []
     with contextlib.ExitStack() as stack:
@@ -135,8 +155,6 @@ def _render(chunks: Iterable[np.ndarray], fps: float, output: str | Path | None,
 
 
 def _check_video_output(output: str | Path | None) -> Path | None:
-    from motion2video.core.atomic import check_output_path
-    from motion2video.formats.video import VIDEO_SUFFIXES
 
     return None if output is None else check_output_path(output, VIDEO_SUFFIXES)
 
@@ -179,7 +197,6 @@ class Futures:
 
     def save_npz(self, path: str | Path) -> Path:
         """``observed``, ``futures``, ``fps``, ``layout``, ``model``, ``seed`` in one .npz (``sample --npz``)."""
-        from motion2video.apps.sample import save_forecast_npz
 
         return save_forecast_npz(self._forecast(), path)
 
@@ -189,7 +206,6 @@ class Futures:
         return _write_bvh(folder, stem, whole, self.fps, self.layout)
 
     def _forecast(self):
-        from motion2video.stages.sampling import Forecast
 
         return Forecast(observed=self.observed, futures=self.futures, fps=self.fps, layout=self.layout,
                         model=self.model, seed=self.seed)
@@ -215,9 +231,6 @@ def sample(model, clip: str | Path, *, samples: int = 5, observed: int | None = 
     Returns:
         :class:`Futures`.
     """
-    from motion2video.apps.sample import iter_forecast, load_clip_for
-    from motion2video.stages.sampling import sample_forecast
-    from motion2video.stages.video import check_cell_size
 
     check_cell_size(size)
     out = _check_video_output(output)
@@ -287,8 +300,6 @@ def synthesize(motion_model, frame_model, clip: str | Path, reference: str | Pat
     Returns:
         :class:`Synthesis`.
     """
-    from motion2video.apps.synthesize import SynthesisConfig, synthesize as synthesize_app
-    from motion2video.stages.people import is_video
 
     report = progress or _no_progress
     if is_video(clip):
@@ -378,12 +389,6 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
     Returns:
         :class:`Transfer`.
     """
-    from motion2video.apps.transfer import (frame_style_inputs, iter_transfer, requested_style, sample_behaviors,
-                                            style_for, transfer_behavior, transfer_forecast)
-    from motion2video.stages.clips import load_clip
-    from motion2video.stages.latents import ADAPT_STEPS, behavior_model
-    from motion2video.stages.people import is_video
-    from motion2video.stages.video import check_cell_size
 
     report = progress or _no_progress
     check_cell_size(size)
@@ -418,7 +423,6 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
         result = sample_behaviors(bundle, tgt, num_samples=samples, target_frame=target_frame, horizon=horizon,
                                   seed=seed)
     if ref is not None:
-        from motion2video.stages.structure import reference_in_view
 
         ref = reference_in_view(transfer_forecast(result), ref, size=frames_model.config.image_size,
                                 fit_view=fit_view)
@@ -479,11 +483,6 @@ def analogy(model, a: str | Path, b: str | Path, c: str | Path, *, a_start: int 
     Returns:
         :class:`Analogy`.
     """
-    from motion2video.apps.analogy import analogy as analogy_app, iter_analogy
-    from motion2video.stages.clips import load_clip
-    from motion2video.stages.latents import analogy_model
-    from motion2video.stages.video import check_cell_size
-    from renderers.registry import check_style
 
     check_cell_size(size)
     out = _check_video_output(output)
@@ -540,15 +539,11 @@ class Pose:
     def save(self, path: str | Path) -> Path:
         """A photo's reference pose file (``IMAGE.pose.npz``, which ``synthesize`` reads beside the image) or a
         video's motion .npz, as ``motion2video pose -o`` writes them."""
-        from motion2video.core.atomic import check_output_path
 
         out = check_output_path(path, (".npz",))
         if self.fps is None:
-            from motion2video.stages.people import reference_pose_of
-            from motion2video.stages.reference import save_reference_pose
 
             return save_reference_pose(out, reference_pose_of(self.estimate))
-        from motion2video.pose.files import save_video_pose
 
         return save_video_pose(out, self.estimate)
 
@@ -567,14 +562,12 @@ def estimate_pose(path: str | Path, *, person: str | int = "largest", max_second
     Raises:
         InputError: a missing or unreadable file, another extension, nobody found, a video too long.
     """
-    from motion2video.stages import people
 
     src = Path(path)
     if not src.exists():
         raise InputError("no such file", src)
     if people.is_video(src):
         if max_seconds is not None:
-            from motion2video.pose.estimate import open_video
 
             cap, info = open_video(src)
             cap.release()
