@@ -93,3 +93,24 @@ def test_every_readme_example_runs_as_written(tmp_path):
         if run.returncode != 0:
             failures.append(f"{command}\n  exit {run.returncode}: {(run.stderr or run.stdout).strip()[-400:]}")
     assert not failures, "README examples that fail:\n" + "\n".join(failures)
+
+
+def python_examples(text: str) -> list[str]:
+    """The README's fenced ``python`` blocks, in order."""
+    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
+
+
+@pytest.mark.slow
+def test_readme_python_examples_run_as_written(tmp_path):
+    blocks = python_examples((ROOT / "README.md").read_text())
+    assert len(blocks) >= 2
+    work = tmp_path / "clone"
+    work.mkdir()
+    os.symlink(ROOT / "demo_inputs", work / "demo_inputs")
+    (work / "out").mkdir()
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "PYOPENGL_PLATFORM": os.environ.get("PYOPENGL_PLATFORM", "osmesa")}
+    for block in blocks:
+        run = subprocess.run([sys.executable, "-c", block], cwd=work, env=env, capture_output=True, text=True,
+                             timeout=900)
+        assert run.returncode == 0, f"{block}\n  exit {run.returncode}: {run.stderr.strip()[-600:]}"
+    assert (work / "out" / "walk.mp4").is_file() and (work / "out" / "walk_mesh.mp4").is_file()
