@@ -26,10 +26,12 @@ STYLES = ("skeleton", "mesh")
 
 
 def load_clip_for(bundle: ModelBundle, path: str | Path, *, character: str | Path | None = None,
+                  rig_map: str | Path | None = None,
                   fps: float | None = None) -> np.ndarray:
     """The clip at ``path`` as the model's data at its frame rate (:func:`motion2video.stages.clips.load_clip`):
-    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models. ``character`` and ``fps`` as in ``load_clip``."""
-    return load_clip(bundle, path, character=character, fps=fps).data
+    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models. ``character``, ``rig_map``
+    and ``fps`` as in ``load_clip``."""
+    return load_clip(bundle, path, character=character, fps=fps, rig_map=rig_map).data
 
 
 def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> np.ndarray:

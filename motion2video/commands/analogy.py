@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     check_bvh_output(args.bvh, bundle.data_config.layout)
     analogy_model(bundle)  # the wrong kind of model fails before any clip is read
     check_style(bundle.data_config.layout, args.style)  # mesh needs a 3D body model
-    options = {"character": args.character, "fps": args.input_fps}
+    options = {"character": args.character, "fps": args.input_fps, "rig_map": args.rig_map}
     a = load_clip(bundle, args.a, **options)
     b = a if args.b == args.a else load_clip(bundle, args.b, **options)
     c = load_clip(bundle, args.c, **options)

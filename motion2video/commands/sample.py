@@ -86,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         bundle = load_model(args.model)
     check_bvh_output(args.bvh, bundle.data_config.layout)
-    clip = load_clip_for(bundle, args.input, character=args.character, fps=args.input_fps)
+    clip = load_clip_for(bundle, args.input, character=args.character, fps=args.input_fps,
+                         rig_map=args.rig_map)
     fc = forecast(bundle, clip, num_samples=args.samples, observed=args.observed, horizon=args.horizon,
                   start=args.start, seed=args.seed, source=args.input, rigid_bones=args.rigid_bones)
     chunks = iter_forecast(fc, style=args.style, size=args.size)

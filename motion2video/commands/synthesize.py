@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
                              size=args.size, rigid_bones=args.rigid_bones, character=args.character,
-                             input_fps=args.input_fps, crop_person=args.crop_person, fit_view=args.fit_view)
+                             rig_map=args.rig_map, input_fps=args.input_fps, crop_person=args.crop_person, fit_view=args.fit_view)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

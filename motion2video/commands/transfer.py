@@ -101,9 +101,10 @@ def run(args: argparse.Namespace) -> int:
     elif args.reference_pose or args.frame_model or args.crop_person or args.fit_view:
         raise InputError("--frame-model, --reference-pose, --crop-person and --fit-view are only used with --style "
                          "frames")
-    target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps)
+    target = load_clip(bundle, args.target, character=args.character, fps=args.input_fps, rig_map=args.rig_map)
     if args.behavior is not None:
-        source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps)
+        source = load_clip(bundle, args.behavior, character=args.character, fps=args.input_fps,
+                           rig_map=args.rig_map)
         result = transfer_behavior(bundle, source, target, source_start=args.behavior_start,
                                    target_frame=args.target_frame, horizon=args.horizon,
                                    adapt_steps=ADAPT_STEPS if args.adapt_steps is None else args.adapt_steps)
