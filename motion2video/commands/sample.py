@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from motion2video.data.licences import licence_table
 from motion2video.commands.common import (RIGID_BONES_HELP, add_bvh_argument, add_command,
                                           add_motion_input_arguments, add_threads_argument, check_at_least,
                                           check_bvh_output, check_video_and_npz, set_threads)
@@ -43,7 +44,8 @@ shipped motion models (model cards in motion2video/weights/NAME.md):
   mixer-cvae      3D body: that CVAE, sampled from its prior
   mtvae-add-2d    2D keypoints in a virtual camera
   mtvae-add-face  ARKit face coefficients + head pose
-"""
+
+""" + licence_table()
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

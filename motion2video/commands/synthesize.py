@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from motion2video.data.licences import licence_table
 from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_motion_input_arguments,
                                           add_reference_photo_arguments, check_at_least)
 from motion2video.core.errors import InputError
@@ -38,7 +39,8 @@ grey-scale images become RGB, RGBA images are composited over white. Its pose is
 when that exists (or --reference-pose); otherwise a body pose is estimated in the image (BlazePose, with a
 note), and only when nobody is found is the image assumed to show the first observed pose. A video as the
 observed clip has its person's pose estimated (cached in ~/.cache/motion2video/pose by the file's hash).
-"""
+
+""" + licence_table()
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

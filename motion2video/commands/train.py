@@ -37,7 +37,9 @@ and "train" (TrainConfig: batch_size, lr, weight_decay, grad_clip, checkpoint_ev
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "train", run, help=HELP, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="registered model name, e.g. mtvae-add")
-    p.add_argument("--data", required=True, help="folder of BVH files (with manifest.csv), or face captures")
+    p.add_argument("--data", required=True, action="append",
+                   help="folder of BVH files (with manifest.csv), or face captures; repeat to join mocap folders into "
+                   "one corpus (e.g. --data ../shared/data/mocap --data ../shared/data/bandai)")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("-o", "--output", required=True, help="final checkpoint (.safetensors)")
     p.add_argument("--base", default=None,
@@ -84,7 +86,8 @@ def detect_layout(data: str) -> str:
     path = Path(data)
     if path.is_file():
         return "face" if path.suffix.lower() == ".csv" else "body3d"
-    if path.is_dir() and not any(path.rglob("*.bvh")) and any(path.rglob("*.csv")):
+    if (path.is_dir() and not any(path.rglob("*.bvh")) and not any(path.rglob("*.bvh.xz"))
+            and any(path.rglob("*.csv"))):
         return "face"
     return "body3d"
 
@@ -153,7 +156,8 @@ def run(args: argparse.Namespace) -> int:
     data_values = dict(cfg["data"])
     if args.layout != "auto":
         data_values["layout"] = args.layout
-    data_values.setdefault("layout", detect_layout(args.data))
+    data_values.setdefault("layout", detect_layout(args.data[0]))
+    data = args.data[0] if len(args.data) == 1 else args.data
     data_config = _dataclass(DatasetConfig, data_values, "data")
     train_values = dict(cfg["train"])
     if args.steps is not None:
@@ -163,10 +167,10 @@ def run(args: argparse.Namespace) -> int:
     train_config = _dataclass(TrainConfig, train_values, "train")
     base_meta = cfg.get("base_meta")
     if base_meta is not None:  # DLow: the base model's split and statistics, so its decoder sees its own units
-        dataset = build_dataset(args.data, data_config, split=base_meta.split, stats=base_meta.stats,
+        dataset = build_dataset(data, data_config, split=base_meta.split, stats=base_meta.stats,
                                 character=args.character)
     else:
-        dataset = build_dataset(args.data, data_config, character=args.character)
+        dataset = build_dataset(data, data_config, character=args.character)
     print(f"data: {dataset.summary['clips']} clips, {dataset.summary['frames']} frames at {data_config.fps:g} fps; "
           f"train/val/test clips {len(dataset.split.train)}/{len(dataset.split.val)}/{len(dataset.split.test)}; "
           f"layout {data_config.layout} ({dataset.num_features} features)")

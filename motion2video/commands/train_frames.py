@@ -95,6 +95,19 @@ def default_crop(domain: str, size: int) -> int:
     return size // 2
 
 
+def sequence_licences(seqs, *, data_root: str | None) -> dict:
+    """The licence record (:func:`motion2video.data.licences.licence_record`) of the captures that posed or
+    animated the training sequences, from the ``manifest.csv`` of ``mocap/`` (bodies) or ``face/`` (faces)."""
+    from motion2video.data.licences import licence_record
+    from motion2video.formats.manifest import read_manifest
+    from motion2video.frames.specs import default_data_root
+
+    root = Path(data_root) if data_root is not None else default_data_root()
+    manifest_path = root / ("mocap" if seqs.domain == "body" else "face") / "manifest.csv"
+    entries = read_manifest(manifest_path) if manifest_path.is_file() else {}
+    return licence_record([entries[c].licence if c in entries else None for c in seqs.summary()["clips"]])
+
+
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
@@ -167,7 +180,8 @@ def run(args: argparse.Namespace) -> int:
                                silhouette_erosion=args.silhouette_erosion)
     result = train_frames(seqs, output=output, config=config, model_config=model_config, resume=args.resume,
                           progress=not args.no_progress, init_from=args.init_from,
-                          extra_metadata={"dataset_spec": spec.key()})
+                          extra_metadata={"dataset_spec": spec.key(),
+                                          "licences": sequence_licences(seqs, data_root=args.data_root)})
     last = result.history[-1] if result.history else {}
     print(json.dumps({"checkpoint": str(result.path), "steps": result.steps,
                       "wall_s": round(result.wall_s, 1), "total_wall_s": round(result.total_wall_s, 1),

@@ -20,9 +20,10 @@ def _minutes(frames: float, fps: float) -> float:
     return frames / fps / 60.0
 
 
-def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
+def corpus_stats(folder: str | Path | list, config: DatasetConfig = DatasetConfig(), *,
                  character: str | Path | None = None) -> dict:
-    """Minutes per source, action and split of the corpus ``build_dataset(folder, config)`` trains on.
+    """Minutes per source, action and split of the corpus ``build_dataset(folder, config)`` trains on
+    (``folder``: one mocap folder or a list of them, :func:`motion2video.data.corpus.corpus_rows`).
 
     Returns:
         ``{"config": {...}, "total": {...}, "per_split": {split: {...}}, "per_source": {source: {...}},
@@ -30,8 +31,14 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
         "dropped": {copy: kept}}``. Minutes are clip frames at ``config.fps`` / fps / 60; windows count
         every ``config.length``-frame window ``config.stride`` frames apart.
     """
-    index = corpus_index(folder, drop_duplicates=config.drop_duplicates)
-    dataset = build_dataset(folder, config, character=character)
+    folders = list(folder) if isinstance(folder, (list, tuple)) else [folder]
+    entries, dropped = {}, {}
+    for i, one in enumerate(folders):
+        prefix = "" if i == 0 else f"{Path(one).name}/"
+        index = corpus_index(one, drop_duplicates=config.drop_duplicates)
+        entries.update({prefix + k: v for k, v in index.entries.items()})
+        dropped.update({prefix + k: prefix + v for k, v in index.dropped.items()})
+    dataset = build_dataset(folders[0] if len(folders) == 1 else folders, config, character=character)
     fps = config.fps
     split_of = {name: s for s in SPLITS for name in dataset.split.names(s)}
     per_split = {s: {"clips": 0, "minutes": 0.0, "windows": 0, "groups": 0} for s in SPLITS}
@@ -54,11 +61,11 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
         per_split[s]["minutes"] += minutes
         per_split[s]["windows"] += len(sliding_starts(clip.num_frames, length=config.length, stride=config.stride))
         groups[s].add(clip.group)
-    for name, entry in index.entries.items():
+    for name, entry in entries.items():
         source = per_source.setdefault(source_of(name), {"files": 0, "clips": 0, "minutes": 0.0,
                                                           "dropped_copies": 0, "dropped_minutes": 0.0})
         source["files"] += 1
-        if name in index.dropped:
+        if name in dropped:
             source["dropped_copies"] += 1
             if entry is not None and entry.frames and entry.fps:
                 source["dropped_minutes"] += _minutes(entry.frames, entry.fps)
@@ -66,16 +73,16 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
         per_split[s]["groups"] = len(groups[s])
     total_minutes = sum(v["minutes"] for v in per_split.values())
     return {
-        "data": str(folder),
+        "data": " + ".join(str(f) for f in folders),
         "config": {"fps": fps, "observed": config.observed, "future": config.future, "stride": config.stride,
                    "held_out": config.held_out, "drop_duplicates": config.drop_duplicates},
-        "total": {"files": len(index.entries), "clips": len(dataset.clips), "minutes": total_minutes,
-                  "dropped_copies": len(index.dropped)},
+        "total": {"files": len(entries), "clips": len(dataset.clips), "minutes": total_minutes,
+                  "dropped_copies": len(dropped)},
         "per_split": per_split,
         "per_source": dict(sorted(per_source.items(), key=lambda kv: -kv[1]["minutes"])),
         "per_action": dict(sorted(per_action.items(), key=lambda kv: -kv[1]["total"])),
         "groups": {s: sorted(groups[s]) for s in SPLITS},
-        "dropped": dict(index.dropped),
+        "dropped": dropped,
     }
 
 

@@ -88,11 +88,11 @@ class EvalResult:
 
     def table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """A fixed-width text table, one row per method (pooled over all windows)."""
-        return _rows_table(self.results, columns)
+        return rows_table(self.results, columns)
 
     def macro_table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """The macro average over actions, one row per method."""
-        return _rows_table(self.macro, columns)
+        return rows_table(self.macro, columns)
 
     def per_action_table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """One row per (action, method), the actions in the order of ``per_action`` (most windows first)."""
@@ -100,10 +100,10 @@ class EvalResult:
         actions = list(next(iter(self.per_action.values()))) if methods else []
         rows = {f"{a} ({self.per_action[methods[0]][a][COUNT_KEY]}) {m}": self.per_action[m][a]
                 for a in actions for m in methods}
-        return _rows_table(rows, columns, first="action (windows) method")
+        return rows_table(rows, columns, first="action (windows) method")
 
 
-def _rows_table(rows: dict[str, dict[str, float]], columns: tuple[str, ...], *, first: str = "method") -> str:
+def rows_table(rows: dict[str, dict[str, float]], columns: tuple[str, ...], *, first: str = "method") -> str:
     """A fixed-width text table: one row per key of ``rows``, one column per metric name."""
     width = max([len(first)] + [len(n) for n in rows])
     head = f"{first:<{width}}  " + "  ".join(f"{c:>8}" for c in columns)
