@@ -141,7 +141,7 @@ def mocap_files(folder: str | Path) -> dict[str, ManifestEntry | None]:
     """The clips of a mocap folder, ``{path relative to folder: manifest row}``.
 
     With a ``manifest.csv`` in ``folder``: its rows in its order. Without one: every ``*.bvh`` below
-    ``folder`` (sorted by path, no manifest rows).
+    ``folder`` (``*.bvh`` and ``*.bvh.xz``, sorted by path, no manifest rows).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -149,9 +149,9 @@ def mocap_files(folder: str | Path) -> dict[str, ManifestEntry | None]:
     manifest_path = folder / "manifest.csv"
     if manifest_path.is_file():
         return dict(read_manifest(manifest_path))
-    paths = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*.bvh"))
+    paths = sorted(p.relative_to(folder).as_posix() for pattern in ("*.bvh", "*.bvh.xz") for p in folder.rglob(pattern))
     if not paths:
-        raise InputError("no .bvh files and no manifest.csv in the directory", folder)
+        raise InputError("no .bvh / .bvh.xz files and no manifest.csv in the directory", folder)
     return {p: None for p in paths}
 
 
