@@ -32,6 +32,8 @@ RIG_FILES = {
     "deepmimic-humanoid-txt": ["deepmimic/txt/humanoid3d_walk.txt", "deepmimic-cmu/02_01.txt"],
     "mass-character1": ["mass/mass_walk.bvh"],
     "cmu-bench-expmap": ["cmu-bench/test/walking/walking_1.txt"],
+    # a rig outside the known table, mapped from its joint names: Bandai-Namco's (../shared/data/bandai)
+    "named-joints": ["../bandai/bvh/dataset-2_walk_normal_001.bvh.xz", "../bandai/bvh/dataset-1_bow_active_001.bvh.xz"],
 }
 
 

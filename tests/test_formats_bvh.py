@@ -163,8 +163,8 @@ def test_binary_garbage_and_missing_file(tmp_path):
         bvh.load_bvh(tmp_path / "missing.bvh")
 
 
-def test_unknown_rig_raises():
-    with pytest.raises(InputError, match="unknown BVH rig"):
+def test_unmappable_rig_raises_naming_the_missing_body_points():
+    with pytest.raises(InputError, match="two.bvh: cannot map this BVH rig.*no joint found for right_hip, right_knee"):
         bvh.bvh_to_canonical(bvh.parse_bvh(TWO_JOINTS, "two.bvh"))
 
 

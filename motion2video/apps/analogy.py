@@ -168,7 +168,7 @@ class AnalogySettings:
         observed, horizon: frames of A and C, of B and D (None: the model's).
         style: ``skeleton`` or ``mesh`` (3D body models). size: cell width and height in pixels.
         npz: also write A->B, C->D and z here, or None.
-        character, input_fps: how the clips are read (:func:`motion2video.stages.clips.load_clip`).
+        character, input_fps, rig_map: how the clips are read (:func:`motion2video.stages.clips.load_clip`).
         bvh: also write C then the generated D as a BVH file into this folder, or None.
     """
 
@@ -187,6 +187,7 @@ class AnalogySettings:
     npz: str | Path | None = None
     character: str | Path | None = None
     input_fps: float | None = None
+    rig_map: str | Path | None = None
     bvh: str | Path | None = None
 
 
@@ -217,7 +218,7 @@ def analogy_to_files(settings: AnalogySettings) -> AnalogyFiles:
     check_bvh_output(s.bvh, bundle.data_config.layout)
     analogy_model(bundle)  # the wrong kind of model fails before any clip is read
     check_style(bundle.data_config.layout, s.style)  # mesh needs a 3D body model
-    options = {"character": s.character, "fps": s.input_fps}
+    options = {"character": s.character, "fps": s.input_fps, "rig_map": s.rig_map}
     a = load_clip(bundle, s.a, **options)
     b = a if s.b == s.a else load_clip(bundle, s.b, **options)
     c = load_clip(bundle, s.c, **options)

@@ -40,6 +40,7 @@ class RenderRequest:
         palette: skeleton palette, ``"leftright"`` or ``"openpose"``.
         progress: show a progress bar.
         character: the character file of a DeepMimic motion file (None: found beside it, else the standard).
+        rig_map: the rig map file of a BVH whose joint names do not tell the body points.
         input_fps: the input's true frame rate, for files that state none (joint arrays) or a wrong one.
 
     A joint array of K clips ``(K, T, J, 3)`` renders as one grid of K cells (skeleton style, one camera).
@@ -55,6 +56,7 @@ class RenderRequest:
     palette: str = "leftright"
     progress: bool = False
     character: str | None = None
+    rig_map: str | None = None
     input_fps: float | None = None
 
 
@@ -228,7 +230,7 @@ def render_file(request: RenderRequest) -> RenderResult:
         motion = futures[0]
         frames = iter_futures_grid(futures, size=size, palette=request.palette)
     else:
-        motion = load_motion(src, fps=input_fps, character=request.character)
+        motion = load_motion(src, fps=input_fps, character=request.character, rig_map=request.rig_map)
         if request.fps is not None:
             motion = resample_motion(motion, float(request.fps))
         if request.start != 0 or request.frames is not None:

@@ -35,10 +35,12 @@ STYLES = ("skeleton", "mesh")
 
 
 def load_clip_for(bundle: ModelBundle, path: str | Path, *, character: str | Path | None = None,
+                  rig_map: str | Path | None = None,
                   fps: float | None = None) -> np.ndarray:
     """The clip at ``path`` as the model's data at its frame rate (:func:`motion2video.stages.clips.load_clip`):
-    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models. ``character`` and ``fps`` as in ``load_clip``."""
-    return load_clip(bundle, path, character=character, fps=fps).data
+    (T, 17, 3) world joints for body models, (T, 58) face parameters for face models. ``character``, ``rig_map``
+    and ``fps`` as in ``load_clip``."""
+    return load_clip(bundle, path, character=character, fps=fps, rig_map=rig_map).data
 
 
 def render_forecast(fc: Forecast, *, style: str = "skeleton", size: int = 256) -> np.ndarray:
@@ -111,7 +113,7 @@ class SampleSettings:
         rigid_bones: every future frame keeps the last observed frame's bone lengths.
         npz: also write observed + futures here (:func:`save_forecast_npz`), or None.
         style: ``skeleton`` or ``mesh`` (3D body models). size: cell width and height in pixels.
-        character, input_fps: how the clip is read (:func:`motion2video.stages.clips.load_clip`).
+        character, input_fps, rig_map: how the clip is read (:func:`motion2video.stages.clips.load_clip`).
         bvh: also write each future (after the observed frames) as a BVH file into this folder, or None.
     """
 
@@ -129,6 +131,7 @@ class SampleSettings:
     size: int = 256
     character: str | Path | None = None
     input_fps: float | None = None
+    rig_map: str | Path | None = None
     bvh: str | Path | None = None
 
 
@@ -153,7 +156,7 @@ def sample_to_files(settings: SampleSettings) -> SampleFiles:
     out = check_video_and_npz(s.output, s.npz)
     bundle = baseline_bundle(s.model, DatasetConfig()) if s.model in BASELINES + RULES else load_model(s.model)
     check_bvh_output(s.bvh, bundle.data_config.layout)
-    clip = load_clip_for(bundle, s.input, character=s.character, fps=s.input_fps)
+    clip = load_clip_for(bundle, s.input, character=s.character, fps=s.input_fps, rig_map=s.rig_map)
     fc = forecast(bundle, clip, num_samples=s.samples, observed=s.observed, horizon=s.horizon, start=s.start,
                   seed=s.seed, source=s.input, rigid_bones=s.rigid_bones)
     chunks = iter_forecast(fc, style=s.style, size=s.size)

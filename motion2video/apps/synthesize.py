@@ -193,6 +193,7 @@ class SynthesisConfig:
         rigid_bones: give the futures the observed bone lengths (3D body models;
             :func:`motion2video.stages.sampling.forecast`).
         character: the character file of a DeepMimic input (None: found beside it, else the standard one).
+        rig_map: the rig map file of a BVH input whose joint names do not tell the body points.
         input_fps: the input's true frame rate when the file states none (joint arrays) or a wrong one.
         crop_person: cut the reference photo to a square around its person first
             (:func:`motion2video.stages.reference.crop_to_person`).
@@ -214,6 +215,7 @@ class SynthesisConfig:
     size: int | None = None
     rigid_bones: bool = False
     character: str | None = None
+    rig_map: str | None = None
     input_fps: float | None = None
     crop_person: bool = False
     fit_view: bool = False
@@ -335,7 +337,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     if size != gen_config.image_size and (kind not in ("warp", "mesh") or domain == "face"):
         raise InputError(f"--size {size} needs a body warp or mesh frame model (this {domain} generator makes "
                          f"{gen_config.image_size} px frames only)")
-    clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps).data
+    clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps,
+                     rig_map=config.rig_map).data
     ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose,
                          crop_person=config.crop_person)
     timings["load"] = time.perf_counter() - t0

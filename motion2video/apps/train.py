@@ -29,7 +29,8 @@ class MotionTrainingSettings:
 
     Attributes:
         model: registered model name (``mtvae-add``, ``dlow``, ...).
-        data: folder of BVH files (with manifest.csv) or face captures, or one file.
+        data: folder of BVH files (with manifest.csv) or face captures, or one file; or several mocap folders
+            joined into one corpus.
         output: the final checkpoint (``.safetensors``).
         config: a JSON object, inline or a file's path: ``{"model": .., "data": .., "train": ..}``.
         base: ``dlow`` only: the trained checkpoint (path or shipped name) DLow samples from.
@@ -41,7 +42,7 @@ class MotionTrainingSettings:
     """
 
     model: str
-    data: str | Path
+    data: str | Path | tuple[str | Path, ...]
     output: str | Path
     config: str | None = None
     base: str | None = None
@@ -84,7 +85,8 @@ def detect_layout(data: str | Path) -> str:
     path = Path(data)
     if path.is_file():
         return "face" if path.suffix.lower() == ".csv" else "body3d"
-    if path.is_dir() and not any(path.rglob("*.bvh")) and any(path.rglob("*.csv")):
+    if (path.is_dir() and not any(path.rglob("*.bvh")) and not any(path.rglob("*.bvh.xz"))
+            and any(path.rglob("*.csv"))):
         return "face"
     return "body3d"
 
@@ -151,7 +153,9 @@ def train_motion_model(settings: MotionTrainingSettings, *,
     data_values = dict(cfg["data"])
     if settings.layout != "auto":
         data_values["layout"] = settings.layout
-    data_values.setdefault("layout", detect_layout(settings.data))
+    folders = [settings.data] if isinstance(settings.data, (str, Path)) else list(settings.data)
+    data = folders[0] if len(folders) == 1 else folders
+    data_values.setdefault("layout", detect_layout(folders[0]))
     data_config = _dataclass(DatasetConfig, data_values, "data")
     train_values = dict(cfg["train"])
     if settings.steps is not None:
@@ -161,10 +165,10 @@ def train_motion_model(settings: MotionTrainingSettings, *,
     train_config = _dataclass(TrainConfig, train_values, "train")
     base_meta = cfg.get("base_meta")
     if base_meta is not None:  # DLow: the base model's split and statistics, so its decoder sees its own units
-        dataset = build_dataset(settings.data, data_config, split=base_meta.split, stats=base_meta.stats,
+        dataset = build_dataset(data, data_config, split=base_meta.split, stats=base_meta.stats,
                                 character=settings.character)
     else:
-        dataset = build_dataset(settings.data, data_config, character=settings.character)
+        dataset = build_dataset(data, data_config, character=settings.character)
     note(dataset_line(dataset))
     return train_model(model_name=name, model_config=cfg["model"], dataset=dataset, config=train_config,
                        out=settings.output, resume=settings.resume, progress=settings.progress,

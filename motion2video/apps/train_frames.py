@@ -9,13 +9,24 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from motion2video.core.errors import InputError
+from motion2video.data.licences import licence_record
+from motion2video.formats.manifest import read_manifest
 from motion2video.frames.data import default_cache_dir, load_or_generate, structure_channels
 from motion2video.frames.mesh_warp import MeshWarpConfig
-from motion2video.frames.specs import default_spec
+from motion2video.frames.specs import default_data_root, default_spec
 from motion2video.frames.training import TrainFramesConfig, TrainFramesResult, train_frames
 from motion2video.frames.warp import WarpGeneratorConfig
 
 MODEL_KINDS = ("analogy", "warp", "mesh")
+
+
+def sequence_licences(seqs, *, data_root: str | Path | None) -> dict:
+    """The licence record (:func:`motion2video.data.licences.licence_record`) of the captures that posed or
+    animated the training sequences, from the ``manifest.csv`` of ``mocap/`` (bodies) or ``face/`` (faces)."""
+    root = Path(data_root) if data_root is not None else default_data_root()
+    manifest_path = root / ("mocap" if seqs.domain == "body" else "face") / "manifest.csv"
+    entries = read_manifest(manifest_path) if manifest_path.is_file() else {}
+    return licence_record([entries[c].licence if c in entries else None for c in seqs.summary()["clips"]])
 
 
 @dataclass(frozen=True)
@@ -128,4 +139,6 @@ def train_frame_generator(settings: FrameTrainingSettings) -> TrainFramesResult:
                                model_kind=s.model_kind, edge_weight=edge, person_weight=person,
                                silhouette_erosion=s.silhouette_erosion)
     return train_frames(seqs, output=output, config=config, model_config=model_config, resume=s.resume,
-                        progress=s.progress, init_from=s.init_from, extra_metadata={"dataset_spec": spec.key()})
+                        progress=s.progress, init_from=s.init_from,
+                        extra_metadata={"dataset_spec": spec.key(),
+                                        "licences": sequence_licences(seqs, data_root=s.data_root)})

@@ -379,7 +379,7 @@ class TransferSettings:
             its pose file, cutting it to its person, zooming it out to keep every body in view, the frame generator.
         seed: the flow samples' seed. size: cell width and height in pixels.
         npz: also write source, re-enactments and latents here, or None.
-        character, input_fps: how the clips are read (:func:`motion2video.stages.clips.load_clip`).
+        character, input_fps, rig_map: how the clips are read (:func:`motion2video.stages.clips.load_clip`).
         bvh: also write each re-enactment as a BVH file into this folder, or None.
     """
 
@@ -403,6 +403,7 @@ class TransferSettings:
     npz: str | Path | None = None
     character: str | Path | None = None
     input_fps: float | None = None
+    rig_map: str | Path | None = None
     bvh: str | Path | None = None
 
 
@@ -448,9 +449,10 @@ def transfer_to_files(settings: TransferSettings, *, note: Callable[[str], None]
     elif s.reference_pose or s.frame_model or s.crop_person or s.fit_view:
         raise InputError("--frame-model, --reference-pose, --crop-person and --fit-view are only used with --style "
                          "frames")
-    target = load_clip(bundle, s.target, character=s.character, fps=s.input_fps)
+    target = load_clip(bundle, s.target, character=s.character, fps=s.input_fps, rig_map=s.rig_map)
     if s.behavior is not None:
-        source = load_clip(bundle, s.behavior, character=s.character, fps=s.input_fps)
+        source = load_clip(bundle, s.behavior, character=s.character, fps=s.input_fps,
+                           rig_map=s.rig_map)
         result = transfer_behavior(bundle, source, target, source_start=s.behavior_start,
                                    target_frame=s.target_frame, horizon=s.horizon,
                                    adapt_steps=ADAPT_STEPS if s.adapt_steps is None else s.adapt_steps)

@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     settings = AnalogySettings(model=args.model, a=args.a, b=args.b, c=args.c, output=args.output,
                                a_start=args.a_start, b_start=args.b_start, c_start=args.c_start,
                                observed=args.observed, horizon=args.horizon, style=args.style, size=args.size,
-                               npz=args.npz, character=args.character, input_fps=args.input_fps, bvh=args.bvh)
+                               npz=args.npz, character=args.character, input_fps=args.input_fps,
+                               rig_map=args.rig_map, bvh=args.bvh)
     files = analogy_to_files(settings)
     result = files.result
     print(f"wrote {files.video} (A:B::C:D with {files.label}; {result.observed} observed + "

@@ -38,9 +38,17 @@ INPUT_FPS_HELP = ("the input's true frame rate, for files that state none or a w
                   "20 fps for (T, 22, 3) SMPL/HumanML3D joints, 50 for H36M-17 ones, by default)")
 
 
+RIG_MAP_HELP = ("BVH files of a rig whose joint names do not tell the body points: a JSON file naming them, body point "
+                "-> joint name, e.g. {\"left_hip\": \"Thigh.L\", \"head\": \"Head:end\"} (points: pelvis, right_hip, "
+                "right_knee, right_ankle, left_hip, left_knee, left_ankle, spine, thorax, neck, head, left_shoulder, "
+                "left_elbow, left_wrist, right_shoulder, right_elbow, right_wrist; the rest still come from the names)")
+
+
 def add_motion_input_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--character FILE`` and ``--input-fps FPS``: how the commands that read motion files read them."""
+    """``--character FILE``, ``--rig-map FILE`` and ``--input-fps FPS``: how the commands that read motion files
+    read them."""
     parser.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
+    parser.add_argument("--rig-map", metavar="FILE", default=None, help=RIG_MAP_HELP)
     # Where --fps means nothing else (every command but render, whose --fps is the output rate), it is another
     # spelling of --input-fps: an OpenPose folder's true rate is what users pass as --fps.
     names = ["--input-fps"] + (["--fps"] if "--fps" not in parser._option_string_actions else [])

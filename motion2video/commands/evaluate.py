@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from motion2video.commands.common import CHARACTER_HELP, add_command, add_threads_argument, check_at_least, set_threads
-from motion2video.evaluation.forecasting import ForecastEvalSettings, evaluate_models
+from motion2video.evaluation.forecasting import ForecastEvalSettings, evaluate_models, rows_table
 
 DESCRIPTION = """\
 Evaluate a motion model against the three data-driven baselines on the same windows: APD, ADE, FDE, MMADE,
@@ -26,11 +26,20 @@ examples:
   motion2video evaluate --model runs/cvae.safetensors --data ../shared/data/mocap/cmu/13_10.bvh
   motion2video evaluate --model mtvae-add-face --data ../shared/data/face/livelinkface/S07-001.csv
   motion2video evaluate --model mixture-periodic --model mirror-periodic --data ../shared/data/mocap
+  motion2video evaluate --model mixture-periodic --data ../shared/data/mocap --data ../shared/data/bandai \
+      --split subjects --stride 64
 
 Windows: every (observed + future)-frame window, --stride frames apart, of the clips of --split: by default
 the checkpoint's held-out test clips plus any clip it has never seen whose subject it did not train or
 validate on, and a single file given as --data whole; --recorded-only keeps the recorded test clips only.
 Metrics (best of K for ADE/FDE) on root-relative poses, metres (face models: parameter units).
+
+--split subjects tests what training covers, on the corpus of every --data folder: the test clips are whole
+performers (the corpus's test subjects and one Bandai-Namco performer per set, skeleton groups 1B and 2C),
+whatever split the checkpoints recorded (a checkpoint that trained on one of them is refused). Per action and
+macro over the actions the split's training clips perform; each test action no training clip performs (Indian
+dance) in its own "unseen action" row outside the macro; and a cross-dataset row, the macro over the held-out
+Bandai performers' actions, marked for each model whether it trained on any Bandai-Namco clip.
 """
 
 
@@ -41,14 +50,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "(they must share the layout and data settings; the first one's split picks the windows); "
                    "mirror-periodic, a rule with no weights, is scored in the first trained model's windows and "
                    "statistics (3D body models)")
-    p.add_argument("--data", required=True, help="BVH folder or motion file (face models: .csv / .npz captures)")
+    p.add_argument("--data", required=True, action="append",
+                   help="BVH folder or motion file (face models: .csv / .npz captures); repeat to join mocap folders "
+                   "into one corpus (--split subjects: e.g. ../shared/data/mocap and ../shared/data/bandai)")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("--samples", type=int, default=50, help="K futures per window (default 50)")
     p.add_argument("--json", default=None, help="write the results as JSON here")
     p.add_argument("--plot", default=None, help="draw ADE per future frame of every model and baseline into this PNG")
     p.add_argument("--stride", type=int, default=16, help="frames between evaluated windows (default 16)")
-    p.add_argument("--split", choices=("test", "val", "train", "all"), default="test",
-                   help="which clips (default test: held-out clips and clips the checkpoint never saw)")
+    p.add_argument("--split", choices=("test", "val", "train", "all", "subjects"), default="test",
+                   help="which clips (default test: held-out clips and clips the checkpoint never saw; subjects: "
+                   "whole held-out performers, per action with unseen-action and cross-dataset rows, see above)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     p.add_argument("--recorded-only", action="store_true",
                    help="only the clips the checkpoint's recorded split names (reproduces results measured on "
@@ -68,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     check_at_least("--samples", args.samples)
     check_at_least("--stride", args.stride)
-    settings = ForecastEvalSettings(models=tuple(args.model), data=args.data, samples=args.samples,
+    settings = ForecastEvalSettings(models=tuple(args.model), data=tuple(args.data), samples=args.samples,
                                     stride=args.stride, split=args.split, seed=args.seed,
                                     rigid_bones=args.rigid_bones, raw_futures=args.raw_futures,
                                     recorded_only=args.recorded_only, extended=args.extended, json=args.json,
@@ -78,6 +90,13 @@ def run(args: argparse.Namespace) -> int:
     columns = ("ade", "fde", "mmade", "mmfde", "apd") + (("s_mse", "r_mse", "cll") if args.extended else ())
     print(f"{evaluation.windows} windows from {len(result.protocol['clips'])} clip(s), best of {args.samples}, "
           f"units: {result.protocol['units']}")
+    if evaluation.subjects is not None:
+        print(f"\nsubject split: actions in training: {', '.join(evaluation.subjects.train_actions)}")
+        print(rows_table(evaluation.subjects.rows, ("ade", "fde", "ade_zv", "fde_zv", "apd"),
+                         first="row (windows) method"))
+        if evaluation.json is not None:
+            print(f"wrote {evaluation.json}")
+        return 0
     print(result.table(columns))
     actions = result.protocol["actions"]
     print(f"\nmacro average over {len(actions)} action(s) (each action counts once):")
@@ -88,3 +107,4 @@ def run(args: argparse.Namespace) -> int:
         if out is not None:
             print(f"wrote {out}")
     return 0
+

@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         palette=args.palette,
         progress=not args.no_progress,
         character=args.character,
+        rig_map=args.rig_map,
         input_fps=args.input_fps,
     )
     result = render_file(request)

@@ -8,6 +8,7 @@ from motion2video.apps.sample import STYLES, SampleSettings, sample_to_files
 from motion2video.commands.common import (RIGID_BONES_HELP, add_bvh_argument, add_command,
                                           add_motion_input_arguments, add_threads_argument, check_at_least,
                                           set_threads)
+from motion2video.data.licences import licence_table
 
 DESCRIPTION = """\
 Observe the first --observed frames of a clip (from --start), sample K futures from a checkpoint or shipped
@@ -42,7 +43,8 @@ shipped motion models (model cards in motion2video/weights/NAME.md):
   mixer-cvae      3D body: that CVAE, sampled from its prior
   mtvae-add-2d    2D keypoints in a virtual camera
   mtvae-add-face  ARKit face coefficients + head pose
-"""
+
+""" + licence_table()
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -72,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
     settings = SampleSettings(model=args.model, input=args.input, output=args.output, samples=args.samples,
                               observed=args.observed, horizon=args.horizon, start=args.start, seed=args.seed,
                               rigid_bones=args.rigid_bones, npz=args.npz, style=args.style, size=args.size,
-                              character=args.character, input_fps=args.input_fps, bvh=args.bvh)
+                              character=args.character, input_fps=args.input_fps, rig_map=args.rig_map,
+                              bvh=args.bvh)
     result = sample_to_files(settings)
     fc = result.forecast
     print(f"wrote {result.video} ({args.samples} futures of {fc.futures.shape[1]} frames after "

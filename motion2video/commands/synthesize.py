@@ -9,6 +9,7 @@ from motion2video.apps.synthesize import SynthesisConfig, synthesize
 from motion2video.commands.common import (RIGID_BONES_HELP, add_command, add_motion_input_arguments,
                                           add_reference_photo_arguments, check_at_least)
 from motion2video.core.errors import InputError
+from motion2video.data.licences import licence_table
 
 DESCRIPTION = """\
 Observe the first --observed frames of a clip, sample K futures with a motion model, render their structure
@@ -39,7 +40,8 @@ note), a picture with nobody in it is refused (exit 2), and a person cut by the 
 picture is extended, its edge repeated, where the joints lie beyond it). A face reference without a pose file is
 assumed to show the first observed pose. A video as the
 observed clip has its person's pose estimated (cached in ~/.cache/motion2video/pose by the file's hash).
-"""
+
+""" + licence_table()
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -81,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     config = SynthesisConfig(samples=args.samples, observed=args.observed, horizon=args.horizon, start=args.start,
                              seed=args.seed, batch_size=args.batch_size, generator_threads=args.threads,
                              size=args.size, rigid_bones=args.rigid_bones, character=args.character,
-                             input_fps=args.input_fps, crop_person=args.crop_person, fit_view=args.fit_view)
+                             rig_map=args.rig_map, input_fps=args.input_fps, crop_person=args.crop_person, fit_view=args.fit_view)
     result = synthesize(motion_model=args.motion_model, frame_model=args.frame_model, input_path=args.input,
                         reference=args.reference, output=args.output, config=config,
                         reference_pose=args.reference_pose)

@@ -32,7 +32,9 @@ and "train" (TrainConfig: batch_size, lr, weight_decay, grad_clip, checkpoint_ev
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "train", run, description=DESCRIPTION, examples=EXAMPLES)
     p.add_argument("--model", required=True, help="registered model name, e.g. mtvae-add")
-    p.add_argument("--data", required=True, help="folder of BVH files (with manifest.csv), or face captures")
+    p.add_argument("--data", required=True, action="append",
+                   help="folder of BVH files (with manifest.csv), or face captures; repeat to join mocap folders into "
+                   "one corpus (e.g. --data ../shared/data/mocap --data ../shared/data/bandai)")
     p.add_argument("--character", metavar="FILE", default=None, help=CHARACTER_HELP)
     p.add_argument("-o", "--output", required=True, help="final checkpoint (.safetensors)")
     p.add_argument("--base", default=None,
@@ -52,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     set_threads(args.threads)
     if args.steps is not None:
         check_at_least("--steps", args.steps)
-    settings = MotionTrainingSettings(model=args.model, data=args.data, output=args.output, config=args.config,
+    settings = MotionTrainingSettings(model=args.model, data=tuple(args.data), output=args.output, config=args.config,
                                       base=args.base, steps=args.steps, seed=args.seed, layout=args.layout,
                                       resume=args.resume, progress=not args.no_progress, character=args.character)
     result = train_motion_model(settings)

@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         adapt_steps=args.adapt_steps, style=args.style, reference=args.reference,
         reference_pose=args.reference_pose, crop_person=args.crop_person, fit_view=args.fit_view,
         frame_model=args.frame_model, seed=args.seed, size=args.size, npz=args.npz, character=args.character,
-        input_fps=args.input_fps, bvh=args.bvh)
+        input_fps=args.input_fps, rig_map=args.rig_map, bvh=args.bvh)
     files = transfer_to_files(settings,
                               note=lambda line: print(f"motion2video transfer: note: {line}", file=sys.stderr))
     result = files.result

@@ -15,6 +15,7 @@ joint's origin sits at each canonical joint; ``None`` entries are derived by :fu
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -467,3 +468,116 @@ def h36m_body_points(raw: np.ndarray, *, head_direction: np.ndarray | None = Non
     j[:, NECK] = thorax + u * (leg * H36M_BONES_MM["thorax_nose"] / H36M_LEG_MM)
     j[:, HEAD] = j[:, NECK] + u * (leg * H36M_BONES_MM["nose_head"] / H36M_LEG_MM)
     return j
+
+
+# --- any humanoid rig, from its joint names ------------------------------------------------------------
+# A rig outside RIG_JOINT_MAPS is mapped by the names its joints carry in the common conventions
+# (``LeftUpLeg``, ``mixamorig:LeftUpLeg``, ``UpperLeg_L``, ``thigh_l``, ``L_Hip``, ``Bip01 L Thigh``, ``lThigh``):
+# a name splits into a side (left / right / none) and a part; each body point takes the first part of its
+# list that a joint of that side carries. Earlier parts win: a rig with both ``LeftShoulder`` (the clavicle)
+# and ``LeftArm`` (the shoulder joint) maps the shoulder to ``LeftArm``.
+LIMB_PARTS: dict[str, tuple[str, ...]] = {
+    "hip": ("upleg", "upperleg", "thigh", "femur", "hip"),
+    "knee": ("lowerleg", "lowleg", "shin", "calf", "knee", "tibia", "leg"),
+    "ankle": ("foot", "ankle"),
+    "shoulder": ("upperarm", "uparm", "arm", "humerus", "shoulder", "shldr"),
+    "elbow": ("forearm", "lowerarm", "lowarm", "elbow", "radius"),
+    "wrist": ("hand", "wrist"),
+}
+PELVIS_PARTS = ("hips", "pelvis", "hip")
+NECK_PARTS = ("neck", "neck1", "neck0", "neck01", "lowerneck")
+HEAD_PARTS = ("head",)
+HEAD_TOP_PARTS = ("headtop", "headend", "headtopend", "headnub")  # a child joint of the head at its top
+
+# Prefixes that say nothing about the body part: a namespace (``mixamorig:``), 3ds Max's ``Bip01 `` and
+# MotionBuilder's ``Character1_``.
+_NAME_PREFIX = re.compile(r"^(?:.*:)?(?:bip0*1[ _]*|character\d*_)?", re.IGNORECASE)
+_NAME_TOKEN = re.compile(r"[A-Z]+(?=[A-Z][a-z])|[A-Z]?[a-z]+|[A-Z]+|\d+")
+
+
+def joint_name_parts(name: str) -> tuple[str, str]:
+    """(side, part) of a joint name: side ``"left"``, ``"right"`` or ``""``; part the rest in lower case
+    without separators. ``"mixamorig:LeftUpLeg"`` -> ``("left", "upleg")``, ``"UpperLeg_L"`` -> ``("left",
+    "upperleg")``, ``"Bip01 R Forearm"`` -> ``("right", "forearm")``, ``"lThigh"`` -> ``("left", "thigh")``,
+    ``"Spine1"`` -> ``("", "spine1")``."""
+    tokens = [t.lower() for t in _NAME_TOKEN.findall(_NAME_PREFIX.sub("", name))]
+    side = ""
+    for word, which in (("left", "left"), ("right", "right")):
+        if word in tokens:
+            side = which
+            tokens.remove(word)
+    if not side and len(tokens) > 1:
+        for at in (0, -1):  # a one-letter side first or last: L_Hip, thigh_l, lThigh
+            if tokens[at] in ("l", "r"):
+                side = "left" if tokens[at] == "l" else "right"
+                del tokens[at]
+                break
+    return side, "".join(tokens)
+
+
+def _first_with_part(candidates: list[int], parts_of: list[tuple[str, str]], side: str,
+                     wanted: tuple[str, ...]) -> int | None:
+    for part in wanted:
+        for i in candidates:
+            if parts_of[i] == (side, part):
+                return i
+    return None
+
+
+def _path_up(node: int, parents: tuple[int, ...] | list[int]) -> list[int]:
+    """``node`` and its ancestors, nearest first."""
+    out = []
+    while node >= 0:
+        out.append(node)
+        node = parents[node]
+    return out
+
+
+def map_joint_names(names: tuple[str, ...] | list[str], parents: tuple[int, ...] | list[int]
+                    ) -> tuple[dict[str, str | tuple[str, str]], list[str]]:
+    """The canonical body points of a rig guessed from its joint names and its hierarchy.
+
+    Limbs and hips come from the names (:data:`LIMB_PARTS`, :func:`joint_name_parts`). ``spine`` is the first
+    joint above the pelvis on the way to the neck and ``thorax`` the last one below the neck (the midpoint of
+    pelvis and neck when none lies between); :func:`h36m_body_points` rebuilds both, using only the spine's
+    bend. ``neck`` -> ``head`` carries the head's direction: the head joint and the point past its top (a
+    ``HeadTop_End``-like joint or the head's end site) when the rig has one, else the neck and the head.
+
+    Args:
+        names: (N,) node names, end sites as ``"<joint>:end"``.
+        parents: (N,) parent index per node.
+    Returns:
+        (mapping body point -> node name or pair of node names, body points not found).
+    """
+    joints = [i for i, n in enumerate(names) if not n.endswith(":end")]
+    parts_of = [joint_name_parts(n) if not n.endswith(":end") else ("", "") for n in names]
+    found: dict[str, int] = {}
+    for side in ("right", "left"):
+        for point, parts in LIMB_PARTS.items():
+            i = _first_with_part(joints, parts_of, side, parts)
+            if i is not None:
+                found[f"{side}_{point}"] = i
+    for point, parts in (("pelvis", PELVIS_PARTS), ("neck", NECK_PARTS), ("head", HEAD_PARTS)):
+        i = _first_with_part(joints, parts_of, "", parts)
+        if i is not None:
+            found[point] = i
+    mapping: dict[str, str | tuple[str, str]] = {k: names[i] for k, i in found.items()}
+    if "head" in found and "neck" not in found and parents[found["head"]] >= 0:
+        found["neck"] = parents[found["head"]]
+        mapping["neck"] = names[found["neck"]]
+    if "head" in found:
+        head = found["head"]
+        tops = [i for i, p in enumerate(parents) if p == head
+                and (names[i] == f"{names[head]}:end" or parts_of[i][1] in HEAD_TOP_PARTS)]
+        if tops:
+            mapping["neck"], mapping["head"] = names[head], names[tops[0]]
+    if "pelvis" in found and "neck" in found:
+        up = _path_up(found["neck"], parents)
+        if found["pelvis"] in up:
+            between = up[1:up.index(found["pelvis"])]  # nearest the neck first
+            if between:
+                mapping["spine"], mapping["thorax"] = names[between[-1]], names[between[0]]
+            else:
+                mapping["spine"] = mapping["thorax"] = (names[found["pelvis"]], names[found["neck"]])
+    missing = [j for j in H36M_17.joints if j not in mapping]
+    return mapping, missing

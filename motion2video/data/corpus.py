@@ -16,7 +16,13 @@ Groups (the unit a split never cuts), per folder of ``../shared/data/mocap``:
 - ``deepmimic/`` (BVH twins and ``txt/`` originals): one source, ``deepmimic`` (its capture subjects are
   not stated).
 - ``mass/``: one source, ``mass``.
+- Bandai-Namco's sets (files named ``dataset-1_*`` / ``dataset-2_*``, sources ``bandai-1`` / ``bandai-2``): the
+  manifest's ``skeleton_group`` (one set of bone offsets, most likely one actor): ``bandai-2C``.
 - any other name: the CMU rule when the file stem is ``NN_MM``, else the clip itself.
+
+Several folders form one corpus (:func:`corpus_rows`, ``--data A --data B``): the clips of every folder after
+the first are named with that folder's name in front (``bandai/bvh/dataset-2_walk_normal_001.bvh.xz``), so the
+first folder's names, and the splits checkpoints recorded with them, stay as they are.
 
 Trials (what a duplicate is): ``cmu NN_MM`` for the CMU files named or labelled with a trial, ``deepmimic
 <motion>`` for a DeepMimic BVH and its ``.txt`` original; other clips are their own trial. When one trial
@@ -45,6 +51,12 @@ from motion2video.formats.manifest import ManifestEntry
 # folder lacks these groups altogether (then make_split's hash rule fills the fractions).
 TEST_GROUPS = ("cmu-02", "cmu-131", "cmu-94", "cmu-140")
 VAL_GROUPS = ("cmu-03", "cmu-85", "cmu-bench:basketball", "mass")
+# The split that tests what training covers (``held_out="subjects"``, ``evaluate --split subjects``): the
+# corpus's test subjects plus one whole Bandai-Namco performer per set (skeleton groups 1B and 2C: every action
+# of each set is performed by its other large group too, so every held-out Bandai action is in training).
+SUBJECT_TEST_GROUPS = TEST_GROUPS + ("bandai-1B", "bandai-2C")
+BANDAI_SOURCES = ("bandai-1", "bandai-2")
+_BANDAI_FILE = re.compile(r"^dataset-([12])_")
 
 _STEM = re.compile(r"^(\d+)_(\d+)$")
 _LABEL_TRIAL = re.compile(r"\bCMU (\d+)_(\d+)\b")
@@ -56,7 +68,11 @@ SOURCE_PREFERENCE = ("cmu", "deepmimic", "cmu-bench", "deepmimic-cmu")
 
 def source_of(name: str) -> str:
     """The folder a clip comes from: ``cmu``, ``acrnn``, ``cmu-bench``, ``deepmimic-cmu``, ``deepmimic``,
-    ``deepmimic/txt``, ``mass`` (the first path part; ``deepmimic/txt`` kept apart), or ``other``."""
+    ``deepmimic/txt``, ``mass`` (the first path part; ``deepmimic/txt`` kept apart), ``bandai-1`` / ``bandai-2``
+    (Bandai-Namco's files ``dataset-1_*`` / ``dataset-2_*``, in any folder), or ``other``."""
+    bandai = _BANDAI_FILE.match(Path(name).name)
+    if bandai:
+        return f"bandai-{bandai.group(1)}"
     parts = Path(name).parts
     if len(parts) < 2:
         return "other"
@@ -72,16 +88,19 @@ def cmu_trial(name: str, label: str | None = None) -> tuple[int, int] | None:
     if source == "cmu-bench":
         match = _LABEL_TRIAL.search(label or "")
         return (int(match.group(1)), int(match.group(2))) if match else None
-    if source in ("acrnn", "deepmimic", "deepmimic/txt", "mass"):
+    if source in ("acrnn", "deepmimic", "deepmimic/txt", "mass") + BANDAI_SOURCES:
         return None
     match = _STEM.match(Path(name).stem)
     return (int(match.group(1)), int(match.group(2))) if match else None
 
 
-def clip_group(name: str, label: str | None = None) -> str:
+def clip_group(name: str, label: str | None = None, manifest_group: str | None = None) -> str:
     """The split group of a clip (module docstring): ``cmu-08``, ``cmu-60-61``, ``cmu-bench:soccer``,
-    ``deepmimic``, ``mass``, or the name itself."""
+    ``deepmimic``, ``mass``, ``bandai-2C``, or the name itself. ``manifest_group``: the manifest's
+    ``skeleton_group`` column (the performer of a source that names none per clip)."""
     source = source_of(name)
+    if manifest_group:
+        return f"bandai-{manifest_group}" if source in BANDAI_SOURCES else f"{source}:{manifest_group}"
     trial = cmu_trial(name, label)
     if trial is not None:
         return f"cmu-{trial[0]:02d}"
@@ -184,6 +203,10 @@ ACTION_KEYWORDS = (
     ("soccer", "soccer"), ("jump", "jump"), ("hop", "jump"), ("leap", "jump"), ("run", "run"),
     ("walk", "walk"), ("dance", "dance"), ("pirouette", "dance"), ("kick", "kick"), ("punch", "punch"),
     ("fall", "fall"), ("slip", "fall"), ("crawl", "crawl"), ("roll", "roll"), ("spin", "spin"),
+    # Bandai-Namco's actions: walks of every direction and turn are walks, a dash is a run; waves ("bye",
+    # "byebye", "wave-left-hand") are one class, raised hands another; bow, guide, call, respond, slash keep
+    # their names.
+    ("dash", "run"), ("wave", "wave"), ("bye", "wave"), ("raise-up", "raise hands"),
 )
 
 
@@ -200,6 +223,18 @@ def action_class(label: str | None) -> str | None:
         if key in head:
             return action
     return head.split()[0].split("_")[0]
+
+
+def corpus_rows(folders: list[str | Path], *, drop_duplicates: bool = True) -> list[tuple[Path, "CorpusRow"]]:
+    """The clips of one or more mocap folders as one corpus: (file path, row) per clip, the row's name with
+    the folder's name in front for every folder after the first (module docstring)."""
+    out = []
+    for i, folder in enumerate(folders):
+        folder = Path(folder)
+        prefix = "" if i == 0 else f"{folder.name}/"
+        for row in corpus_index(folder, drop_duplicates=drop_duplicates).rows:
+            out.append((folder / row.name, CorpusRow(prefix + row.name, row.entry, row.group)))
+    return out
 
 
 @dataclass(frozen=True)
@@ -238,7 +273,8 @@ def corpus_index(folder: str | Path, *, drop_duplicates: bool = True) -> CorpusI
 
     entries = mocap_files(folder)
     labelled = [(name, entry.label if entry is not None else None) for name, entry in entries.items()]
-    groups = {name: clip_group(name, label) for name, label in labelled}
+    groups = {name: clip_group(name, label, entries[name].group if entries[name] is not None else None)
+              for name, label in labelled}
     linked = link_groups(list(groups.items()))
     dropped = duplicates(labelled) if drop_duplicates else {}
     rows = tuple(CorpusRow(name, entry, linked[groups[name]]) for name, entry in entries.items()

@@ -23,9 +23,10 @@ def _minutes(frames: float, fps: float) -> float:
     return frames / fps / 60.0
 
 
-def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
+def corpus_stats(folder: str | Path | list, config: DatasetConfig = DatasetConfig(), *,
                  character: str | Path | None = None) -> dict:
-    """Minutes per source, action and split of the corpus ``build_dataset(folder, config)`` trains on.
+    """Minutes per source, action and split of the corpus ``build_dataset(folder, config)`` trains on
+    (``folder``: one mocap folder or a list of them, :func:`motion2video.data.corpus.corpus_rows`).
 
     Returns:
         ``{"config": {...}, "total": {...}, "per_split": {split: {...}}, "per_source": {source: {...}},
@@ -33,8 +34,14 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
         "dropped": {copy: kept}}``. Minutes are clip frames at ``config.fps`` / fps / 60; windows count
         every ``config.length``-frame window ``config.stride`` frames apart.
     """
-    index = corpus_index(folder, drop_duplicates=config.drop_duplicates)
-    dataset = build_dataset(folder, config, character=character)
+    folders = list(folder) if isinstance(folder, (list, tuple)) else [folder]
+    entries, dropped = {}, {}
+    for i, one in enumerate(folders):
+        prefix = "" if i == 0 else f"{Path(one).name}/"
+        index = corpus_index(one, drop_duplicates=config.drop_duplicates)
+        entries.update({prefix + k: v for k, v in index.entries.items()})
+        dropped.update({prefix + k: prefix + v for k, v in index.dropped.items()})
+    dataset = build_dataset(folders[0] if len(folders) == 1 else folders, config, character=character)
     fps = config.fps
     split_of = {name: s for s in SPLITS for name in dataset.split.names(s)}
     per_split = {s: {"clips": 0, "minutes": 0.0, "windows": 0, "groups": 0} for s in SPLITS}
@@ -57,11 +64,11 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
         per_split[s]["minutes"] += minutes
         per_split[s]["windows"] += len(sliding_starts(clip.num_frames, length=config.length, stride=config.stride))
         groups[s].add(clip.group)
-    for name, entry in index.entries.items():
+    for name, entry in entries.items():
         source = per_source.setdefault(source_of(name), {"files": 0, "clips": 0, "minutes": 0.0,
                                                           "dropped_copies": 0, "dropped_minutes": 0.0})
         source["files"] += 1
-        if name in index.dropped:
+        if name in dropped:
             source["dropped_copies"] += 1
             if entry is not None and entry.frames and entry.fps:
                 source["dropped_minutes"] += _minutes(entry.frames, entry.fps)
@@ -69,16 +76,16 @@ def corpus_stats(folder: str | Path, config: DatasetConfig = DatasetConfig(), *,
         per_split[s]["groups"] = len(groups[s])
     total_minutes = sum(v["minutes"] for v in per_split.values())
     return {
-        "data": str(folder),
+        "data": " + ".join(str(f) for f in folders),
         "config": {"fps": fps, "observed": config.observed, "future": config.future, "stride": config.stride,
                    "held_out": config.held_out, "drop_duplicates": config.drop_duplicates},
-        "total": {"files": len(index.entries), "clips": len(dataset.clips), "minutes": total_minutes,
-                  "dropped_copies": len(index.dropped)},
+        "total": {"files": len(entries), "clips": len(dataset.clips), "minutes": total_minutes,
+                  "dropped_copies": len(dropped)},
         "per_split": per_split,
         "per_source": dict(sorted(per_source.items(), key=lambda kv: -kv[1]["minutes"])),
         "per_action": dict(sorted(per_action.items(), key=lambda kv: -kv[1]["total"])),
         "groups": {s: sorted(groups[s]) for s in SPLITS},
-        "dropped": dict(index.dropped),
+        "dropped": dropped,
     }
 
 
@@ -114,14 +121,16 @@ class CorpusStatsSettings:
     """What ``motion2video corpus-stats`` reports on.
 
     Attributes:
-        data: the mocap folder (with manifest.csv).
+        data: the mocap folder (with manifest.csv), or several joined into one corpus (every folder's clips after
+            the first named with its folder's name in front).
         json: also write the statistics as JSON here (None: no file).
-        held_out: the split rule, ``corpus`` (the pinned held-out subjects and sources) or ``hash``.
+        held_out: the split rule, ``corpus`` (the pinned held-out subjects and sources), ``hash``, or ``subjects``
+            (also one Bandai-Namco performer per set).
         keep_duplicates: keep every copy of a trial found in several folders.
         character: DeepMimic motion files' character file.
     """
 
-    data: str | Path
+    data: str | Path | tuple[str | Path, ...]
     json: str | Path | None = None
     held_out: str = "corpus"
     keep_duplicates: bool = False
@@ -141,9 +150,11 @@ def corpus_report(settings: CorpusStatsSettings) -> CorpusReport:
     """The statistics of ``settings.data`` under the default data config with the settings' split rule and
     duplicate handling; written as JSON when ``settings.json`` is given. InputError for a missing folder or a
     JSON path whose folder does not exist, before any clip is read."""
-    data = Path(settings.data)
-    if not data.is_dir():
-        raise InputError("not a folder (corpus-stats takes a mocap folder)", data)
+    folders = [settings.data] if isinstance(settings.data, (str, Path)) else list(settings.data)
+    for folder in folders:
+        if not Path(folder).is_dir():
+            raise InputError("not a folder (corpus-stats takes mocap folders)", folder)
+    data = Path(folders[0]) if len(folders) == 1 else folders
     if settings.json is not None and not Path(settings.json).parent.exists():
         raise InputError("the folder for --json does not exist", settings.json)
     config = DatasetConfig(held_out=settings.held_out, drop_duplicates=not settings.keep_duplicates)

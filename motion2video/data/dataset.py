@@ -40,9 +40,17 @@ from pathlib import Path
 import numpy as np
 
 from motion2video.data import windows as W
-from motion2video.data.corpus import action_class, corpus_index, pinned_split, source_of
+from motion2video.data.corpus import (
+    SUBJECT_TEST_GROUPS,
+    TEST_GROUPS,
+    action_class,
+    corpus_rows,
+    pinned_split,
+    source_of,
+)
 from motion2video.data.corpus import clip_group as corpus_group
 from motion2video.data.face_data import face_files, load_face_clip, mirror_face
+from motion2video.data.licences import licence_record
 from motion2video.core.errors import InputError
 from motion2video.core.motion import FaceMotion, Motion
 from motion2video.core.skeletons import H36M_17
@@ -52,6 +60,7 @@ DEFAULT_FACE = Path(__file__).resolve().parents[3] / "shared" / "data" / "face"
 BODY_SUFFIXES = (".bvh", ".npz", ".json")
 MULTIMODAL_SOURCE = "procedural:multimodal"  # --data value naming the known-answer benchmark
 MULTIMODAL_CLIPS = 2000
+HELD_OUT_RULES = ("corpus", "hash", "subjects")
 
 
 @dataclass(frozen=True)
@@ -73,7 +82,9 @@ class DatasetConfig:
         split_seed: seed of the deterministic split.
         min_std: floor of the normalisation standard deviation.
         held_out: ``"corpus"``: the corpus's pinned held-out groups when the clips hold any of them, else
-            the hash rule; ``"hash"``: the hash rule only (module docstring).
+            the hash rule; ``"hash"``: the hash rule only (module docstring); ``"subjects"``: as ``"corpus"``
+            with one Bandai-Namco performer per set held out too
+            (:data:`motion2video.data.corpus.SUBJECT_TEST_GROUPS`).
         drop_duplicates: keep one copy of a trial found in several folders of a mocap folder
             (:func:`motion2video.data.corpus.duplicates`).
         face_head_pose: ``"procedural"``: a face capture whose head pose is all zero (Live Link Face takes
@@ -117,8 +128,8 @@ class DatasetConfig:
             raise ValueError(f"stride must be >= 1, got {self.stride}")
         if not 0.0 <= self.speed < 1.0:
             raise ValueError(f"speed must be in [0, 1), got {self.speed}")
-        if self.held_out not in ("corpus", "hash"):
-            raise ValueError(f"held_out must be 'corpus' or 'hash', got {self.held_out!r}")
+        if self.held_out not in HELD_OUT_RULES:
+            raise ValueError(f"held_out must be one of {', '.join(HELD_OUT_RULES)}, got {self.held_out!r}")
         if self.face_head_pose not in ("procedural", "zero"):
             raise ValueError(f"face_head_pose must be 'procedural' or 'zero', got {self.face_head_pose!r}")
 
@@ -152,12 +163,14 @@ class Clip:
         label: coarse action class (``"walk"``, :func:`motion2video.data.corpus.action_class`), or None.
         group: split unit (:func:`motion2video.data.corpus.clip_group`, linked by
             :func:`motion2video.data.corpus.link_groups` in a mocap folder).
+        licence: the file's licence (its manifest row's), None when unknown.
     """
 
     name: str
     data: np.ndarray
     label: str | None
     group: str
+    licence: str | None = None
 
     @property
     def num_frames(self) -> int:
@@ -434,14 +447,16 @@ def clip_group(name: str, label: str | None = None) -> str:
 
 
 def make_split(clips: list[Clip], *, val_fraction: float, test_fraction: float, seed: int,
-               pinned: bool = True) -> Split:
-    """Deterministic split by group (see the module docstring); ``pinned=False`` is the hash rule only."""
+               pinned: bool = True, test_groups: tuple[str, ...] = TEST_GROUPS) -> Split:
+    """Deterministic split by group (see the module docstring); ``pinned=False`` is the hash rule only;
+    ``test_groups``: the groups pinned to test (:data:`~motion2video.data.corpus.SUBJECT_TEST_GROUPS` for the
+    ``"subjects"`` rule)."""
     frames: dict[str, int] = {}
     for c in clips:
         frames[c.group] = frames.get(c.group, 0) + c.num_frames
     assign: dict[str, str] = {}
     if pinned and len(frames) > 2:
-        assign = {g: s for g in frames if (s := pinned_split(g)) is not None}
+        assign = {g: s for g in frames if (s := pinned_split(g, test_groups=test_groups)) is not None}
         if len(frames) - len(assign) < 2:  # fewer than two groups would be left to train on
             assign = {}
     if assign:
@@ -465,13 +480,14 @@ def make_split(clips: list[Clip], *, val_fraction: float, test_fraction: float, 
     return Split(train=by["train"], val=by["val"], test=by["test"])
 
 
-def _body_clip_from_motion(motion: Motion, *, name: str, fps: float, group: str | None = None) -> Clip:
+def _body_clip_from_motion(motion: Motion, *, name: str, fps: float, group: str | None = None,
+                           licence: str | None = None) -> Clip:
     if motion.skeleton != "h36m-17" or motion.dim != 3:
         raise InputError(f"body models need 3D h36m-17 joints, got {motion.skeleton} with D={motion.dim}",
                          motion.source or name)
     data = W.resample(motion.joints, motion.fps, fps).astype(np.float32)
     return Clip(name=name, data=data, label=coarse_label(motion.label),
-                group=clip_group(name, motion.label) if group is None else group)
+                group=clip_group(name, motion.label) if group is None else group, licence=licence)
 
 
 def stable_seed(text: str) -> int:
@@ -496,15 +512,24 @@ def _relative_name(path: Path, root: Path) -> str:
         return path.name
 
 
-def load_clips(data: str | Path, *, config: DatasetConfig, character: str | Path | None = None) -> list[Clip]:
+def load_clips(data: str | Path | list, *, config: DatasetConfig, character: str | Path | None = None) -> list[Clip]:
     """Load every clip ``data`` names, resampled to ``config.fps``. ``character``: the character file of its
     DeepMimic motion files (default: found as the formats find it, else the shipped humanoid3d).
 
     Body layouts: a mocap folder (with ``manifest.csv``: its clips of every format, rates, labels and
     trims, duplicates dropped per ``config.drop_duplicates``; without one: its ``*.bvh`` files), one
     motion file (``.bvh``, DeepMimic / exp-map ``.txt``, Motion ``.npz``, ...), or ``"procedural:multimodal"`` (:func:`multimodal_clips`). Face layout: one ``.csv`` / FaceMotion ``.npz`` capture
-    or a folder of them. Clip names are paths relative to the folder (the file name for a single file).
+    or a folder of them. Clip names are paths relative to the folder (the file name for a single file). A list
+    of mocap folders forms one corpus (:func:`motion2video.data.corpus.corpus_rows`: the clips of every folder
+    after the first named with the folder's name in front).
     """
+    if isinstance(data, (list, tuple)):
+        if config.layout == "face":
+            raise InputError("face captures come from one folder", data[0])
+        for folder in data:
+            if not Path(folder).is_dir():
+                raise InputError("not a folder (several --data are mocap folders forming one corpus)", folder)
+        return _corpus_clips(list(data), config=config, character=character)
     if str(data) == MULTIMODAL_SOURCE:
         return multimodal_clips(config)
     if character is not None and not Path(character).is_file():
@@ -519,12 +544,7 @@ def load_clips(data: str | Path, *, config: DatasetConfig, character: str | Path
         return [_face_clip_from_motion(load_face_clip(f), name=_relative_name(f, root), fps=fps,
                                        head_pose=config.face_head_pose) for f in files]
     if path.is_dir():
-        from motion2video.formats.mocap import load_mocap
-
-        index = corpus_index(path, drop_duplicates=config.drop_duplicates)
-        return [_body_clip_from_motion(load_mocap(path / row.name, manifest=row.entry or False, character=character),
-                                       name=row.name,
-                                       fps=fps, group=row.group) for row in index.rows]
+        return _corpus_clips([path], config=config, character=character)
     if path.suffix.lower() in (".csv",):
         raise InputError("this is a face capture, but the model is a body model", path)
     from motion2video.formats.io import load_motion
@@ -533,6 +553,16 @@ def load_clips(data: str | Path, *, config: DatasetConfig, character: str | Path
     if isinstance(motion, FaceMotion):
         raise InputError("this file holds face motion, but the model is a body model", path)
     return [_body_clip_from_motion(motion, name=path.name, fps=fps)]
+
+
+def _corpus_clips(folders: list, *, config: DatasetConfig, character: str | Path | None) -> list[Clip]:
+    """The clips of one or more mocap folders (:func:`motion2video.data.corpus.corpus_rows`) at ``config.fps``."""
+    from motion2video.formats.mocap import load_mocap
+
+    return [_body_clip_from_motion(load_mocap(path, manifest=row.entry or False, character=character),
+                                   name=row.name, fps=config.fps, group=row.group,
+                                   licence=row.entry.licence if row.entry is not None else None)
+            for path, row in corpus_rows(folders, drop_duplicates=config.drop_duplicates)]
 
 
 def multimodal_clips(config: DatasetConfig, *, count: int = MULTIMODAL_CLIPS) -> list[Clip]:
@@ -595,9 +625,11 @@ def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | Non
         raise InputError("no clips to use", data)
     if split is None:
         split = make_split(clips, val_fraction=config.val_fraction, test_fraction=config.test_fraction,
-                           seed=config.split_seed, pinned=config.held_out == "corpus")
+                           seed=config.split_seed, pinned=config.held_out in ("corpus", "subjects"),
+                           test_groups=SUBJECT_TEST_GROUPS if config.held_out == "subjects" else TEST_GROUPS)
     else:
-        new_clips = "none" if recorded_only else "unseen_subjects" if Path(str(data)).is_dir() else "all"
+        folders = isinstance(data, (list, tuple)) or Path(str(data)).is_dir()
+        new_clips = "none" if recorded_only else "unseen_subjects" if folders else "all"
         split = extend_split(split, clips, new_clips=new_clips)
     if stats is None:
         train = [c for c in clips if c.name in set(split.train)]
@@ -619,6 +651,8 @@ def build_dataset(data: str | Path, config: DatasetConfig, *, split: Split | Non
             for s in ("train", "val", "test")
         },
         "test_groups": sorted({c.group for c in clips if c.name in set(split.test)}),
+        # what the training files allow (a model trained on non-commercial files says so when loaded)
+        "licences": licence_record([c.licence for c in clips if c.name in set(split.train) | set(split.val)]),
         "val_groups": sorted({c.group for c in clips if c.name in set(split.val)}),
     }
     return MotionDataset(config=config, clips=list(clips), split=split, stats=stats, source=str(data),

@@ -24,9 +24,11 @@ from motion2video.evaluation.plots import plot_ade_per_frame
 from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_model
 from motion2video.models.periodic import RULES
+from motion2video.data.corpus import BANDAI_SOURCES, source_of
 from motion2video.data.dataset import WindowSet, build_dataset
 from motion2video.data.windows import FeatureLayout, metric_vectors
-from motion2video.evaluation.per_action import COUNT_KEY, group_by_action, macro_average, per_action_means
+from motion2video.evaluation.per_action import (COUNT_KEY, family_key, group_by_action, macro_average, per_action_means,
+                                                subject_split_report)
 from motion2video.stages.sampling import as_model_input, keep_bone_lengths
 from motion2video.stages.sampling import sample_futures
 
@@ -96,11 +98,11 @@ class EvalResult:
 
     def table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """A fixed-width text table, one row per method (pooled over all windows)."""
-        return _rows_table(self.results, columns)
+        return rows_table(self.results, columns)
 
     def macro_table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """The macro average over actions, one row per method."""
-        return _rows_table(self.macro, columns)
+        return rows_table(self.macro, columns)
 
     def per_action_table(self, columns: tuple[str, ...] = MAIN_METRICS) -> str:
         """One row per (action, method), the actions in the order of ``per_action`` (most windows first)."""
@@ -108,10 +110,10 @@ class EvalResult:
         actions = list(next(iter(self.per_action.values()))) if methods else []
         rows = {f"{a} ({self.per_action[methods[0]][a][COUNT_KEY]}) {m}": self.per_action[m][a]
                 for a in actions for m in methods}
-        return _rows_table(rows, columns, first="action (windows) method")
+        return rows_table(rows, columns, first="action (windows) method")
 
 
-def _rows_table(rows: dict[str, dict[str, float]], columns: tuple[str, ...], *, first: str = "method") -> str:
+def rows_table(rows: dict[str, dict[str, float]], columns: tuple[str, ...], *, first: str = "method") -> str:
     """A fixed-width text table: one row per key of ``rows``, one column per metric name."""
     width = max([len(first)] + [len(n) for n in rows])
     head = f"{first:<{width}}  " + "  ".join(f"{c:>8}" for c in columns)
@@ -281,7 +283,8 @@ class ForecastEvalSettings:
     Attributes:
         models: checkpoint paths or shipped names (the first one's split and statistics pick the windows);
             ``mirror-periodic``, a rule with no weights, is scored in the first trained model's windows.
-        data: BVH folder or motion file (face models: .csv / .npz captures).
+        data: BVH folder or motion file (face models: .csv / .npz captures), or several mocap folders joined into
+            one corpus.
         samples, stride, split, seed, rigid_bones: as in :class:`EvalProtocol`.
         raw_futures: score the networks' futures as they come out (``EvalProtocol.continue_motion`` off).
         recorded_only: only the clips the checkpoint's recorded split names.
@@ -292,7 +295,7 @@ class ForecastEvalSettings:
     """
 
     models: tuple[str, ...]
-    data: str | Path
+    data: str | Path | tuple[str | Path, ...]
     samples: int = 50
     stride: int = 16
     split: str = "test"
@@ -315,6 +318,7 @@ class ForecastEvaluation:
     windows: int
     json: Path | None
     plot: Path | None
+    subjects: SubjectSplitTables | None = None
 
 
 def _load_models(names: tuple[str, ...]) -> tuple[list[ModelBundle], list[str]]:
@@ -327,8 +331,9 @@ def _load_models(names: tuple[str, ...]) -> tuple[list[ModelBundle], list[str]]:
                          "is scored on")
     models = [load_model(name) for name in learned]
     bundle = models[0]
-    for other in models[1:]:
-        if other.data_config != bundle.data_config:
+    for other in models[1:]:  # the split rule aside (the first model's split, or the subject split, picks the clips)
+        if (dataclasses.replace(other.data_config, held_out="corpus")
+                != dataclasses.replace(bundle.data_config, held_out="corpus")):
             raise InputError(f"{other.label} was trained with other data settings than {bundle.label}: "
                              "compare models of one layout and window length", other.path)
     labels = [m.label for m in models]
@@ -352,9 +357,18 @@ def evaluate_models(settings: ForecastEvalSettings) -> ForecastEvaluation:
     models, rules = _load_models(tuple(settings.models))
     bundle = models[0]
     cfg = bundle.data_config
-    dataset = build_dataset(settings.data, cfg, split=bundle.meta.split, stats=bundle.stats,
-                            recorded_only=settings.recorded_only, character=settings.character)
-    windows = dataset.windows(settings.split, stride=settings.stride)
+    data = settings.data if isinstance(settings.data, (str, Path)) or len(settings.data) > 1 else settings.data[0]
+    train_actions: set[str] = set()
+    if settings.split == "subjects":
+        if cfg.feature_layout.kind != "body3d":
+            raise InputError(f"--split subjects holds out body-motion performers, not the "
+                             f"{cfg.feature_layout.kind} layout of {bundle.label}")
+        dataset, windows, train_actions = subject_windows(data, cfg, models, stride=settings.stride,
+                                                          character=settings.character)
+    else:
+        dataset = build_dataset(data, cfg, split=bundle.meta.split, stats=bundle.stats,
+                                recorded_only=settings.recorded_only, character=settings.character)
+        windows = dataset.windows(settings.split, stride=settings.stride)
     if len(windows) == 0:
         longest = max((c.num_frames for c in dataset.clips_of(settings.split)), default=0)
         raise InputError(f"no clip of the {settings.split} split is long enough: a window needs {cfg.length} "
@@ -367,12 +381,82 @@ def evaluate_models(settings: ForecastEvalSettings) -> ForecastEvaluation:
     val = dataset.windows("val", stride=settings.stride) if settings.extended else None
     result = evaluate_bundles(bundles, windows, protocol=protocol, extended=settings.extended, val_windows=val)
     result.protocol["checkpoint"] = str(bundle.path)
-    result.protocol["data"] = str(settings.data)
-    json_out = write_json(settings.json, result.to_json()) if settings.json is not None else None
+    result.protocol["data"] = str(data) if isinstance(data, (str, Path)) else " + ".join(map(str, data))
+    subjects = subject_split_tables(result, models, train_actions) if settings.split == "subjects" else None
+    record = result.to_json() if subjects is None else {**result.to_json(), "subjects": subjects.json}
+    json_out = write_json(settings.json, record) if settings.json is not None else None
     plot_out = None
     if settings.plot is not None:
         plot_out = plot_ade_per_frame(result.ade_per_frame, settings.plot, fps=cfg.fps,
                                       units=result.protocol["units"].split(" (")[0], best_of=settings.samples,
                                       title=f"{len(windows)} {settings.split} windows from "
                                             f"{len(result.protocol['clips'])} clips")
-    return ForecastEvaluation(result=result, windows=len(windows), json=json_out, plot=plot_out)
+    return ForecastEvaluation(result=result, windows=len(windows), json=json_out, plot=plot_out, subjects=subjects)
+
+
+def subject_windows(data, cfg, models: list[ModelBundle], *, stride: int, character: str | Path | None):
+    """The subject split's test windows (labels ``"action @ family"``,
+    :func:`~motion2video.evaluation.per_action.family_key`), its dataset and the actions its training clips perform.
+    InputError when a model trained on a held-out clip."""
+    bundle = models[0]
+    dataset = build_dataset(data, dataclasses.replace(cfg, held_out="subjects"), stats=bundle.stats,
+                            character=character)
+    test = set(dataset.split.test)
+    for model in models:
+        if model.meta.split is not None:
+            seen = test & (set(model.meta.split.train) | set(model.meta.split.val))
+            if seen:
+                raise InputError(f"it trained on {len(seen)} clip(s) the subject split holds out (e.g. "
+                                 f"{sorted(seen)[0]}): score it with its own --split test", model.path)
+    windows = dataset.windows("test", stride=stride)
+    windows.labels = tuple(family_key(label, "bandai" if source_of(name) in BANDAI_SOURCES else "mocap")
+                           for label, name in zip(windows.labels, windows.clip_names))
+    train_actions = {c.label or "unlabelled" for c in dataset.clips_of("train")}
+    return dataset, windows, train_actions
+
+
+def trained_on_bandai(bundle: ModelBundle) -> bool:
+    """Whether a model's recorded training clips include any Bandai-Namco clip (False for rules and baselines)."""
+    split = bundle.meta.split
+    return split is not None and any(source_of(n) in BANDAI_SOURCES for n in split.train)
+
+
+@dataclass
+class SubjectSplitTables:
+    """The subject split's tables: ``rows`` (per action, unseen actions, macro, cross-dataset; each method's
+    metrics with ADE / FDE over zero-velocity's as ``ade_zv`` / ``fde_zv``), the actions training covers, and the
+    JSON-able record."""
+
+    rows: dict[str, dict[str, float]]
+    train_actions: list[str]
+    json: dict
+
+
+def subject_split_tables(result: EvalResult, models: list[ModelBundle], train_actions: set[str]) -> SubjectSplitTables:
+    """Per action and macro over the actions the training clips perform, each unseen test action in its own row,
+    and the cross-dataset row (the held-out Bandai performers), for every method of ``result``."""
+    report = {m: subject_split_report(rows, train_actions) for m, rows in result.per_action.items()}
+    bandai = {m.label: trained_on_bandai(m) for m in models}
+    zv = report.get("zero-velocity")
+
+    def with_ratio(row: dict, ref: dict | None) -> dict:
+        if not row or ref is None:
+            return dict(row)
+        return {**row, "ade_zv": row["ade"] / ref["ade"], "fde_zv": row["fde"] / ref["fde"]}
+
+    rows: dict[str, dict[str, float]] = {}
+    for part in ("per_action", "unseen"):
+        for action in next(iter(report.values()))[part]:
+            for m, r in report.items():
+                row = r[part][action]
+                tag = "unseen action: " if part == "unseen" else ""
+                rows[f"{tag}{action} ({row[COUNT_KEY]}) {m}"] = with_ratio(row, zv[part][action] if zv else None)
+    for m, r in report.items():
+        rows[f"macro over {len(r['per_action'])} actions {m}"] = with_ratio(r["macro"], zv["macro"] if zv else None)
+    for m, r in report.items():
+        if r["cross_dataset"] is not None:
+            note = "" if m not in bandai else (" (trained with Bandai)" if bandai[m] else " (trained without Bandai)")
+            rows[f"cross-dataset: Bandai held-out ({r['cross_dataset'][COUNT_KEY]}) {m}{note}"] = with_ratio(
+                r["cross_dataset"], zv["cross_dataset"] if zv else None)
+    record = {"report": report, "trained_on_bandai": bandai, "train_actions": sorted(train_actions)}
+    return SubjectSplitTables(rows=rows, train_actions=sorted(train_actions), json=record)

@@ -83,3 +83,44 @@ def ratios_to(per_action: dict[str, dict[str, float]], reference: dict[str, dict
             for a, r in per_action.items()}
     macro = macro_average(rows)
     return {**{a: [r["ade"], r["fde"]] for a, r in rows.items()}, "macro": [macro["ade"], macro["fde"]]}
+
+
+# --- the subject split (``evaluate --split subjects``) ---------------------------------------------------
+FAMILY_SEPARATOR = " @ "  # window key "walk @ bandai": the action and the family of sources its clip is from
+
+
+def family_key(action: str | None, family: str) -> str:
+    """The window label the subject split scores by: ``"walk @ bandai"``."""
+    return f"{action or UNLABELLED}{FAMILY_SEPARATOR}{family}"
+
+
+def subject_split_report(per_key: dict[str, dict[str, float]], train_actions: set[str], *,
+                         family: str = "bandai") -> dict:
+    """One method's rows of the subject split from its per-(action, family) means (:func:`per_action_means` of
+    windows labelled by :func:`family_key`).
+
+    - ``per_action``: each action present in training, its families merged (window-weighted, so exact for the
+      per-window metrics ADE, FDE, MMADE, MMFDE, APD);
+    - ``macro``: the unweighted mean over those actions;
+    - ``unseen``: each test action no training clip performs, merged likewise, outside the macro;
+    - ``cross_dataset``: the macro over the actions of ``family``'s held-out windows (the held-out Bandai
+      performers), present in training or not; None without such windows.
+
+    Returns:
+        ``{"per_action": {action: row}, "macro": row, "unseen": {action: row}, "cross_dataset": row | None}``.
+    """
+    by_action: dict[str, dict[str, dict]] = {}
+    for key, row in per_key.items():
+        action, _, fam = key.rpartition(FAMILY_SEPARATOR)
+        by_action.setdefault(action, {})[fam] = row
+    merged = {a: window_weighted_average(rows) | {COUNT_KEY: int(sum(r[COUNT_KEY] for r in rows.values()))}
+              for a, rows in by_action.items()}
+    order = sorted(merged, key=lambda a: (-merged[a][COUNT_KEY], a))
+    seen = {a: merged[a] for a in order if a in train_actions}
+    unseen = {a: merged[a] for a in order if a not in train_actions}
+    held = {a: rows[family] for a, rows in by_action.items() if family in rows}
+    cross = None
+    if held:
+        cross = macro_average(held) | {COUNT_KEY: int(sum(r[COUNT_KEY] for r in held.values()))}
+    return {"per_action": seen, "macro": macro_average(seen) if seen else {}, "unseen": unseen,
+            "cross_dataset": cross}

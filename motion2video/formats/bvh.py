@@ -15,22 +15,52 @@ BVH conventions used here:
   component on the same axis (the usual reading: the root's channels are its world position).
 - ``End Site`` blocks become nodes named ``"<joint>:end"`` (the notation of
   :data:`motion2video.core.skeletons.RIG_JOINT_MAPS`).
+- A ``.bvh.xz`` file is read through lzma.
+
+Rigs: a rig of :data:`~motion2video.core.skeletons.RIG_JOINT_MAPS` is recognised by its joint names; any
+other humanoid rig (:data:`NAMED_JOINTS_RIG`) is mapped to the body points from its joint names
+(:func:`~motion2video.core.skeletons.map_joint_names`), where a rig map (``--rig-map FILE``,
+:func:`read_rig_map`) names the joints the names do not tell; its unit and up axis are read off the body
+(:func:`body_unit`, :func:`up_axes`) and its body points must pass Human3.6M's proportion test
+(:data:`PROPORTION_BAND`).
 """
 
 from __future__ import annotations
 
+import json
+import lzma
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from motion2video.core.errors import InputError
-from motion2video.formats.canonical import CanonicalClip, canonical_from_map, canonical_motion, to_project_frame
+from motion2video.formats.canonical import (
+    Y_UP_TO_Z_UP,
+    CanonicalClip,
+    canonical_from_map,
+    canonical_motion,
+    to_project_frame,
+)
 from motion2video.formats.manifest import ManifestEntry, default_trim, resolve_manifest
 from motion2video.formats.numbers import parse_number_rows
 from motion2video.formats.resample import round_fps
 from motion2video.core.motion import Motion
-from motion2video.core.skeletons import BODY_POINT_RIGS, RIG_JOINT_MAPS
+from motion2video.core.skeletons import (
+    BODY_POINT_RIGS,
+    H36M_17,
+    L_ANKLE,
+    L_HIP,
+    L_KNEE,
+    NECK,
+    PELVIS,
+    R_ANKLE,
+    R_HIP,
+    R_KNEE,
+    RIG_JOINT_MAPS,
+    map_joint_names,
+    proportion_ratios,
+)
 
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 _CHANNEL_LOOKUP = {c.lower(): c for c in CHANNEL_NAMES}
@@ -302,17 +332,27 @@ def _parse_lines(lines, source: str, *, chunk: int = CHUNK_FRAMES) -> BvhClip:
     )
 
 
+def is_bvh_path(path: str | Path) -> bool:
+    """Whether a path names a BVH file: ``*.bvh`` or xz-compressed ``*.bvh.xz``."""
+    name = Path(path).name.lower()
+    return name.endswith(".bvh") or name.endswith(".bvh.xz")
+
+
 def read_bvh(path: str | Path) -> BvhClip:
-    """Read a BVH file; see :func:`parse_bvh`. The file is streamed line by line (the motion lines parsed
-    :data:`CHUNK_FRAMES` at a time). Raises :class:`InputError` for a missing or malformed file."""
+    """Read a BVH file (``.bvh``, or ``.bvh.xz`` through lzma); see :func:`parse_bvh`. The file is streamed
+    line by line (the motion lines parsed :data:`CHUNK_FRAMES` at a time). Raises :class:`InputError` for a
+    missing or malformed file."""
     path = Path(path)
     if not path.is_file():
         raise InputError("no such file", path)
+    opener = lzma.open if path.name.lower().endswith(".xz") else open
     try:
-        with path.open(encoding="utf-8", errors="strict", newline=None) as f:
+        with opener(path, "rt", encoding="utf-8", errors="strict", newline=None) as f:
             return _parse_lines((line.rstrip("\n") for line in f), str(path))
     except UnicodeDecodeError:
         raise InputError("not a text file (BVH is plain text)", path) from None
+    except (lzma.LZMAError, EOFError):
+        raise InputError("not a readable xz file (corrupt or truncated)", path) from None
 
 
 # --- forward kinematics ---------------------------------------------------------------------------------
@@ -449,20 +489,123 @@ def _map_node_names(mapping: dict[str, str | tuple[str, str]]) -> set[str]:
     return out
 
 
-def detect_rig(names: tuple[str, ...] | list[str], source: str | None = None) -> str:
-    """Name of the rig whose mapped joints all occur in ``names`` (node names, end sites as ``"j:end"``).
+def detect_rig(names: tuple[str, ...] | list[str], source: str | None = None) -> str | None:
+    """Name of the known rig whose mapped joints all occur in ``names`` (node names, end sites as
+    ``"j:end"``), or None when none does (the rig is then mapped from its joint names).
 
-    Raises :class:`InputError` when no rig, or more than one, matches.
+    Raises :class:`InputError` when more than one matches.
     """
     present = set(names)
     found = [rig for rig, mapping in rig_joint_maps().items() if _map_node_names(mapping) <= present]
-    if len(found) == 1:
-        return found[0]
-    if not found:
-        sample = ", ".join(n for n in names if not n.endswith(":end"))[:120]
-        raise InputError(f"unknown BVH rig (joints: {sample}...); known rigs: {', '.join(rig_joint_maps())}",
-                         source)
+    if len(found) <= 1:
+        return found[0] if found else None
     raise InputError(f"BVH joint names match several rigs ({', '.join(found)}); pass rig= explicitly", source)
+
+
+# The rig name of a BVH whose body points come from its joint names (:func:`named_rig_mapping`).
+NAMED_JOINTS_RIG = "named-joints"
+# Every proportion of a rig mapped from its joint names lies in this band of Human3.6M's
+# (:func:`~motion2video.core.skeletons.proportion_ratios`), as every known rig's does (tests).
+PROPORTION_BAND = (0.8, 1.25)
+# Candidate units of a rig mapped by names, metres per file unit: metres, centimetres, millimetres, inches,
+# CMU's 1/0.45 inch. The one that makes the leg (thigh + shin) nearest LEG_METRES wins (:func:`body_unit`).
+UNIT_CANDIDATES = (1.0, 0.01, 0.001, 0.0254, 0.0254 / 0.45)
+LEG_METRES = 0.85
+
+
+def read_rig_map(path: str | Path) -> dict[str, str]:
+    """A rig map file: a JSON object, canonical body point -> joint name of the BVH (an end site as
+    ``"<joint>:end"``), e.g. ``{"left_hip": "Thigh.L", "head": "Head:end"}``. Body points are the names of
+    :data:`~motion2video.core.skeletons.H36M_17` (``pelvis``, ``right_hip``, ..., ``right_wrist``).
+
+    Raises:
+        InputError: a missing or malformed file, an unknown body point or a value that is not a string.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such rig map file", path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise InputError(f"not a JSON rig map ({err})", path) from None
+    if not isinstance(data, dict) or not all(isinstance(v, str) for v in data.values()):
+        raise InputError('a rig map is a JSON object of body point -> joint name, e.g. {"left_hip": "Thigh.L"}',
+                         path)
+    unknown = sorted(set(data) - set(H36M_17.joints))
+    if unknown:
+        raise InputError(f"unknown body point(s) {', '.join(unknown)}; the body points are "
+                         f"{', '.join(H36M_17.joints)}", path)
+    return dict(data)
+
+
+def named_rig_mapping(clip: BvhClip, rig_map: dict[str, str] | None = None) -> dict[str, str | tuple[str, str]]:
+    """Body point -> node name of a rig outside the known table: guessed from the joint names
+    (:func:`~motion2video.core.skeletons.map_joint_names`), ``rig_map`` winning where it names a point.
+
+    Raises:
+        InputError: one line naming the body points no joint was found for, or a joint of ``rig_map`` the
+            file lacks.
+    """
+    guessed, missing = map_joint_names(clip.names, clip.parents)
+    given = dict(rig_map or {})
+    absent = sorted({v for v in given.values() if v not in clip.names})
+    if absent:
+        raise InputError(f"the rig map names joint(s) the file lacks: {', '.join(absent)}", clip.path)
+    missing = [m for m in missing if m not in given]
+    if missing:
+        raise InputError(f"cannot map this BVH rig to the body: no joint found for {', '.join(missing)}; "
+                         "name them in a rig map (--rig-map FILE, JSON body point -> joint name)", clip.path)
+    return {**guessed, **given}
+
+
+def with_head_top(clip: BvhClip, mapping: dict[str, str | tuple[str, str]]) -> BvhClip:
+    """A head-top end site of (nearly) zero length, under a tenth of the head joint's own offset (Bandai's
+    rig: exactly 0), continued along the head's own bone: its offset becomes the head joint's offset from
+    its parent, so it points where the head points (bones lie along the joints' rest offsets). Other clips
+    are returned unchanged."""
+    top = mapping.get("head")
+    if not isinstance(top, str) or not top.endswith(":end"):
+        return clip
+    end, head = clip.index(top), clip.parents[clip.index(top)]
+    head_length = float(np.linalg.norm(clip.offsets[head]))
+    if head_length <= 1e-9 or np.linalg.norm(clip.offsets[end]) >= 0.1 * head_length:
+        return clip
+    offsets = clip.offsets.copy()
+    offsets[end] = clip.offsets[head]
+    return replace(clip, offsets=offsets)
+
+
+def body_unit(raw: np.ndarray) -> float:
+    """Metres per file unit of a rig mapped by names: the candidate of :data:`UNIT_CANDIDATES` that makes
+    the median leg (thigh + shin, both sides) nearest :data:`LEG_METRES`.
+
+    Args:
+        raw: (T, 17, 3) the mapped joints in file units.
+    """
+    seg = lambda a, b: np.linalg.norm(raw[:, a] - raw[:, b], axis=-1)  # noqa: E731  (T,)
+    leg = float(np.median(0.5 * (seg(R_HIP, R_KNEE) + seg(R_KNEE, R_ANKLE) + seg(L_HIP, L_KNEE)
+                                 + seg(L_KNEE, L_ANKLE))))
+    if not np.isfinite(leg) or leg <= 0:
+        return 1.0
+    return min(UNIT_CANDIDATES, key=lambda u: abs(np.log(leg * u / LEG_METRES)))
+
+
+def up_axes(raw: np.ndarray, source: str) -> np.ndarray:
+    """The (3, 3) matrix taking a rig's file axes to the project's (z up): y up (BVH's convention) or z up,
+    told by the median pelvis -> neck direction over the clip.
+
+    Args:
+        raw: (T, 17, 3) the mapped joints in file units.
+    Raises:
+        InputError: when the body points along neither +y nor +z.
+    """
+    up = np.median(raw[:, NECK] - raw[:, PELVIS], axis=0)  # (3,)
+    axis = int(np.argmax(np.abs(up)))
+    if axis == 1 and up[1] > 0:
+        return Y_UP_TO_Z_UP
+    if axis == 2 and up[2] > 0:
+        return np.eye(3)
+    raise InputError("cannot tell the rig's up axis: its body points neither along +y nor along +z", source)
 
 
 def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) -> np.ndarray:
@@ -482,12 +625,18 @@ def canonical_from_nodes(nodes: np.ndarray, names: tuple[str, ...], rig: str) ->
 CanonicalBvh = CanonicalClip
 
 
-def canonical_positions(clip: BvhClip, *, rig: str | None = None, chunk: int = CHUNK_FRAMES) -> CanonicalClip:
+def canonical_positions(clip: BvhClip, *, rig: str | None = None, rig_map: dict[str, str] | None = None,
+                        chunk: int = CHUNK_FRAMES) -> CanonicalClip:
     """Forward kinematics, rig detection, unit and axis conversion for a whole clip (no floor shift);
     ``fps`` of the result is the header's rate. Frames are posed ``chunk`` at a time (the result does not
     depend on it); the canonical body points (:func:`~motion2video.core.skeletons.h36m_body_points`) are
-    then built once from the whole clip's nearest joints, as they take whole-clip medians and maxima."""
-    rig = detect_rig(clip.names, clip.path) if rig is None else rig
+    then built once from the whole clip's nearest joints, as they take whole-clip medians and maxima.
+
+    A rig outside the known table, or any rig with ``rig_map`` (:func:`read_rig_map`), is mapped from its
+    joint names (:func:`named_canonical_positions`)."""
+    rig = detect_rig(clip.names, clip.path) if rig is None and rig_map is None else rig
+    if rig is None or rig == NAMED_JOINTS_RIG:
+        return named_canonical_positions(clip, rig_map=rig_map, chunk=chunk)
     if rig not in rig_joint_maps():
         raise InputError(f"unknown rig {rig!r}; known: {', '.join(rig_joint_maps())}", clip.path)
     unit = RIG_UNITS[rig]
@@ -497,6 +646,37 @@ def canonical_positions(clip: BvhClip, *, rig: str | None = None, chunk: int = C
                                               unit)
     joints = canonical_from_nodes(nodes, clip.names, rig)  # (T, 17, 3)
     return CanonicalClip(joints=joints, nodes=nodes, names=clip.names, rig=rig, unit=unit, fps=clip.header_fps)
+
+
+def named_canonical_positions(clip: BvhClip, *, rig_map: dict[str, str] | None = None,
+                              chunk: int = CHUNK_FRAMES) -> CanonicalClip:
+    """:func:`canonical_positions` of a rig mapped from its joint names (:func:`named_rig_mapping`): a
+    zero-length head end site continued along the head (:func:`with_head_top`), the unit and up axis read
+    off the body (:func:`body_unit`, :func:`up_axes`), the body points built as for every rig, then held
+    to Human3.6M's proportions (:data:`PROPORTION_BAND`).
+
+    Raises:
+        InputError: body points not found, or a mapping whose body fails the proportion test (one line).
+    """
+    mapping = named_rig_mapping(clip, rig_map)
+    clip = with_head_top(clip, mapping)
+    nodes = np.empty((clip.num_frames, clip.num_nodes, 3))  # (T, N, 3) file units and axes
+    for s in range(0, clip.num_frames, chunk):
+        nodes[s:s + chunk] = _world_positions(replace(clip, values=clip.values[s:s + chunk]))
+    raw = canonical_from_map(nodes, clip.names, mapping, body_points=False)  # (T, 17, 3) file units
+    unit = body_unit(raw)
+    nodes = to_project_frame(nodes, unit, up_axes(raw, clip.path))  # (T, N, 3) metres, z up
+    joints = canonical_from_map(nodes, clip.names, mapping)  # (T, 17, 3) on Human3.6M's body points
+    ratios = proportion_ratios(joints)
+    off = {k: v for k, v in ratios.items() if not PROPORTION_BAND[0] <= v <= PROPORTION_BAND[1]}
+    if off:
+        said = ", ".join(f"{k} {v:.2f}" for k, v in off.items())
+        raise InputError(f"the joints mapped to the body give proportions outside {PROPORTION_BAND[0]}-"
+                         f"{PROPORTION_BAND[1]} of Human3.6M's ({said}; mapping: "
+                         + ", ".join(f"{k}={v}" for k, v in mapping.items())
+                         + "); name the joints in a rig map (--rig-map FILE)", clip.path)
+    return CanonicalClip(joints=joints, nodes=nodes, names=clip.names, rig=NAMED_JOINTS_RIG, unit=unit,
+                         fps=clip.header_fps)
 
 
 def bvh_to_canonical(
@@ -509,6 +689,7 @@ def bvh_to_canonical(
     target_fps: float | None = None,
     label: str | None = None,
     canonical: CanonicalClip | None = None,
+    rig_map: dict[str, str] | None = None,
 ) -> Motion:
     """Convert a parsed BVH clip to a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
 
@@ -527,12 +708,13 @@ def bvh_to_canonical(
         label: action label stored on the Motion.
         canonical: ``canonical_positions(clip, rig=rig)`` when the caller already has it (skips the
             forward kinematics).
+        rig_map: body point -> joint name for a rig the names do not tell (:func:`read_rig_map`).
     """
     rate = clip.header_fps if fps is None else float(fps)
     if start < 0 or start >= clip.num_frames:
         raise InputError(f"start frame {start} is outside the clip (0..{clip.num_frames - 1})", clip.path)
     if canonical is None:
-        canonical = canonical_positions(clip, rig=rig)
+        canonical = canonical_positions(clip, rig=rig, rig_map=rig_map)
     elif canonical.joints.shape[0] != clip.num_frames or (rig is not None and canonical.rig != rig):
         raise ValueError("canonical= does not belong to this clip / rig")
     return canonical_motion(canonical.joints, fps=rate, source=clip.path, start=start, frames=frames,
@@ -550,6 +732,7 @@ def load_bvh(
     frames: int | None = None,
     manifest: str | Path | ManifestEntry | bool | None = None,
     label: str | None = None,
+    rig_map: dict[str, str] | None = None,
 ) -> Motion:
     """Load a BVH file as a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
 
@@ -564,14 +747,15 @@ def load_bvh(
             :class:`ManifestEntry`, ``True`` to look for a manifest.csv listing this file in its folder or
             the folders above (:func:`find_manifest_entry`), or None / False for none.
         label: action label (wins over the manifest's).
+        rig_map: body point -> joint name for a rig the names do not tell (:func:`read_rig_map`).
     """
     clip = read_bvh(path)
     entry = resolve_manifest(path, manifest)
-    rig = detect_rig(clip.names, clip.path)
+    canonical = canonical_positions(clip, rig_map=rig_map)
     if entry is not None:
         fps = entry.fps if fps is None else fps
         label = entry.label if label is None else label
         if trim_start is None:
-            trim_start = default_trim(rig)
-    return bvh_to_canonical(clip, rig=rig, fps=fps, start=trim_start or 0, frames=frames,
-                            target_fps=target_fps, label=label)
+            trim_start = default_trim(canonical.rig)
+    return bvh_to_canonical(clip, rig=canonical.rig, fps=fps, start=trim_start or 0, frames=frames,
+                            target_fps=target_fps, label=label, canonical=canonical)

@@ -3,8 +3,8 @@
 ======================================  ==============================================================
 path                                    read as
 ======================================  ==============================================================
-``*.bvh``                               :func:`~motion2video.formats.bvh.load_bvh` (canonical h36m-17, metres,
-                                        z up); a ``manifest.csv`` in its folder or up to three folders above
+``*.bvh``, ``*.bvh.xz``                 :func:`~motion2video.formats.bvh.load_bvh` (canonical h36m-17, metres,
+                                        z up; any humanoid rig, ``rig_map`` naming joints); a ``manifest.csv`` in its folder or up to three folders above
                                         that lists the file supplies fps, label and the rig's default trim
 ``*.txt``, or ``*.json`` holding        DeepMimic motion file (:mod:`~motion2video.formats.deepmimic`, the
 ``"Frames"``                            character file found beside it), same manifest rules
@@ -45,7 +45,7 @@ from motion2video.formats.resample import resample_linear
 from motion2video.formats.videopose3d import load_videopose3d
 from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion, Motion
 
-MOTION_SUFFIXES = (".bvh", ".txt", ".npz", ".npy", ".json", ".csv")
+MOTION_SUFFIXES = (".bvh", ".bvh.xz", ".txt", ".npz", ".npy", ".json", ".csv")
 
 
 def _check_rate(value: float | None, name: str, path: Path) -> None:
@@ -68,7 +68,7 @@ def resample_motion(motion: Motion | FaceMotion, target_fps: float) -> Motion | 
 
 def load_motion(
     path: str | Path, *, fps: float | None = None, target_fps: float | None = None,
-    character: str | Path | None = None,
+    character: str | Path | None = None, rig_map: str | Path | None = None,
 ) -> Motion | FaceMotion:
     """Read any supported motion file (see the module table).
 
@@ -78,6 +78,8 @@ def load_motion(
         target_fps: resample the result to this rate (linear interpolation).
         character: the character file of DeepMimic motion files (default: found beside the motion, else
             the standard humanoid3d); other files ignore it.
+        rig_map: BVH files only: a rig map file naming the joints of the body points where the rig's joint
+            names do not tell (:func:`~motion2video.formats.bvh.read_rig_map`); other files ignore it.
     Raises:
         InputError: missing path, unknown extension, or a malformed file (one line naming the file).
     """
@@ -87,8 +89,12 @@ def load_motion(
     if not path.exists():
         raise InputError("no such file or directory", path)
     suffix = path.suffix.lower()
-    if suffix in (".bvh", ".txt") or (suffix == ".json" and path.is_file() and is_deepmimic_file(path)):
-        return load_mocap(path, fps=fps, target_fps=target_fps, manifest=True, character=character)
+    if (suffix in (".bvh", ".txt") or path.name.lower().endswith(".bvh.xz")
+            or (suffix == ".json" and path.is_file() and is_deepmimic_file(path))):
+        from motion2video.formats.bvh import read_rig_map
+
+        return load_mocap(path, fps=fps, target_fps=target_fps, manifest=True, character=character,
+                          rig_map=None if rig_map is None else read_rig_map(rig_map))
     if path.is_dir() or suffix == ".json":
         motion: Motion | FaceMotion = load_openpose_folder(path, fps=25.0 if fps is None else fps)
     elif suffix == ".csv":

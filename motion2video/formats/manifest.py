@@ -33,6 +33,9 @@ class ManifestEntry:
         fps: true frame rate, or None when the column is empty.
         frames: declared frame count, or None.
         notes: free text.
+        licence: the ``licence`` column (None when empty).
+        group: the ``skeleton_group`` column, the performer of a source that names none per clip (Bandai-Namco's
+            sets), or None.
     """
 
     file: str
@@ -41,6 +44,8 @@ class ManifestEntry:
     fps: float | None
     frames: int | None
     notes: str
+    licence: str | None = None
+    group: str | None = None
 
 
 def read_manifest(path: str | Path) -> dict[str, ManifestEntry]:
@@ -70,6 +75,8 @@ def read_manifest(path: str | Path) -> dict[str, ManifestEntry]:
                 fps=fps,
                 frames=None if frames is None else int(frames),
                 notes=(row.get("notes") or "").strip(),
+                licence=(row.get("licence") or "").strip() or None,
+                group=(row.get("skeleton_group") or "").strip() or None,
             )
     return entries
 

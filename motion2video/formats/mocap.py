@@ -4,7 +4,7 @@ text files, each to a canonical ``h36m-17`` Motion with the manifest's true fram
 =================================  ===========================  ============================================
 file                               kind                         reader
 =================================  ===========================  ============================================
-``*.bvh``                          ``bvh``                      :func:`~motion2video.formats.bvh.load_bvh`
+``*.bvh``, ``*.bvh.xz``            ``bvh``                      :func:`~motion2video.formats.bvh.load_bvh`
 ``*.txt`` / ``*.json`` holding a   ``deepmimic``                :func:`~motion2video.formats.deepmimic.load_deepmimic`
 JSON object with ``"Frames"``      (:func:`is_deepmimic_file`)
 other ``*.txt`` (comma-separated   ``expmap``                   :func:`~motion2video.formats.expmap.load_expmap`
@@ -31,7 +31,7 @@ from motion2video.formats.manifest import (
 from motion2video.core.motion import Motion
 
 KINDS = ("bvh", "deepmimic", "expmap")
-MOCAP_SUFFIXES = (".bvh", ".txt", ".json")
+MOCAP_SUFFIXES = (".bvh", ".bvh.xz", ".txt", ".json")
 
 
 def is_deepmimic_file(path: str | Path) -> bool:
@@ -55,7 +55,7 @@ def mocap_kind(path: str | Path, entry: ManifestEntry | None = None) -> str:
     if not path.is_file():
         raise InputError("no such file", path)
     suffix = path.suffix.lower()
-    if suffix == ".bvh":
+    if path.name.lower().endswith((".bvh", ".bvh.xz")):
         return "bvh"
     rig = (entry.rig or "") if entry is not None else ""
     if rig.startswith("deepmimic") and rig.endswith("-txt"):
@@ -70,7 +70,7 @@ def mocap_kind(path: str | Path, entry: ManifestEntry | None = None) -> str:
 
 
 def mocap_canonical(path: str | Path, *, entry: ManifestEntry | None = None,
-                    character: str | Path | None = None) -> CanonicalClip:
+                    character: str | Path | None = None, rig_map: dict[str, str] | None = None) -> CanonicalClip:
     """A whole mocap file in the project frame (metres, z up, every node), before trimming and floor
     placement; ``fps`` is the rate the file states (BVH header, DeepMimic frame duration, exp-map layout).
 
@@ -79,12 +79,14 @@ def mocap_canonical(path: str | Path, *, entry: ManifestEntry | None = None,
         entry: its manifest row (used only to tell the kind, :func:`mocap_kind`).
         character: DeepMimic files only: the character file (None: found beside the motion, else the
             standard humanoid3d; :func:`~motion2video.formats.deepmimic.resolve_character`).
+        rig_map: BVH files only: body point -> joint name where the joint names do not tell
+            (:func:`~motion2video.formats.bvh.read_rig_map`).
     """
     kind = mocap_kind(path, entry)
     if kind == "bvh":
         from motion2video.formats.bvh import canonical_positions, read_bvh
 
-        return canonical_positions(read_bvh(path))
+        return canonical_positions(read_bvh(path), rig_map=rig_map)
     if kind == "deepmimic":
         from motion2video.formats.deepmimic import deepmimic_canonical, read_deepmimic, resolve_character
 
@@ -105,6 +107,7 @@ def load_mocap(
     label: str | None = None,
     canonical: CanonicalClip | None = None,
     character: str | Path | None = None,
+    rig_map: dict[str, str] | None = None,
 ) -> Motion:
     """Load any mocap file as a canonical ``h36m-17`` Motion (metres, z up, floor at z = 0).
 
@@ -120,10 +123,12 @@ def load_mocap(
         label: action label (wins over the manifest's).
         canonical: :func:`mocap_canonical` of this file when the caller has it already.
         character: DeepMimic files only: their character file (see :func:`mocap_canonical`).
+        rig_map: BVH files only: body point -> joint name (see :func:`mocap_canonical`).
     """
     path = Path(path)
     entry = resolve_manifest(path, manifest)
-    canon = mocap_canonical(path, entry=entry, character=character) if canonical is None else canonical
+    canon = (mocap_canonical(path, entry=entry, character=character, rig_map=rig_map) if canonical is None
+             else canonical)
     if entry is not None:
         fps = entry.fps if fps is None else fps
         label = entry.label if label is None else label
@@ -136,7 +141,7 @@ def mocap_files(folder: str | Path) -> dict[str, ManifestEntry | None]:
     """The clips of a mocap folder, ``{path relative to folder: manifest row}``.
 
     With a ``manifest.csv`` in ``folder``: its rows in its order. Without one: every ``*.bvh`` below
-    ``folder`` (sorted by path, no manifest rows).
+    ``folder`` (``*.bvh`` and ``*.bvh.xz``, sorted by path, no manifest rows).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -144,9 +149,9 @@ def mocap_files(folder: str | Path) -> dict[str, ManifestEntry | None]:
     manifest_path = folder / "manifest.csv"
     if manifest_path.is_file():
         return dict(read_manifest(manifest_path))
-    paths = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*.bvh"))
+    paths = sorted(p.relative_to(folder).as_posix() for pattern in ("*.bvh", "*.bvh.xz") for p in folder.rglob(pattern))
     if not paths:
-        raise InputError("no .bvh files and no manifest.csv in the directory", folder)
+        raise InputError("no .bvh / .bvh.xz files and no manifest.csv in the directory", folder)
     return {p: None for p in paths}
 
 

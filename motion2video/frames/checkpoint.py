@@ -14,6 +14,7 @@ config, data summary, wall time, ...).
 from __future__ import annotations
 
 import json
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +27,7 @@ from motion2video.core.atomic import atomic_output
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
+from motion2video.data.licences import licence_note, model_licences
 from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator
 from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
 from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
@@ -159,6 +161,10 @@ def load_frame_model(path_or_name: str | Path, *, any_skeleton: bool = False) ->
         step, train = int(metadata.get("step", "0")), json.loads(metadata.get("train", "{}"))
     except (TypeError, ValueError) as err:
         raise InputError(f"damaged checkpoint metadata (step / train: {err})", path) from None
+    stem = path.name[: -len(".safetensors")] if path.name.endswith(".safetensors") else path.name
+    note = licence_note(stem, model_licences(stem, train.get("licences")))
+    if note is not None:
+        print(f"motion2video: note: {note}", file=sys.stderr)
     return LoadedFrameModel(model=model, path=path, step=step, train=train)
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
 
@@ -29,6 +30,7 @@ import motion2video.models  # noqa: F401  (registers the learned models and the 
 from motion2video import __version__
 from motion2video.core.atomic import atomic_output
 from motion2video.data.dataset import DatasetConfig, Split
+from motion2video.data.licences import licence_note, model_licences
 from motion2video.data.windows import FeatureLayout, NormStats
 from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_version
 from motion2video.core.errors import InputError
@@ -130,6 +132,12 @@ class ModelBundle:
     @property
     def kind(self) -> str:
         return self.meta.kind
+
+    @property
+    def licences(self) -> dict | None:
+        """The licences of the files it was trained on (:func:`motion2video.data.licences.licence_record`):
+        the checkpoint's own record, else the shipped record of its name; None for neither."""
+        return model_licences(self.label, self.meta.data_summary.get("licences"))
 
     @property
     def data_config(self) -> DatasetConfig:
@@ -241,7 +249,11 @@ def load_model(path_or_name: str | Path, *, device: str | torch.device = "cpu") 
     except RuntimeError as err:
         raise InputError(f"the weights do not fit model {meta.model!r}: {str(err).splitlines()[0]}", path) from None
     model.to(device).eval()
-    return ModelBundle(model=model, stats=meta.stats, meta=meta, path=path)
+    bundle = ModelBundle(model=model, stats=meta.stats, meta=meta, path=path)
+    note = licence_note(bundle.label, bundle.licences)
+    if note is not None:
+        print(f"motion2video: note: {note}", file=sys.stderr)
+    return bundle
 
 
 def baseline_bundle(name: str, data_config: DatasetConfig, *, stats: NormStats | None = None,

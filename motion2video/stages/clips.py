@@ -109,12 +109,13 @@ def video_motion(bundle, path: Path, *, person: str | int = "largest") -> Motion
 
 
 def load_clip(bundle, path: str | Path, *, character: str | Path | None = None,
-              fps: float | None = None) -> LoadedClip:
+              fps: float | None = None, rig_map: str | Path | None = None) -> LoadedClip:
     """Read ``path`` for ``bundle``'s model (a :class:`~motion2video.models.checkpoint.ModelBundle`).
 
     Args:
         character: the character file of a DeepMimic motion file (default: found beside it, else the
             standard humanoid3d).
+        rig_map: a BVH rig's rig map file (:func:`motion2video.formats.bvh.read_rig_map`).
         fps: the file's true frame rate, for files that state none or a wrong one (joint arrays: 20 fps
             for SMPL-22 by default).
 
@@ -138,7 +139,7 @@ def load_clip(bundle, path: str | Path, *, character: str | Path | None = None,
                              "joint arrays)", path)
         motion = video_motion(bundle, path)
     else:
-        motion = load_motion(path, fps=fps, character=character)
+        motion = load_motion(path, fps=fps, character=character, rig_map=rig_map)
     data = LOADERS[bundle.data_config.layout](bundle, motion, path)
     identity = dict(motion.identity) if isinstance(motion, FaceMotion) else {}
     source_frames = motion.num_frames
