@@ -48,8 +48,8 @@ golden: setup
 
 # render speed and memory (~3 min), then batch throughput side by side (~8 min, an otherwise idle machine)
 bench: setup
-	$(PY) scripts/bench_render.py --json out/bench_render.json
-	$(PY) scripts/bench_batch.py --json out/bench_batch.json
+	$(PY) scripts/bench.py render --json out/bench_render.json
+	$(PY) scripts/bench.py batch --json out/bench_batch.json
 
 clean:
 	rm -rf out test_output .pytest_cache

@@ -93,7 +93,7 @@ def reference_person(image: np.ndarray):
 
 def default_generator_threads() -> int:
     """Half the CPU cores, 1 to 4. On the 2-core machines this was built on, two threads were slower than
-    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench_pipeline.py``."""
+    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench.py pipeline``."""
     return max(1, min(4, (os.cpu_count() or 1) // 2))
 
 
