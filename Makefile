@@ -1,13 +1,22 @@
 # Two commands on a fresh machine: `make demo` and `make test`. Both set everything up first: `setup` what the
-# demo needs (OSMesa, the venv), `setup-test` that plus the browser the batch gallery test opens.
+# demo needs (OSMesa, the venv), `setup-test` that plus the browser the batch gallery test opens. `make check`
+# is the edit loop: the import contracts and the fast tests.
+SHELL  := /bin/bash
+.SHELLFLAGS := -o pipefail -c
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
 export PYOPENGL_PLATFORM ?= osmesa
+# test workers: two processes share the machine's cores (tests are xdist-safe: tmp_path outputs, atomic caches)
+WORKERS ?= 2
+# pip quiet: no progress, no version check, and not the warnings a machine's pip configuration can add about index
+# folders it does not have ("Location ... is ignored"); pip's errors and its exit status still come through
+PIP_INSTALL = $(PY) -m pip install -q --disable-pip-version-check
+QUIET_PIP = 2>&1 | { grep -v "^WARNING: Location '.*' is ignored" || true; }
 
-.PHONY: setup setup-test demo test test-fast fuzz golden bench clean
+.PHONY: setup setup-test demo test check fuzz golden bench clean
 
 setup: $(STAMP)
 
@@ -16,10 +25,11 @@ setup-test: $(TEST_STAMP)
 $(STAMP): pyproject.toml
 	@dpkg -s libosmesa6 >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libosmesa6; }
 	@[ -x $(PY) ] || python3 -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip
-	# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install
-	$(PY) -m pip install -q torch==2.13.0
-	$(PY) -m pip install -q -e '.[dev,ray]'
+	@echo "installing the Python packages into $(VENV) (a few minutes the first time) ..."
+	@$(PIP_INSTALL) --upgrade pip $(QUIET_PIP)
+	@# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install
+	@$(PIP_INSTALL) torch==2.13.0 $(QUIET_PIP)
+	@$(PIP_INSTALL) -e '.[dev,ray]' $(QUIET_PIP)
 	@touch $@
 
 # Debian's chromium, for the tests only: the batch gallery test opens index.html in it (Playwright drives the
@@ -33,11 +43,12 @@ demo: setup
 
 test: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(WORKERS) --durations=15
 
-test-fast: setup-test
+# the edit loop (a few minutes): import contracts and every test not marked slow
+check: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q -n $(WORKERS) -m "not slow"
 
 # every reader fuzzed with 10,000 derandomised hypothesis examples (make test runs 200 of them)
 fuzz: setup
