@@ -9,8 +9,10 @@ STAMP  := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
 export PYOPENGL_PLATFORM ?= osmesa
-# test workers: two processes share the machine's cores (tests are xdist-safe: tmp_path outputs, atomic caches)
+# test workers: two processes share the machine's cores (tests are xdist-safe: tmp_path outputs, atomic caches);
+# a file's tests stay on one worker, so its module fixtures (trained models, renders) are built once
 WORKERS ?= 2
+XDIST  = -n $(WORKERS) --dist loadfile
 # pip quiet: no progress, no version check, and not the warnings a machine's pip configuration can add about index
 # folders it does not have ("Location ... is ignored"); pip's errors and its exit status still come through
 PIP_INSTALL = $(PY) -m pip install -q --disable-pip-version-check
@@ -43,12 +45,12 @@ demo: setup
 
 test: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q -n $(WORKERS) --durations=15
+	$(PY) -m pytest -q $(XDIST) --durations=15
 
 # the edit loop (a few minutes): import contracts and every test not marked slow
 check: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q -n $(WORKERS) -m "not slow"
+	$(PY) -m pytest -q $(XDIST) -m "not slow"
 
 # every reader fuzzed with 10,000 derandomised hypothesis examples (make test runs 200 of them)
 fuzz: setup
