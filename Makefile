@@ -50,7 +50,7 @@ test: setup-test
 # the edit loop (a few minutes): import contracts and every test not marked slow
 check: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q $(XDIST) -m "not slow"
+	$(PY) -m pytest -q $(XDIST) -m "not slow" --hypothesis-profile=check
 
 # every reader fuzzed with 10,000 derandomised hypothesis examples (make test runs 200 of them)
 fuzz: setup
