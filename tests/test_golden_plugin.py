@@ -200,6 +200,7 @@ def test_names_alias_root_and_counts(pytester, monkeypatch):
     assert "golden frames" not in nothing.stdout.str()  # no golden used: no summary
 
 
+@pytest.mark.slow
 def test_parallel_workers_report_one_golden_summary(pytester):
     """Under pytest-xdist (``make test`` runs two workers) the controller prints the summary of every worker's
     goldens: written, compared, failed and unused, as one process would."""
