@@ -1,13 +1,24 @@
 # Two commands on a fresh machine: `make demo` and `make test`. Both set everything up first: `setup` what the
-# demo needs (OSMesa, the venv), `setup-test` that plus the browser the batch gallery test opens.
+# demo needs (OSMesa, the venv), `setup-test` that plus the browser the batch gallery test opens. `make check`
+# is the edit loop: the import contracts and the fast tests.
+SHELL  := /bin/bash
+.SHELLFLAGS := -o pipefail -c
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
 export PYOPENGL_PLATFORM ?= osmesa
+# test workers: two processes share the machine's cores (tests are xdist-safe: tmp_path outputs, atomic caches);
+# a file's tests stay on one worker, so its module fixtures (trained models, renders) are built once
+WORKERS ?= 2
+XDIST  = -n $(WORKERS) --dist loadfile
+# pip quiet: no progress, no version check, and not the warnings a machine's pip configuration can add about index
+# folders it does not have ("Location ... is ignored"); pip's errors and its exit status still come through
+PIP_INSTALL = $(PY) -m pip install -q --disable-pip-version-check
+QUIET_PIP = 2>&1 | { grep -v "^WARNING: Location '.*' is ignored" || true; }
 
-.PHONY: setup setup-test demo test test-fast fuzz golden bench clean
+.PHONY: setup setup-test demo test check fuzz golden bench clean
 
 setup: $(STAMP)
 
@@ -16,10 +27,11 @@ setup-test: $(TEST_STAMP)
 $(STAMP): pyproject.toml
 	@dpkg -s libosmesa6 >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libosmesa6; }
 	@[ -x $(PY) ] || python3 -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip
-	# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install
-	$(PY) -m pip install -q torch==2.13.0
-	$(PY) -m pip install -q -e '.[dev,ray,app]'
+	@echo "installing the Python packages into $(VENV) (a few minutes the first time) ..."
+	@$(PIP_INSTALL) --upgrade pip $(QUIET_PIP)
+	@# the CPU wheel on disk; pyproject.toml only asks for a range so other environments can install
+	@$(PIP_INSTALL) torch==2.13.0 $(QUIET_PIP)
+	@$(PIP_INSTALL) -e '.[dev,ray,app]' $(QUIET_PIP)
 	@touch $@
 
 # Debian's chromium, for the tests only: the batch gallery test opens index.html in it (Playwright drives the
@@ -33,11 +45,12 @@ demo: setup
 
 test: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q $(XDIST) --durations=15
 
-test-fast: setup-test
+# the edit loop (a few minutes): import contracts and every test not marked slow
+check: setup-test
 	$(VENV)/bin/lint-imports
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q $(XDIST) -m "not slow" --hypothesis-profile=check
 
 # every reader fuzzed with 10,000 derandomised hypothesis examples (make test runs 200 of them)
 fuzz: setup
@@ -48,8 +61,8 @@ golden: setup
 
 # render speed and memory (~3 min), then batch throughput side by side (~8 min, an otherwise idle machine)
 bench: setup
-	$(PY) scripts/bench_render.py --json out/bench_render.json
-	$(PY) scripts/bench_batch.py --json out/bench_batch.json
+	$(PY) scripts/bench.py render --json out/bench_render.json
+	$(PY) scripts/bench.py batch --json out/bench_batch.json
 
 clean:
 	rm -rf out test_output .pytest_cache

@@ -22,8 +22,8 @@ from motion2video.core.errors import InputError
 # Every sub-command's line in `motion2video --help`, in the order listed there. The table is here, not in the command
 # modules, so that `--help` lists the commands without importing them (and with them torch and the renderers).
 SUMMARIES = {
-    "render": ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) to "
-               "mp4/GIF"),
+    "render": ("render a motion file (BVH, DeepMimic, exp-map text, npz, OpenPose JSON folder, Live Link Face CSV) or "
+               "the person of a video to mp4/GIF"),
     "pose": ("estimate a person's pose in a photo (reference pose file) or a video (motion .npz), BlazePose; --face: "
              "a face video's face motion"),
     "train": "train a motion model (pred-lstm, cvae, mtvae-concat, mtvae-add, lcpvae, behavior)",

@@ -39,6 +39,23 @@ class GoldenSession:
 
 
 _SESSION = pytest.StashKey[GoldenSession]()
+_WORKER_KEY = "motion2video_golden"  # what a pytest-xdist worker sends its controller
+
+
+def _to_record(state: GoldenSession) -> dict:
+    """A worker's golden state as plain data (xdist sends ``workeroutput`` across processes)."""
+    return {"compared": state.compared, "written": [str(p) for p in state.written],
+            "failed": [[nodeid, str(p)] for nodeid, p in state.failed],
+            "used": {str(p): nodeid for p, nodeid in state.used.items()}, "roots": [str(p) for p in state.roots]}
+
+
+def _merge_record(state: GoldenSession, record: dict) -> None:
+    """Add a worker's golden state (:func:`_to_record`) to the controller's, for the one summary."""
+    state.compared += int(record["compared"])
+    state.written += [Path(p) for p in record["written"]]
+    state.failed += [(nodeid, Path(p)) for nodeid, p in record["failed"]]
+    state.used.update({Path(p): nodeid for p, nodeid in record["used"].items()})
+    state.roots.update(Path(p) for p in record["roots"])
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -53,6 +70,23 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 def pytest_configure(config: pytest.Config) -> None:
     config.stash[_SESSION] = GoldenSession()
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """In a pytest-xdist worker: hand what the golden_frames fixture did to the controller, which prints the
+    summary (a worker's own summary is not shown)."""
+    output = getattr(session.config, "workeroutput", None)
+    state = session.config.stash.get(_SESSION, None)
+    if output is not None and state is not None:
+        output[_WORKER_KEY] = _to_record(state)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error) -> None:
+    """pytest-xdist's controller, as each worker finishes: merge its golden state (:func:`pytest_sessionfinish`)."""
+    record = getattr(node, "workeroutput", {}).get(_WORKER_KEY)
+    if record is not None:
+        _merge_record(node.config.stash[_SESSION], record)
 
 
 def pytest_deselected(items: list) -> None:

@@ -4,8 +4,9 @@ Anny (NAVER, Apache-2.0) is a MakeHuman-based body model in PyTorch: 13,718 vert
 104 bones, 52 ARKit facial actions (in :data:`motion2video.core.motion.ARKIT_NAMES` order) and 6 phenotype
 parameters. Its frame is the project's world frame: metres, z up, the body faces -y, its left side is +x.
 
-Building the model the first time on a machine takes ~40 s and writes a cache under ``~/.cache/anny``;
-afterwards it takes ~1 s. :func:`get_anny` builds it once per process and every renderer shares it.
+Building the model the first time on a machine takes ~40 s and writes a cache under ``~/.cache/anny`` (a line on
+stderr says so before it starts); afterwards it takes ~1 s. :func:`get_anny` builds it once per process and every
+renderer shares it.
 
 Body regions (for colouring, :func:`region_weights`) come from the skinning weights: each vertex takes the
 region of its dominant bone (:data:`BONE_REGION_RULES`); then straight cut lines on the rest pose (waist,
@@ -17,7 +18,10 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
@@ -77,7 +81,7 @@ def get_anny() -> "_anny_t.Anny":
             import anny
             import torch
 
-            with torch.no_grad():
+            with _cache_build_lock(), torch.no_grad():
                 model = anny.Anny(facial_actions="all", local_changes="none")
             model.eval()
             if list(model.phenotype_labels) != list(PHENOTYPE_NAMES):
@@ -85,6 +89,52 @@ def get_anny() -> "_anny_t.Anny":
             _check_facial_actions(model)
             _MODEL = model
     return _MODEL
+
+
+def cache_folder() -> Path:
+    """Where Anny keeps the model data it builds on first use (``~/.cache/anny``, or ``$ANNY_CACHE_DIR``)."""
+    from anny.paths import get_anny_cache_path
+
+    return Path(get_anny_cache_path())
+
+
+def cache_built(folder: Path) -> bool:
+    """Whether Anny's cache in ``folder`` holds its built model data (its ``.safetensors`` files)."""
+    return folder.is_dir() and any(folder.rglob("*.safetensors"))
+
+
+def build_note(folder: Path) -> str | None:
+    """The line said on stderr before Anny builds its cache in ``folder``; None when it is built already."""
+    if cache_built(folder):
+        return None
+    return (f"building the Anny body model's cache in {folder}: once per machine, about 40 s on an idle 2-core "
+            "machine (minutes on a busy one), about 0.8 GB ...")
+
+
+@contextmanager
+def _cache_build_lock() -> Iterator[None]:
+    """Held while Anny is constructed: one process builds the cache (with a line on stderr before and after)
+    while any other waits for it instead of building the same files beside it (parallel test workers, batch
+    workers on a fresh machine)."""
+    import fcntl
+    import sys
+    import time
+
+    folder = cache_folder()
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    with open(folder.parent / f".{folder.name}.build.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            note = build_note(folder)
+            if note is not None:
+                print(f"motion2video: {note}", file=sys.stderr, flush=True)
+            start = time.perf_counter()
+            yield
+            if note is not None:
+                print(f"motion2video: the Anny cache is built ({time.perf_counter() - start:.0f} s)",
+                      file=sys.stderr, flush=True)
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def _init_warp_quietly() -> None:

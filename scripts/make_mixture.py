@@ -14,14 +14,10 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
-
-from motion2video.core.errors import InputError  # noqa: E402
-from motion2video.models.base import MODEL_REGISTRY  # noqa: E402
-from motion2video.models.checkpoint import baseline_bundle, compose_mixture, load_model, save_checkpoint  # noqa: E402
+from motion2video.core.errors import InputError
+from motion2video.models.base import MODEL_REGISTRY
+from motion2video.models.checkpoint import baseline_bundle, compose_mixture, load_model, save_checkpoint
 
 
 def parse_shares(text: str | None, count: int) -> list[float] | None:

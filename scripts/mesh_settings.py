@@ -17,7 +17,6 @@ import argparse
 import json
 import sys
 from dataclasses import replace
-from pathlib import Path
 
 
 def main(argv: list[str] | None = None) -> int:

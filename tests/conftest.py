@@ -10,8 +10,10 @@ import pytest
 from hypothesis import settings
 
 # Property-based tests (tests/test_fuzz_readers.py): "ci" is the default profile (200 derandomised examples per
-# reader, the same cases on every run); `make fuzz` runs "fuzz" (10,000 per reader, still repeatable).
+# reader, the same cases on every run); `make fuzz` runs "fuzz" (10,000 per reader, still repeatable) and `make check`
+# runs "check" (25 per reader: the edit loop).
 settings.register_profile("ci", max_examples=200, derandomize=True, print_blob=True)
+settings.register_profile("check", max_examples=25, derandomize=True, print_blob=True)
 settings.register_profile("fuzz", max_examples=10_000, derandomize=True, print_blob=True)
 settings.load_profile("ci")
 

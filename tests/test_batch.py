@@ -73,6 +73,7 @@ def test_rerun_skips_what_is_done_and_force_redoes_it(batch_run, capsys, tmp_pat
     assert [r.status for r in summary.results] == ["ok"] * 3
 
 
+@pytest.mark.slow
 def test_jsonl_jobs_with_list_and_object_args(mocap_dir, tmp_path):
     clip = mocap_dir / "cmu" / "08_01.bvh"
     lines = [

@@ -1,4 +1,4 @@
-"""scripts/bench_batch.py end to end on a tiny configuration: real pools, real clips, real mp4 files."""
+"""scripts/bench.py batch end to end on a tiny configuration: real pools, real clips, real mp4 files."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.mark.slow
 def test_bench_batch_writes_its_keys_from_the_frames_it_wrote(tmp_path, shared_dir):
     out = tmp_path / "bench.json"
-    run = subprocess.run([sys.executable, str(ROOT / "scripts" / "bench_batch.py"), "--json", str(out), "--clips", "3",
+    run = subprocess.run([sys.executable, str(ROOT / "scripts" / "bench.py"), "batch", "--json", str(out), "--clips", "3",
                           "--frames", "30", "--repeats", "1", "--no-ray", "--mesh-clips", "1", "--mesh-frames", "3"],
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]

@@ -192,3 +192,36 @@ def test_a_misspelt_command_is_one_usage_error(capsys):
         main(["sampel", "--samples", "3"])
     assert exit_info.value.code == 2
     assert "invalid choice: 'sampel'" in capsys.readouterr().err
+
+
+def test_render_draws_the_person_of_a_video(dancer_video, tmp_path, capsys, monkeypatch):
+    """A video in (the inputs table lists them): the dancer's pose is estimated, cached, and drawn at the video's
+    rate; the second run reads the cache. A face style is refused in one line."""
+    import cv2
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # the pose cache of this test only
+    cap = cv2.VideoCapture(str(dancer_video))
+    clip = tmp_path / "dancer12.avi"
+    writer = None
+    for _ in range(12):
+        ok, frame = cap.read()
+        assert ok
+        if writer is None:
+            writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, frame.shape[1::-1])
+        writer.write(frame)
+    writer.release()
+    cap.release()
+    out = tmp_path / "dancer.mp4"
+    code, printed, err = _run(["render", str(clip), "-o", str(out), "--size", "128"], capsys)
+    assert code == 0, err
+    assert "12 frames" in printed and "25 fps" in printed
+    frames, fps = read_video(out)
+    assert frames.shape == (12, 128, 128, 3) and fps == pytest.approx(25.0)
+    drawn = (np.abs(frames.astype(int) - frames[:, :1, :1].astype(int)).sum(-1) > 60).mean(axis=(1, 2))
+    assert (drawn > 0.005).all()  # a skeleton in every frame
+    assert "estimated" in err or "cache" in err
+    code, _, err = _run(["render", str(clip), "-o", str(tmp_path / "again.mp4"), "--size", "128"], capsys)
+    assert code == 0 and "read from the cache" in err
+    code, _, err = _run(["render", str(clip), "-o", str(tmp_path / "face.mp4"), "--style", "face"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "dancer12.avi" in err and "body motion" in err
+    assert not (tmp_path / "face.mp4").exists()

@@ -99,6 +99,7 @@ def test_a_forearm_across_the_belly_no_longer_sinks_into_the_posed_mesh(rest):
     assert inside(cleared, fore) < 0.05 * fore.sum() and inside(cleared, hand) < 0.05 * hand.sum()
 
 
+@pytest.mark.slow
 def test_render_mesh_track_moves_the_arms_only_in_the_frames_it_is_told(rest):
     """synthesize poses the reference picture's own pose and the motion together: the picture's arms are where
     they are pictured (frame 0 left alone), the motion's are moved out of the torso."""

@@ -154,6 +154,7 @@ def test_duplicates_and_linked_groups():
 # --- the real dataset ---------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_real_split_is_subject_disjoint_across_folders_and_recorded(mocap, mocap_manifest):
     split = mocap.split
     index = corpus.corpus_index(mocap.source)
@@ -177,6 +178,7 @@ def test_real_split_is_subject_disjoint_across_folders_and_recorded(mocap, mocap
     assert mocap.summary["per_split"]["train"]["clips"] == len(split.train)
 
 
+@pytest.mark.slow
 def test_old_checkpoint_split_on_the_grown_folder(mocap):
     """A 72-clip checkpoint's recorded split (the 5-minute mtvae-add's, kept as a fixture) on the 275-file
     folder: its clips keep their split; new clips are test clips only when no clip of their subject was trained
@@ -205,6 +207,7 @@ def test_old_checkpoint_split_on_the_grown_folder(mocap):
     assert again.split == old and again.clips_of("test")[0].name == old.test[0]
 
 
+@pytest.mark.slow
 def test_stats_come_from_the_training_split(mocap):
     train = mocap.windows("train")
     assert train.raw.shape[1:] == (64, 51)
@@ -216,6 +219,7 @@ def test_stats_come_from_the_training_split(mocap):
     assert set(test.clip_names) <= set(mocap.split.test) and len(test) > 10
 
 
+@pytest.mark.slow
 def test_windows_decode_back_to_the_clip(mocap):
     w = mocap.windows("test", stride=16)
     joints = decode_samples(w.features[:, None], config=mocap.config, stats=mocap.stats, frame=w.frames)[:, 0]
@@ -225,6 +229,7 @@ def test_windows_decode_back_to_the_clip(mocap):
         np.testing.assert_allclose(joints[i], original, atol=2e-4)
 
 
+@pytest.mark.slow
 def test_encode_observation_matches_window_encoding(mocap):
     w = mocap.windows("test", stride=16)
     clip = next(c for c in mocap.clips if c.name == w.clip_names[0])
@@ -234,6 +239,7 @@ def test_encode_observation_matches_window_encoding(mocap):
     np.testing.assert_allclose(frame.angle, w.frames.angle[:1])
 
 
+@pytest.mark.slow
 def test_sample_batch_is_seeded_and_augmented(mocap):
     a = mocap.sample_batch(np.random.default_rng(5), 16)
     b = mocap.sample_batch(np.random.default_rng(5), 16)
@@ -245,6 +251,7 @@ def test_sample_batch_is_seeded_and_augmented(mocap):
     assert np.abs(plain - a).max() > 0.01
 
 
+@pytest.mark.slow
 def test_mirrored_window_encodes_the_mirrored_pose(mocap):
     clip = next(c for c in mocap.clips if c.num_frames >= 64)
     window = clip.data[None, :64]

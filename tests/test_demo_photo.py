@@ -4,6 +4,7 @@ CMU walk's futures as the person of one real photo (pose estimated, cut around t
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from motion2video.formats.video import read_video
 from tests.test_pipeline import _demo_module
@@ -18,6 +19,7 @@ def test_photo_demo_is_skipped_with_one_line_without_the_photos(tmp_path, capsys
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_photo_demo_draws_the_walk_as_the_person_of_a_real_photo(photos_dir, tmp_path, capsys):
     """Not marked slow: 9 s on 2 shared cores beside one training (13-18 s beside two)."""
     demo = _demo_module()

@@ -44,6 +44,7 @@ def _cli(argv: list[str], cwd: Path, *, without_osmesa: bool) -> subprocess.Comp
                           text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_doctor_on_this_machine(tmp_path):
     run = _cli(["doctor", "--json", str(tmp_path / "doctor.json")], tmp_path, without_osmesa=False)
     assert run.returncode == 0, run.stdout + run.stderr

@@ -179,6 +179,7 @@ def test_resample_linear_hits_the_original_samples():
 
 # --- real BVH clips (the checks over every file of the folder live in test_mocap_clips.py) -----------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["cmu/05_01.bvh", "cmu/16_01.bvh", "deepmimic/humanoid3d_run.bvh"])
 def test_load_bvh_with_manifest_matches_the_corpus_loader(mocap_clips, mocap_dir, name):
     m = bvh.load_bvh(mocap_dir / name, manifest=True)
@@ -187,6 +188,7 @@ def test_load_bvh_with_manifest_matches_the_corpus_loader(mocap_clips, mocap_dir
     np.testing.assert_array_equal(m.joints, c.joints)
 
 
+@pytest.mark.slow
 def test_true_fps_overrides_the_header(mocap_clips):
     for name in ("cmu/16_01.bvh", "cmu/16_02.bvh"):
         c = mocap_clips[name]
@@ -198,6 +200,7 @@ def test_true_fps_overrides_the_header(mocap_clips):
         assert c.canonical.fps == 120.0 and c.motion.fps == 60.0
 
 
+@pytest.mark.slow
 def test_rigs_and_units_per_rig(mocap_clips):
     rigs = {name: c.canonical.rig for name, c in mocap_clips.items()}
     assert rigs["cmu/01_01.bvh"] == "cmu-mb"

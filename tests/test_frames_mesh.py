@@ -302,6 +302,7 @@ def train_tiny_mesh_model(domain: str, ckpt: Path, cache: Path, capsys) -> Path:
     return ckpt
 
 
+@pytest.mark.slow
 def test_mesh_model_trains_saves_loads_and_evaluates(tmp_path, capsys):
     cache = tmp_path / "cache"
     ckpt = train_tiny_mesh_model("body", tmp_path / "mesh.safetensors", cache, capsys)
@@ -371,6 +372,7 @@ def test_lifted_reference_projects_onto_the_reference_pose():
     assert pose_error < 0.1  # the pictured pose about its pelvis (the guide's depths: 0.83 m off)
 
 
+@pytest.mark.slow
 def test_width_fit_finds_a_stocky_body():
     from motion2video.core.camera import fit_camera
     from motion2video.formats.io import load_motion
@@ -390,6 +392,7 @@ def test_width_fit_finds_a_stocky_body():
     assert fitted["weight"] == 0.15
 
 
+@pytest.mark.slow
 def test_synthesize_through_the_mesh_generator(tmp_path, capsys):
     import imageio.v3 as iio
 
@@ -447,6 +450,7 @@ def test_colour_difference_finds_hair_that_changed_colour():
     assert regions["skin"][0, :, 8:].all()
 
 
+@pytest.mark.slow
 def test_face_mesh_model_trains_evaluates_and_synthesizes(tmp_path, capsys):
     import imageio.v3 as iio
 

@@ -198,3 +198,24 @@ def test_names_alias_root_and_counts(pytester, monkeypatch):
                                  "*2 tests were deselected*"])
     nothing = pytester.runpytest("-p", "no:cacheprovider", "-k", "no_such_test")
     assert "golden frames" not in nothing.stdout.str()  # no golden used: no summary
+
+
+@pytest.mark.slow
+def test_parallel_workers_report_one_golden_summary(pytester):
+    """Under pytest-xdist (``make test`` runs two workers) the controller prints the summary of every worker's
+    goldens: written, compared, failed and unused, as one process would."""
+    pytester.makepyfile(test_a=BAD_INPUT_TESTS.replace("test_dir_is_file", "test_one").replace(
+        "test_corrupt", "test_two").replace("test_other_size", "test_three"))
+    pytester.makepyfile(test_b=BAD_INPUT_TESTS.replace("test_dir_is_file", "test_four").replace(
+        "test_corrupt", "test_five").replace("test_other_size", "test_six").replace("test_fine", "test_seven"))
+    args = ("-p", "no:cacheprovider", "-n", "2", "--dist", "loadfile")
+    written = pytester.runpytest_subprocess(*args, "--update-golden")
+    written.assert_outcomes(passed=8)
+    written.stdout.fnmatch_lines(["golden frames: 0 compared, 8 written, 0 failed, 0 unused"])
+    (pytester.path / "golden" / "test_old").mkdir()
+    (pytester.path / "golden" / "test_old" / "golden.json").write_text("{}")
+    (pytester.path / "golden" / "test_seven" / "frame_000.png").write_bytes(b"not a png")
+    compared = pytester.runpytest_subprocess(*args)
+    compared.assert_outcomes(passed=7, failed=1)
+    compared.stdout.fnmatch_lines(["golden frames: 8 compared, 0 written, 1 failed, 1 unused",
+                                   "*FAILED*golden/test_seven*", "*UNUSED*golden/test_old"])

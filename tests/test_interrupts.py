@@ -239,3 +239,28 @@ def test_a_ctrl_c_while_the_encoder_starts_leaves_no_encoder_and_no_file(tmp_pat
         pytest.fail("the encoder was left running, unknown to the writer")
     assert code == -signal.SIGKILL  # stopped by the writer (VideoWriter's close), not ended by its input
     assert sorted(tmp_path.iterdir()) == []
+
+
+def test_a_ctrl_c_taken_by_another_thread_is_held_too():
+    """The kernel may hand a Ctrl-C to any thread that does not block it (a process with helper threads); Python
+    still raises it in the main thread. Inside the hold it is kept until the block ends, then raised."""
+    import threading
+
+    from motion2video.formats import video
+
+    stop = threading.Event()
+    helper = threading.Thread(target=stop.wait, daemon=True)
+    helper.start()  # started before the hold: SIGINT is not blocked in it
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal (CI may ignore it)
+    reached = False
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with video._interrupts_held():
+                signal.pthread_kill(helper.ident, signal.SIGINT)
+                time.sleep(0.2)  # without the hold, the KeyboardInterrupt is raised in here
+                reached = True
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        stop.set()
+    assert reached
+    assert signal.getsignal(signal.SIGINT) is previous

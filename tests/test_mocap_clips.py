@@ -122,6 +122,7 @@ def knee_agreement(joints: np.ndarray, side: str, forward: np.ndarray) -> tuple[
     return (float(ahead[bent].mean()) if bent.any() else float("nan")), int(bent.sum())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", CLIP_NAMES)
 def test_real_clip_is_a_plausible_body(mocap_clips, name):
     c = mocap_clips[name]
@@ -169,6 +170,7 @@ def test_real_clip_is_a_plausible_body(mocap_clips, name):
         assert np.median(np.sum(foot * forward, axis=-1)) > 0, f"{side} foot points backwards"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [n for n in WALK_NAMES if n not in NOT_PLAIN_WALKS])
 def test_walking_clips_stand_travel_forward_and_touch_the_floor(mocap_clips, name):
     c = mocap_clips[name]
@@ -184,6 +186,7 @@ def test_walking_clips_stand_travel_forward_and_touch_the_floor(mocap_clips, nam
         assert np.mean(lower_ankle < ANKLE_HEIGHT + 0.10) > 0.9
 
 
+@pytest.mark.slow
 def test_chirality_checks_detect_a_mirror_image(mocap_clips):
     for name in ("cmu/16_11.bvh", "cmu-bench/test/walking/walking_1.txt", "deepmimic-cmu/07_03.txt"):
         c = mocap_clips[name]  # a walk of each rig family
@@ -194,6 +197,7 @@ def test_chirality_checks_detect_a_mirror_image(mocap_clips):
             assert bent > 10 and agree < 0.1, (name, side)
 
 
+@pytest.mark.slow
 def test_true_rates_per_source(mocap_clips):
     """The manifest's fps is the truth; the files say otherwise for salsa and the subject-88 files."""
     rates = {name: c.motion.fps for name, c in mocap_clips.items()}
@@ -212,6 +216,7 @@ def test_true_rates_per_source(mocap_clips):
     assert np.percentile(ankle_speed, 99) < 10.0
 
 
+@pytest.mark.slow
 def test_cmu_bench_rest_line_is_dropped_and_matches_its_bvh_twin(mocap_clips):
     """cmu-bench train walking_1 is CMU 02_01: the same trial as cmu/02_01.bvh frame for frame (line 0 of
     the exp-map file is a rest pose, frame 0 of the BVH its T-pose; the BVH drops 5 frames)."""

@@ -182,6 +182,7 @@ def test_the_shipped_file_is_the_composition_of_the_shipped_parts(shipped, tmp_p
         torch.testing.assert_close(ours[key], theirs[key], rtol=0, atol=0)
 
 
+@pytest.mark.slow
 def test_bad_mixes_are_refused_in_one_line(tmp_path):
     first = load_model(PARTS[0])
     rule = baseline_bundle("mirror-periodic", first.data_config, stats=first.stats)
@@ -204,6 +205,7 @@ def test_bad_mixes_are_refused_in_one_line(tmp_path):
     assert "first model must be a trained sampler" in run.stderr  # the last case: a rule first
 
 
+@pytest.mark.slow
 def test_evaluate_scores_the_rule_in_the_trained_models_windows(tmp_path, capsys):
     """``evaluate --model M --model mirror-periodic``: the rule gets its rows (pooled, macro, per action) on M's
     windows; alone, or beside a face model, it is refused in one line with exit 2."""

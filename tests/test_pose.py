@@ -3,6 +3,9 @@ estimator on the real photos and video of ../shared."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import cv2
@@ -359,6 +362,21 @@ def test_pose_command_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, 
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not out.exists() and not out.parent.exists()
+
+
+def test_a_broken_mp4_gives_only_the_one_line_error(tmp_path):
+    """An mp4 without its index (a file cut short while it was written): libav's own "moov atom not found" is not
+    printed before the one-line error. A fresh process, as a user runs it: OpenCV's FFmpeg backend reads its log
+    level once."""
+    broken = tmp_path / "cut.mp4"
+    broken.write_bytes(b"\x00\x00\x00\x18ftypmp42\x00\x00\x00\x00mp42isom" + bytes(500))
+    env = {k: v for k, v in os.environ.items() if not k.startswith("OPENCV_FFMPEG")}
+    run = subprocess.run([sys.executable, "-m", "motion2video.cli", "pose", str(broken), "-o", str(tmp_path / "x.npz")],
+                         capture_output=True, text=True, env=env, timeout=300)
+    assert run.returncode == 2
+    assert run.stderr.splitlines() == [f"motion2video pose: error: {broken}: cannot read the video (not a video file, "
+                                       "or an unsupported codec)"]
+    assert not (tmp_path / "x.npz").exists()
 
 
 def test_pose_command_checks_its_options_before_any_work(photos_dir, tmp_path, capsys):

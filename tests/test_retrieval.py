@@ -62,7 +62,7 @@ def test_retrieved_futures_continue_the_query_and_are_real_motion(walks):
 
 
 def test_retrieved_latents_decode_the_nearest_windows_latents(walks):
-    """A latent model's futures from retrieved latents (scripts/measure_decoder_ceiling.py): a database window asks
+    """A latent model's futures from retrieved latents (the decoder's ceiling): a database window asks
     for K futures and the first is its own future as the decoder draws it from its own posterior mean; the others
     are the decoder's futures of the same past under the other retrieved windows' latents (an untrained model: its
     zero-initialised head draws the same future for every latent, so the latents are compared, not the futures)."""

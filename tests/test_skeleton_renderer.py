@@ -202,18 +202,17 @@ def test_limb_maps(walk):
     assert maps[0, bone, int(wrist[1]), int(wrist[0])] == 0.0
 
 
-def test_bench_render_smoke(tmp_path):
-    """scripts/bench_render.py main(argv) runs end to end (skeleton, heatmaps, mp4) and writes its keys."""
-    import importlib.util
+def test_bench_render_smoke(tmp_path, monkeypatch):
+    """scripts/bench.py render runs end to end (skeleton, heatmaps, mp4) and writes its keys."""
+    import importlib
     import json
     from pathlib import Path
 
-    script = Path(__file__).resolve().parents[1] / "scripts" / "bench_render.py"
-    spec = importlib.util.spec_from_file_location("bench_render", script)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "scripts"))
+    bench = importlib.import_module("bench")
     out = tmp_path / "bench.json"
-    assert bench.main(["--json", str(out), "--frames", "4", "--repeats", "1", "--warmup", "0", "--no-mesh"]) == 0
+    assert bench.main(["render", "--json", str(out), "--frames", "4", "--repeats", "1", "--warmup", "0", "--no-mesh",
+                       "--no-long"]) == 0
     record = json.loads(out.read_text())
     for key in ("skeleton_vs_matplotlib", "mesh_reuse_vs_recreate", "mesh_fps", "mp4_fps", "machine", "versions"):
         assert key in record

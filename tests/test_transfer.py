@@ -386,6 +386,7 @@ def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys)
     assert "blank.png" in err and "no visible person" in err
 
 
+@pytest.mark.slow
 def test_shipped_behavior_carries_held_out_jumps_kicks_and_speeds(mocap_dir, tmp_path, capsys):
     """The shipped checkpoint: on held-out subjects, re-enacted from other subjects'
     postures as ``motion2video transfer`` does it (the decoder adapted to the source), the median signature

@@ -7,6 +7,7 @@ in chunks (:func:`iter_frames`), so memory does not grow with the clip's length.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
@@ -19,6 +20,8 @@ from motion2video.formats.io import load_motion, resample_motion
 from motion2video.core.motion import FaceMotion, Motion
 from motion2video.formats.mocap import is_deepmimic_file
 from motion2video.formats.video import VIDEO_SUFFIXES
+from motion2video.pose.files import pose_motion_3d
+from motion2video.stages.people import is_video, video_pose
 
 STYLES = ("skeleton", "heatmap", "mesh", "face")
 MIN_SIZE, MAX_SIZE = 32, 2048
@@ -30,7 +33,8 @@ class RenderRequest:
     """Everything ``render`` needs.
 
     Attributes:
-        input: the motion file (see :func:`motion2video.formats.io.load_motion`).
+        input: the motion file (see :func:`motion2video.formats.io.load_motion`), or a video of a person, whose
+            pose is estimated (and cached, :func:`motion2video.stages.people.video_pose`) and drawn.
         output: the .mp4 or .gif to write.
         style: one of :data:`STYLES`.
         size: frame width and height in pixels, 32..2048.
@@ -200,6 +204,18 @@ def iter_futures_grid(futures: list[Motion], *, size: int, palette: str = "leftr
         yield from iter_grid([cell(renderer, m) for m in futures], labels)
 
 
+def video_motion(path: Path, *, style: str, input_fps: float | None) -> Motion:
+    """The person of a video as an ``h36m-17`` Motion (3D joints, metres, z up) at the video's own rate: the pose
+    estimated once and cached by the file's hash (:func:`motion2video.stages.people.video_pose`); one note on
+    stderr says whether it was estimated or read from the cache."""
+    if input_fps is not None:
+        raise InputError("a video has its own frame rate; --input-fps is for files without one", path)
+    if style == "face":
+        raise InputError("a video gives body motion; --style face draws face captures (.csv, face .npz)", path)
+    pose = video_pose(path, note=lambda line: print(f"note: {line}", file=sys.stderr))
+    return pose_motion_3d(pose, path)
+
+
 def render_file(request: RenderRequest) -> RenderResult:
     """Load ``request.input``, render it and write ``request.output``; see :class:`RenderRequest`."""
     from motion2video.formats.video import VideoWriter
@@ -218,8 +234,16 @@ def render_file(request: RenderRequest) -> RenderResult:
             and not (src.is_file() and is_deepmimic_file(src))):
         # OpenPose keypoints carry no frame rate: --fps is the rate of the video they came from.
         input_fps = float(request.fps)
-    futures = _joint_futures(request.input, input_fps)
-    if futures is not None:
+    futures = None if is_video(src) else _joint_futures(request.input, input_fps)
+    if is_video(src):
+        motion = video_motion(src, style=request.style, input_fps=request.input_fps)
+        if request.fps is not None:
+            motion = resample_motion(motion, float(request.fps))
+        if request.start != 0 or request.frames is not None:
+            motion = motion.slice(request.start, request.frames)
+        frames = iter_frames(motion, style=request.style, size=size, palette=request.palette,
+                             progress=request.progress)
+    elif futures is not None:
         if request.style != "skeleton":
             raise InputError(f"a joint array of {len(futures)} clips renders as a skeleton grid only, not "
                              f"--style {request.style}", request.input)

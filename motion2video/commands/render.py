@@ -9,7 +9,8 @@ from motion2video.apps.render import STYLES, RenderRequest, render_file
 
 DESCRIPTION = """\
 Render a motion clip offscreen: skeleton maps, Gaussian heatmaps, the Anny body mesh, or the Anny face. Body
-inputs are converted to the canonical H36M-17 skeleton first.
+inputs are converted to the canonical H36M-17 skeleton first. A video's person is found and their 3D pose estimated
+(BlazePose, cached by the file's hash, as `motion2video pose` does), then drawn like any body clip.
 """
 
 EXAMPLES = """\
@@ -21,6 +22,7 @@ examples:
   motion2video render demo_inputs/walk_to_run.npz -o out/heatmaps.mp4 --style heatmap --start 10 --frames 50
   motion2video render ../shared/data/face/llv/dao.csv -o out/dao_face.mp4 --style face
   motion2video render demo_inputs/smile.npz -o out/smile.gif --style face --fps 12.5
+  motion2video render ../shared/data/video/dancer.avi -o out/dancer_mesh.mp4 --style mesh --frames 100
   motion2video render humanml3d_joints.npy -o out/t2m.mp4            # (T, 22, 3) SMPL joints, 20 fps
   motion2video render futures.npy -o out/futures.mp4                 # (K, T, J, 3): a grid of K cells
 """
@@ -31,7 +33,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("input", help="a .bvh, DeepMimic motion file (.txt/.json with \"Frames\"), exp-map text file "
                    "(.txt with a skeleton.json beside or above it), .npz (Motion or FaceMotion), joint array .npy "
                    "(or .npz with one array) of shape (T, 22, 3) SMPL, (T, 17, 3) H36M or (K, T, J, 3) futures, "
-                   "OpenPose JSON folder, or .csv face capture")
+                   "OpenPose JSON folder, .csv face capture, or a video of a person (.mp4, .avi, .mov, ...: their pose is "
+                   "estimated)")
     p.add_argument("-o", "--output", required=True, help="output .mp4 or .gif")
     p.add_argument("--style", choices=STYLES, default="skeleton", help="what to draw (default: skeleton)")
     p.add_argument("--size", type=int, default=256, help="frame width and height in pixels, 32..2048 (default 256)")

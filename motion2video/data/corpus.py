@@ -36,7 +36,7 @@ shipped 5-minute checkpoints trained on is held out (their test subjects were 16
 and 8), and so that test holds whole subjects of several actions plus one whole new source (indian dance,
 subject 94) the old models never saw. Linking (:func:`link_groups`) merges cmu-02 with CMU 5, 6 and 7 through
 the unidentified ``cmu-bench`` walking files, and the 72-clip split trained on clips of 5, 6 and 7: comparisons
-with the 5-minute checkpoints leave those clips out (``scripts/make_results_per_action.py`` does).
+with the 5-minute checkpoints leave those clips out (``scripts/make_results.py per-action`` does).
 """
 
 from __future__ import annotations

@@ -129,7 +129,7 @@ def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarra
                       batch_size: int = 32, from_mean: bool = False) -> np.ndarray | None:
     """K reconstructions per window from latents drawn from the recognition model q(z | obs, future)
     (for R-MSE): (N, K, Tf, F) normalised, or None for models without ``encode`` / ``decode``. ``from_mean``:
-    every latent is the recognition model's mean instead (``scripts/measure_decoder_ceiling.py``)."""
+    every latent is the recognition model's mean instead (the decoder's ceiling: what the best latents could give)."""
     if not (hasattr(model, "encode") and hasattr(model, "decode")):
         return None
     model.eval()

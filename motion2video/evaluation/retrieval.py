@@ -9,7 +9,7 @@ it answers two questions about the evaluation rather than being a model to ship:
   continues each window, captured from other people: the target a generator is held to is only meaningful if
   real motion meets it.
 
-``scripts/measure_retrieved_futures.py`` reports both (docs/results_transfer.md, "Realism").
+docs/results_transfer.md ("Realism") reports both.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def retrieved_latent_futures(model: nn.Module, database: RetrievedFutures, laten
     decoded from the window's own observed frames.
 
     It asks whether a sampler could do better by drawing the latents that the training futures of similar moments
-    have, instead of learning a map from noise (``scripts/measure_decoder_ceiling.py``).
+    have, instead of learning a map from noise (the decoder's ceiling).
 
     Args:
         model: a latent model with ``decode`` (its latents ``latents``, from :func:`posterior_means`).

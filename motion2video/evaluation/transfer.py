@@ -1,5 +1,5 @@
 """Behaviour transfer's protocol (Blattmann et al., CVPR 2021, Table 1 / Table 3), for
-``scripts/make_results_transfer.py``: on held-out windows, each source behaviour x_beta is re-enacted from the
+``scripts/make_results.py transfer``: on held-out windows, each source behaviour x_beta is re-enacted from the
 start posture of a window of a DIFFERENT clip:
 
 - TDE(T): mean squared error between re-enactment x_R and source x_beta at frame T (root-relative joints,

@@ -296,15 +296,31 @@ def _interrupts_held() -> Iterator[None]:
     ``synthesize``, seen once in a clean-clone ``make test``). The encoder inherits the held mask; it runs in its
     own session and is stopped by SIGKILL (:meth:`_FFmpegProcess.close`) or by the end of its input, so it never
     needs those two signals.
+
+    The mask holds a signal back from this thread only; the kernel hands a signal sent to the process to any
+    thread that does not block it (a process with helper threads: a test worker's, a library's), and Python then
+    runs its handler in the main thread all the same. So the Python handlers are replaced for the block too: a
+    signal that arrives is recorded and raised again once the block ends and the handlers are back.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    arrived: list[int] = []
+    replaced = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        handler = signal.getsignal(sig)
+        if handler is not None:  # None: a handler not installed from Python, left alone
+            replaced[sig] = handler
+            signal.signal(sig, lambda signum, _frame: arrived.append(signum))
     held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        for sig, handler in replaced.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(arrived):
+            signal.raise_signal(sig)
 
 
 class VideoWriter:

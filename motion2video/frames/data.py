@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2video.core.atomic import save_npz
+from motion2video.core.atomic import save_npz, write_text
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import H36M_17
 from motion2video.frames.specs import (
@@ -337,7 +337,8 @@ def load_or_generate(spec: DatasetSpec, *, cache_dir: str | Path, data_root: str
     folder.mkdir(parents=True, exist_ok=True)
     spec_file = folder / "spec.json"
     if not spec_file.exists():
-        spec_file.write_text(json.dumps({**asdict(spec), "version": DATA_VERSION}, indent=1, sort_keys=True))
+        # atomically: test workers and training runs may fill one cache side by side
+        write_text(spec_file, json.dumps({**asdict(spec), "version": DATA_VERSION}, indent=1, sort_keys=True))
     shards = [folder / f"shard-{k:05d}.npz" for k in range(spec.num_shards)]
     missing = [k for k, p in enumerate(shards) if not p.is_file()]
     if missing:

@@ -34,7 +34,7 @@ def lift_reference(points: np.ndarray, guide: np.ndarray, camera, scale: float, 
     (the picture's scale); each further joint, parents first, lies on its pixel's ray at its bone's length from its
     parent, the one of the two such points whose depth step is nearer the pictured one (Taylor's 2000
     reconstruction from one view, under perspective). On real-mocap pairs with a fitted reference body this gave
-    0.4-1.8 dB more person PSNR than the guide's depths (``scripts/measure_fitted_reference.py``).
+    0.4-1.8 dB more person PSNR than the guide's depths (on held-out real-mocap pairs).
 
     Without it: each joint at the depth of the same joint of ``guide``. Bones whose direction differs between the
     two poses are then stretched or shrunk in depth, but no bone length from another person is assumed.

@@ -98,7 +98,7 @@ def head_weights(rest) -> np.ndarray:
     1 on the head (:func:`renderers.anny_model.head_vertices`), falling linearly to 0 down the neck, from the head
     bone to the lowest neck bone (``neck01``), by height in the rest pose; 0 below. (Weights by how far in front
     of the skull base a point lies, as a turn of the head would move it, gave up to 0.4 dB less head PSNR with
-    the fitted references of ``scripts/measure_fitted_reference.py``.)"""
+    references fitted to held-out real-mocap pairs.)"""
     head = anny_model.head_vertices()
     top = rest.bone_heads[anny_model.bone_index("head"), 2]
     bottom = rest.bone_heads[anny_model.bone_index("neck01"), 2]

@@ -443,8 +443,9 @@ class WarpGenerator(nn.Module):
 
     # --- inference on full-resolution frames: one reference, many targets ------------------------------
 
-    def encode_reference(self, ref_image: np.ndarray, ref_keypoints: np.ndarray) -> ReferenceState:
-        """Check and hold a reference: (H, W, 3) uint8 image, (17, 2) joints in its pixels.
+    def encode_reference(self, ref_image: np.ndarray, ref_keypoints: np.ndarray, *, path=None) -> ReferenceState:
+        """Check and hold a reference: (H, W, 3) uint8 image, (17, 2) joints in its pixels; ``path``, the image's
+        file, is named in the errors.
 
         Raises:
             InputError: joints outside the image, or no visible person (joints not finite, all within
@@ -456,8 +457,8 @@ class WarpGenerator(nn.Module):
             raise ValueError(f"reference image must be (H, W, 3) uint8, got {image.shape} {image.dtype}")
         if points.shape != (NUM_JOINTS, 2):
             raise ValueError(f"reference keypoints must be (17, 2), got {points.shape}")
-        check_reference_points(points, width=image.shape[1], height=image.shape[0])
-        check_reference_person(image, points)
+        check_reference_points(points, width=image.shape[1], height=image.shape[0], path=path)
+        check_reference_person(image, points, path=path)
         return ReferenceState(image=np.ascontiguousarray(image), points=points.astype(np.float32))
 
     @torch.inference_mode()

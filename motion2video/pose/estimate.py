@@ -19,6 +19,7 @@ The floor is put at z = 0, :data:`~motion2video.formats.canonical.ANKLE_HEIGHT` 
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -278,11 +279,20 @@ class VideoInfo:
     frames: int | None
 
 
+def quiet_libav() -> None:
+    """Keep OpenCV's FFmpeg backend from printing libav's own messages ("moov atom not found") on stderr before
+    the one-line InputError that says the same. The backend reads the level when it first opens a file, so this
+    runs before every open; a user's ``OPENCV_FFMPEG_LOGLEVEL`` or ``OPENCV_FFMPEG_DEBUG`` is left as it is."""
+    if "OPENCV_FFMPEG_LOGLEVEL" not in os.environ and "OPENCV_FFMPEG_DEBUG" not in os.environ:
+        os.environ["OPENCV_FFMPEG_LOGLEVEL"] = "-8"  # AV_LOG_QUIET
+
+
 def open_video(path: str | Path) -> tuple[cv2.VideoCapture, VideoInfo]:
     """Open a video for reading; InputError naming it when it is missing or cannot be decoded."""
     path = Path(path)
     if not path.is_file():
         raise InputError("no such video file", path)
+    quiet_libav()
     cap = cv2.VideoCapture(str(path))
     if not cap.isOpened():
         raise InputError("cannot read the video (not a video file, or an unsupported codec)", path)

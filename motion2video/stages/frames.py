@@ -93,7 +93,7 @@ def reference_person(image: np.ndarray):
 
 def default_generator_threads() -> int:
     """Half the CPU cores, 1 to 4. On the 2-core machines this was built on, two threads were slower than
-    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench_pipeline.py``."""
+    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench.py pipeline``."""
     return max(1, min(4, (os.cpu_count() or 1) // 2))
 
 
@@ -173,7 +173,7 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
     if is_warp(net):
         n = structures.num_targets
         with torch_threads(threads):
-            state = net.encode_reference(reference.image, structures.points[0])
+            state = net.encode_reference(reference.image, structures.points[0], path=reference.path)
             frames = net.decode(state, structures.points[1:1 + n], batch_size=batch_size)
         to, k, tf = structures.observed, structures.samples, structures.horizon
         size = structures.size
@@ -217,7 +217,7 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
             video = mesh_setup(net, reference, structures)
     elif warp:  # the warp generator works at any frame size: its person crop is resized to the model's size
         with torch_threads(threads):
-            state = net.encode_reference(reference.image, structures.points[0])
+            state = net.encode_reference(reference.image, structures.points[0], path=reference.path)
     else:
         size = net.config.image_size
         if structures.size != size:

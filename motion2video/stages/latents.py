@@ -104,7 +104,7 @@ def behavior_root(model: BehaviorModel, source: np.ndarray, start: np.ndarray) -
 # Test-time adaptation of the behaviour decoder to one source (:func:`adapt_to_source`). Chosen on the transfer
 # benchmark's TRAINING cases (transfer_benchmark.CASES, split "train"; 2026-11-26): the mean |log ratio| over their
 # behaviour and root-relative signatures was 0.389 as trained, 0.253 / 0.203 / 0.198 / 0.199 / 0.187 after 25 / 50 /
-# 100 / 200 / 300 Adam steps at 1e-3 (scripts/measure_transfer_adaptation.py); 300 is the best of those (about 6 s
+# 100 / 200 / 300 Adam steps at 1e-3 (measured on the transfer benchmark); 300 is the best of those (about 6 s
 # per source on one CPU thread).
 ADAPT_STEPS = 300
 ADAPT_LR = 1e-3

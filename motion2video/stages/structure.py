@@ -203,8 +203,9 @@ def view_to_fit(points: np.ndarray, size: int) -> tuple[float, float, float] | N
 
 def reference_in_view(forecast, reference: Reference, *, size: int, fit_view: bool) -> Reference:
     """The reference, re-framed so that every observed and future body of ``forecast`` stays in the picture when
-    ``fit_view`` (:func:`view_to_fit`, :func:`motion2video.stages.reference.zoom_to_view`); without ``fit_view``, the
-    same reference with a note when a body leaves the picture. Face references are returned as they are.
+    ``fit_view`` (:func:`view_to_fit`, :func:`motion2video.stages.reference.zoom_to_view`, whose note says by how
+    much); without ``fit_view``, the same reference, nothing added (the option's help says when to ask for it).
+    Face references are returned as they are.
 
     Args:
         forecast: a :class:`motion2video.stages.sampling.Forecast` (observed (To, 17, D), futures (K, Tf, 17, D)).
@@ -215,7 +216,7 @@ def reference_in_view(forecast, reference: Reference, *, size: int, fit_view: bo
 
     from motion2video.stages.reference import ReferencePose, zoom_to_view
 
-    if DOMAIN_OF_LAYOUT[forecast.layout] != "body":
+    if not fit_view or DOMAIN_OF_LAYOUT[forecast.layout] != "body":
         return reference
     ref_points = None if reference.pose is None else reference.pose.points
     placement = place_body(forecast.observed, forecast.futures, size=size, reference_points=ref_points)
@@ -223,10 +224,6 @@ def reference_in_view(forecast, reference: Reference, *, size: int, fit_view: bo
     view = view_to_fit(rows, size)
     if view is None:
         return reference
-    if not fit_view:
-        return replace(reference, notes=reference.notes + (
-            "the motion leaves the reference picture (a head above the top, a foot below the bottom): --fit-view "
-            "zooms out so the person stays in view",))
     if reference.pose is None:  # the placement's own framing becomes the pose that is zoomed
         reference = replace(reference, pose=ReferencePose("body", size, size, points=placement.reference))
     return zoom_to_view(reference, view)
