@@ -347,7 +347,7 @@ class BodyFrames:
             (:func:`renderers.anny_model.head_vertices`), or None when not asked for.
         vertex_uv: (T, V, 2) float32 every mesh vertex's pixel position, or None when not asked for.
         vertex_visible: (T, V) bool, the vertex is the front surface at its pixel (the mesh generator's
-            correspondence, :mod:`motion2video.frames.mesh_flow`), or None.
+            correspondence, :mod:`motion2video.generator.mesh_flow`), or None.
     """
 
     frames: np.ndarray

@@ -46,13 +46,13 @@ from motion2video.core.skeletons import H36M_17
 from motion2video.evaluation.benchtools import bench_parser, median_ms, median_seconds, report
 from motion2video.evaluation.benchtools import median_seconds as _median_time
 from motion2video.formats.video import ENCODER_ENV, write_video
-from motion2video.frames.data import structure_channels
-from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate,
+from motion2video.generator.data import structure_channels
+from motion2video.generator.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate,
                                        reconstruction_loss)
 from motion2video.pose.blazepose import BlazePose, detection_roi
 from motion2video.pose.estimate import estimate_video, iter_video_frames
 from motion2video.pose.h36m import blazepose_to_h36m
-from motion2video.stages.frames import default_generator_threads, generate_frames, generate_video_frames
+from motion2video.stages.generation import default_generator_threads, generate_frames, generate_video_frames
 from motion2video.stages.reference import load_reference
 from motion2video.stages.sampling import sample_forecast, torch_threads
 from motion2video.stages.structure import render_structures, split_rows, structure_previews
@@ -627,9 +627,9 @@ PIPELINE_DOC = """Speed of the multimodal future-video pipeline (``motion2video 
 Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2video/weights``):
 
 - ``generator``: the keypoint body frame generator (``frames-body-128``) at 128x128 (torch.inference_mode), frames/s by batch size, with and
-  without channels_last, through the pipeline's path (:func:`motion2video.stages.frames.generate_frames`, which
+  without channels_last, through the pipeline's path (:func:`motion2video.stages.generation.generate_frames`, which
   encodes the reference once per video) and through the plain per-frame model call
-  (:func:`motion2video.frames.model.generate`), at 1 thread and at the pipeline's default thread count.
+  (:func:`motion2video.generator.model.generate`), at 1 thread and at the pipeline's default thread count.
   ``generator_fps_128`` = the pipeline path at its defaults (batch 8, channels_last, default threads);
   ``generator_fps_128_batch1`` and ``generator_fps_128_best`` (best batch size) beside it.
 - ``generators_side_by_side``: frames/s at 128x128 of the body generator and of each ``--compare-frame-model``
@@ -638,7 +638,7 @@ Measures, with the checkpoints in ``--weights`` (default: the shipped ``motion2v
   ``decode``: person crop, generation, paste, on the demo reference and poses moved around it).
 - ``generators_256``: frames/s of whole synthesized videos at 256x256 (the demo body reference, the real walk
   ``cmu_walk.npz``, K=2 futures x 48 frames after 16 observed, sampled once), through
-  :func:`~motion2video.stages.frames.generate_video_frames` for the body generator and each
+  :func:`~motion2video.stages.generation.generate_video_frames` for the body generator and each
   ``--mesh-frame-model`` (default: the demo's body generator, ``frames-body-mesh-256``, from --weights) side by
   side: the mesh generator's time includes fitting, posing and rendering the body mesh of every frame.
 - ``end_to_end``: K=5 futures x 48 frames after 16 observed, body and face: the wall time of
@@ -682,7 +682,7 @@ def machine() -> dict:
 
 def bench_generator(frame_model, *, repeats: int, frames: int = 16) -> dict:
     """Frames/s of the generator at its size on random structures (speed does not depend on the values)."""
-    from motion2video.frames.model import generate
+    from motion2video.generator.model import generate
 
     net = frame_model.model
     cfg = net.config
@@ -770,7 +770,7 @@ def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> di
     """Wall time of synthesize vs the sum of its stages timed alone, for one demo clip."""
     from motion2video.models.checkpoint import load_model
     from motion2video.apps.sample import load_clip_for
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
 
     clip_path = demo.DEMO_INPUTS / spec["clip"]
     ref_path = demo.DEMO_INPUTS / spec["reference"]
@@ -903,7 +903,7 @@ def pipeline_main(argv: list[str] | None = None) -> int:
     if missing:
         print(f"bench_pipeline: error: missing weight file(s): {', '.join(missing)}", file=sys.stderr)
         return 2
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
 
     result: dict = {"machine": machine(), "weights": str(args.weights)}
     with tempfile.TemporaryDirectory(prefix="bench_pipeline_") as tmp:

@@ -144,7 +144,7 @@ def run_transfer_demo(out: Path, *, weights: Path = WEIGHTS, size: int = 256) ->
     from motion2video.apps.transfer import iter_transfer, transfer_behavior, transfer_forecast
     from motion2video.models.checkpoint import load_model
     from motion2video.core.atomic import save_npz
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
     from motion2video.stages.reference import load_reference
     from motion2video.stages.clips import load_clip
     from motion2video.stages.structure import reference_in_view

@@ -43,7 +43,7 @@ FACE_DEMOS: dict[str, tuple[tuple[tuple[str, float], ...], str]] = {
 }
 REFERENCE_SIZES = (256, 128)
 # Real CMU excerpts: file name -> (clip in the mocap folder, first frame and frames at FPS, description). Both
-# clips are held out of the frame generator's training data (motion2video.frames.specs.is_test_clip).
+# clips are held out of the frame generator's training data (motion2video.generator.specs.is_test_clip).
 REAL_DEMOS: dict[str, tuple[str, int, int, str]] = {
     "cmu_walk.npz": ("cmu/07_04.bvh", 0, 90, "CMU subject 7, trial 4 (\"slow walk\"): walks forward about 3 m"),
     "cmu_jump.npz": ("cmu/16_02.bvh", 20, 75, "CMU subject 16, trial 2 (\"jump\"): stands, crouches, jumps up "

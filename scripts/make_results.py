@@ -49,13 +49,13 @@ from motion2video.data.windows import metric_vectors
 from motion2video.evaluation import metrics as M
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
 from motion2video.formats.io import load_motion
-from motion2video.frames.baselines import run_baseline
-from motion2video.frames.checkpoint import load_frame_model
-from motion2video.frames.data import default_cache_dir, evaluation_pair_index, load_or_generate, make_pairs
-from motion2video.frames.evaluate import frame_metrics, region_psnr, sharpness_ratio
-from motion2video.frames.model import images_to_tensor, tensor_to_images
-from motion2video.frames.specs import default_spec
-from motion2video.frames.warp import WarpGenerator, warp_image
+from motion2video.generator.image_baselines import run_baseline
+from motion2video.generator.checkpoint import load_frame_model
+from motion2video.generator.data import default_cache_dir, evaluation_pair_index, load_or_generate, make_pairs
+from motion2video.generator.scores import frame_metrics, region_psnr, sharpness_ratio
+from motion2video.generator.model import images_to_tensor, tensor_to_images
+from motion2video.generator.specs import default_spec
+from motion2video.generator.warp import WarpGenerator, warp_image
 from motion2video.models.base import MODEL_REGISTRY
 from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model
@@ -1988,7 +1988,7 @@ FRAMES_REAL_DOC = """The body frame generator driven by real mocap it never trai
     python scripts/make_results.py frames-real [--model frames-body-mesh-256] [--mocap ../shared/data/mocap]
 
 For each clip of :data:`CLIPS` (real CMU captures held out of the frame training data:
-``motion2video.frames.specs.is_test_clip``), runs what ``motion2video evaluate-frames --model MODEL --poses
+``motion2video.generator.specs.is_test_clip``), runs what ``motion2video evaluate-frames --model MODEL --poses
 CLIP`` runs (the same functions, once per clip: the held-out identities posed by 4 windows of the clip, the truth
 the Anny render of each pose) and writes:
 
@@ -2046,11 +2046,11 @@ HEAD_BOX = 24  # pixels (frame scale) of the enlarged head crop beside each cell
 def evaluate_clip(model_name: str, clip: Path):
     """The evaluation of ``evaluate-frames --model model_name --poses clip --windows WINDOWS``, its JSON payload
     (the same functions the command runs) and (N, 2, H, W) bool head masks of each pair's target and reference."""
-    from motion2video.frames.data import evaluation_pair_index
+    from motion2video.generator.data import evaluation_pair_index
     from motion2video.commands.evaluate_frames import evaluate_posed, load_baselines
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.evaluate import json_payload
-    from motion2video.frames.poses import load_body_clips
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.generator.scores import json_payload
+    from motion2video.generator.poses import load_body_clips
 
     loaded = load_frame_model(model_name)
     baselines, left_out = load_baselines(None, loaded)
@@ -2166,7 +2166,7 @@ The frame test split's 8 held-out identities, posed by {WINDOWS} windows spread 
 over each real CMU capture (9 frames over 1.2 s each; frame 0 of a window is the reference, the 8 later frames
 the targets), rendered by the Anny body renderer exactly as the training data is (background, camera yaw and
 elevation, light); the truth is the render of each pose. None of these clips is in the frame training data
-(`motion2video.frames.specs.is_test_clip`; `cmu/02_01.bvh` is a training clip, so a held-out
+(`motion2video.generator.specs.is_test_clip`; `cmu/02_01.bvh` is a training clip, so a held-out
 walk is used instead). The head is the target's visible head: the pixels where Anny's head vertices (dominant
 bone `head` or below it) are the front surface, by a depth test, so a hand in front of the face is not head.{old}
 
@@ -2193,7 +2193,7 @@ _Generated {time.strftime('%Y-%m-%d %H:%M:%S')} in {minutes:.1f} min by `python 
 def frames_real_main(argv: list[str] | None = None) -> int:
     import imageio.v3 as iio
 
-    from motion2video.frames.evaluate import contact_sheet
+    from motion2video.generator.scores import contact_sheet
 
     parser = argparse.ArgumentParser(description=FRAMES_REAL_DOC, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--model", default="frames-body-mesh-256",
@@ -2208,7 +2208,7 @@ def frames_real_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--note", default="", help="a paragraph added to the section (e.g. which checkpoint --model is)")
     args = parser.parse_args(argv)
 
-    from motion2video.frames.specs import is_test_clip
+    from motion2video.generator.specs import is_test_clip
 
     start = time.perf_counter()
     payloads, columns = {}, []
@@ -2258,7 +2258,7 @@ What it does (one torch thread; every number comes from this run):
    gamma_C = 0) and MT-VAE (add), whose transfer is the analogy z = E(obs_src, fut_src), x_R = D(obs_tgt, z).
 3. On every held-out window (stride 8), transfers the source's behaviour to the start posture of a window
    of another held-out clip and reports TDE, RE and d_beta at T = 1, 10, 20, 30, 40
-   (:func:`motion2video.evaluation.transfer.evaluate_transfer`), and the realism classifier's accuracy for
+   (:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer`), and the realism classifier's accuracy for
    reconstructions, transfers, prior samples and flow samples.
 4. The known-answer analogy: a small mtvae-add trained on the procedural multimodal benchmark's
    transitions; for several X -> Y and 20 seeds each, the mode classifier's label of D, against a prior
@@ -2427,7 +2427,7 @@ def claims(scores: dict) -> list[str]:
 
 
 def write_markdown(path: Path, *, scores: dict, trained: dict, analogy: dict, info: dict) -> None:
-    from motion2video.evaluation.transfer import TABLE1_TIMESTEPS
+    from motion2video.evaluation.transfer_protocol import TABLE1_TIMESTEPS
 
     ts = TABLE1_TIMESTEPS
     lines = [
@@ -2592,7 +2592,7 @@ def transfer_main(argv: list[str] | None = None) -> int:
 
     from motion2video.models.checkpoint import load_model
     from motion2video.data.dataset import DatasetConfig, build_dataset
-    from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
+    from motion2video.evaluation.transfer_protocol import evaluate_transfer, transfer_pairs
 
     torch.set_num_threads(1)
     t_all = time.perf_counter()
@@ -2646,7 +2646,7 @@ rest of the page is scripts/make_results.py transfer's).
 
 Each ``--behavior LABEL=CHECKPOINT`` is a behaviour model to compare (a shipped name or a path); the
 benchmark itself is :mod:`motion2video.evaluation.transfer_benchmark`, the liveliness and realism numbers
-:func:`motion2video.evaluation.transfer.evaluate_transfer` on the held-out windows of the corpus's pinned
+:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer` on the held-out windows of the corpus's pinned
 subject-disjoint split (the checkpoints' own split).
 """
 
@@ -2696,7 +2696,7 @@ def checkpoint_dataset(mocap: str, bundle):
 
 def liveliness(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, seed: int) -> dict:
     from motion2video.models.checkpoint import load_model
-    from motion2video.evaluation.transfer import evaluate_transfer, transfer_pairs
+    from motion2video.evaluation.transfer_protocol import evaluate_transfer, transfer_pairs
 
     out = {}
     dataset = stats = None
@@ -2716,11 +2716,11 @@ def liveliness(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, s
 
 def sampler_rows(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, samples: int, seed: int) -> dict:
     """Liveliness and realism of each model's sampled futures (what `sample` and `synthesize` draw) on the
-    held-out windows: :func:`motion2video.evaluation.transfer.sample_realism`."""
+    held-out windows: :func:`motion2video.evaluation.transfer_protocol.sample_realism`."""
     import dataclasses
 
     from motion2video.models.checkpoint import load_model
-    from motion2video.evaluation.transfer import sample_realism
+    from motion2video.evaluation.transfer_protocol import sample_realism
 
     out = {}
     for label, path in checkpoints:
@@ -2847,7 +2847,7 @@ def _transfer_benchmark_render(bench: dict, live: dict, samplers: dict, controls
         real_v, real_a = first["motion"]["real"]
         L += ["### Liveliness and realism", "",
               f"Held-out windows of the corpus's pinned split ({first['windows']} windows, 16 observed + 48 "
-              "future frames); `motion2video.evaluation.transfer.evaluate_transfer`: self = reconstruction, "
+              "future frames); `motion2video.evaluation.transfer_protocol.evaluate_transfer`: self = reconstruction, "
               "transfer = re-enacted from another held-out clip's window, prior = z ~ N(0, I), flow = z = "
               "T^-1(u). Mean absolute velocity / acceleration of the features per frame (m/frame, m/frame^2; "
               f"held-out ground truth **{real_v:.4f} / {real_a:.4f}**), and their ratio to the ground truth "

@@ -1,6 +1,6 @@
 """Change the inference settings of a mesh frame generator checkpoint, keeping its weights.
 
-The mesh generator's configuration (:class:`motion2video.frames.mesh_warp.MeshWarpConfig`) holds settings that
+The mesh generator's configuration (:class:`motion2video.generator.mesh_warp.MeshWarpConfig`) holds settings that
 have no weights: the image size and ``net_scale`` (a 128 px model at net_scale 2 and a 256 px model at net_scale 4
 see the body at the same scale) and ``sharpen``. This writes a copy of a checkpoint
 with some of them changed, and its training summary, plus a note of what was changed::
@@ -28,8 +28,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     from motion2video.core.errors import InputError
-    from motion2video.frames.checkpoint import load_frame_model, save_frame_model
-    from motion2video.frames.mesh_warp import MeshWarpGenerator
+    from motion2video.generator.checkpoint import load_frame_model, save_frame_model
+    from motion2video.generator.mesh_warp import MeshWarpGenerator
 
     try:
         loaded = load_frame_model(args.checkpoint)

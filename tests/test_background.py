@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
-from motion2video.frames.background import composite, inpaint_background, person_hole, soft_matte
+from motion2video.generator.background import composite, inpaint_background, person_hole, soft_matte
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
@@ -103,10 +103,10 @@ def test_no_ghost_where_the_photos_person_stood(photos_dir):
     person now covers (her new silhouette grown by 6 px) is white. Pasting the generated person over the reference
     with the old feathered paste mask left 11.5% of those pixels hers (a hand and a shoe's shadow beside the new
     body); over the inpainted background, none."""
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.mesh_flow import grow_masks
-    from motion2video.stages.frames import mesh_setup
-    from motion2video.stages.mesh_frames import generate_mesh_frames
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.generator.mesh_flow import grow_masks
+    from motion2video.stages.generation import mesh_setup
+    from motion2video.stages.mesh_generation import generate_mesh_frames
     from motion2video.stages.reference import load_reference
     from motion2video.stages.sampling import Forecast
     from motion2video.stages.structure import render_structures

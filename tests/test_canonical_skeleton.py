@@ -138,7 +138,7 @@ def test_old_checkpoints_are_refused_with_one_line():
 
 def test_shipped_body_checkpoints_record_the_current_version():
     from motion2video.models.checkpoint import load_model, read_meta, resolve_checkpoint
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
 
     for name in ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior", "mtvae-add-2d"):
         assert read_meta(resolve_checkpoint(name)).skeleton_version == SKELETON_VERSION, name

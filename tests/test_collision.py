@@ -104,7 +104,7 @@ def test_render_mesh_track_moves_the_arms_only_in_the_frames_it_is_told(rest):
     """synthesize poses the reference picture's own pose and the motion together: the picture's arms are where
     they are pictured (frame 0 left alone), the motion's are moved out of the torso."""
     from motion2video.core.camera import fit_camera
-    from motion2video.frames.mesh_fit import render_mesh_track
+    from motion2video.generator.mesh_fit import render_mesh_track
 
     joints = rest.joints17[None].copy()
     pelvis, spine, lateral, front = body_axes(joints)

@@ -129,7 +129,7 @@ def test_frame_checkpoint_is_refused(case, tmp_path, capsys):
 def test_written_checkpoints_record_their_format_version(tmp_path):
     """What save_checkpoint / save_frame_model write carries format_version, and reads back."""
     from motion2video.models.checkpoint import load_model, save_checkpoint
-    from motion2video.frames.checkpoint import load_frame_model, save_frame_model
+    from motion2video.generator.checkpoint import load_frame_model, save_frame_model
 
     bundle = load_model("mtvae-add")
     motion = save_checkpoint(tmp_path / "m.safetensors", model=bundle.model, meta=bundle.meta)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from motion2video.cli import main
-from motion2video.evaluation.video_frames import keypoint_distance, video_frames, video_pairs
+from motion2video.evaluation.reconstruction import keypoint_distance, video_frames, video_pairs
 from tests.test_pipeline import train_frame_model
 from tests.test_pose import _cut_video
 
@@ -69,7 +69,7 @@ def test_evaluate_frames_video_command(dancer_clip, tmp_path, capsys):
 
 
 def test_head_box_is_a_square_around_the_head_and_neck_joints():
-    from motion2video.evaluation.video_frames import head_box_masks
+    from motion2video.evaluation.reconstruction import head_box_masks
 
     points = np.zeros((2, 17, 2))
     points[:, 8] = (50, 60)  # thorax

@@ -77,9 +77,9 @@ def test_motion_model_killed_and_resumed_matches_the_uninterrupted_run(tmp_path,
 
 FRAMES_DRIVER = """
 import sys
-from motion2video.frames.data import toy_sequences
-from motion2video.frames.model import FrameGeneratorConfig
-from motion2video.frames.training import TrainFramesConfig, train_frames
+from motion2video.generator.data import toy_sequences
+from motion2video.generator.model import FrameGeneratorConfig
+from motion2video.generator.training import TrainFramesConfig, train_frames
 import torch
 torch.set_num_threads(1)
 seqs = toy_sequences("body", num_sequences=6, frames_per_sequence=4, image_size=32)
@@ -92,7 +92,7 @@ train_frames(seqs, output=sys.argv[1], config=cfg, model_config=model, resume=sy
 
 @pytest.mark.slow
 def test_frame_generator_killed_and_resumed_matches_the_uninterrupted_run(tmp_path):
-    from motion2video.frames.checkpoint import load_frame_model, state_path
+    from motion2video.generator.checkpoint import load_frame_model, state_path
 
     steps = "150"
     straight, killed = tmp_path / "straight.safetensors", tmp_path / "killed.safetensors"

@@ -10,8 +10,8 @@ import os
 
 import numpy as np
 
-from motion2video.frames import mesh_reference
-from motion2video.frames.mesh_reference import (FACE_HAIRLINE_M, MAX_FACE_SHIFT, align_face, crown_offset,
+from motion2video.generator import mesh_reference
+from motion2video.generator.mesh_reference import (FACE_HAIRLINE_M, MAX_FACE_SHIFT, align_face, crown_offset,
                                                 face_weights, head_weights)
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
@@ -103,7 +103,7 @@ def test_the_demo_references_fitted_irises_land_on_its_eyes(monkeypatch):
 
     from renderers import anny_model
 
-    from motion2video.stages.frames import reference_person
+    from motion2video.stages.generation import reference_person
     from tests.test_mesh_sampling_edges import fitted_reference
 
     root = Path(__file__).resolve().parents[1]

@@ -1,6 +1,6 @@
 """Frame generator: network, SSIM, checkpoints, training/resume, baselines, metrics, contact sheets.
 
-These use the toy OpenCV dataset (frames.data.toy_sequences) and tiny configs; the rendered Anny data and
+These use the toy OpenCV dataset (generator.data.toy_sequences) and tiny configs; the rendered Anny data and
 the CLI are exercised in test_frames_data.py.
 """
 
@@ -15,17 +15,17 @@ from safetensors import safe_open
 from skimage.metrics import structural_similarity
 
 from motion2video.core.errors import InputError
-from motion2video.frames.baselines import border_anchors, copy_reference, limb_warp, run_baseline
-from motion2video.frames.checkpoint import (load_frame_model, resolve_model_path, save_frame_model,
+from motion2video.generator.image_baselines import border_anchors, copy_reference, limb_warp, run_baseline
+from motion2video.generator.checkpoint import (load_frame_model, resolve_model_path, save_frame_model,
                                             state_path)
-from motion2video.frames.data import (
+from motion2video.generator.data import (
     BODY_STRUCTURE_CHANNELS, body_structures, evaluation_pair_index, make_pairs, sample_pair_index, toy_sequences,
 )
-from motion2video.frames.specs import identities
-from motion2video.frames.evaluate import (METHODS, contact_sheet, evaluate_sequences, evaluation_contact_sheet,
+from motion2video.generator.specs import identities
+from motion2video.generator.scores import (METHODS, contact_sheet, evaluate_sequences, evaluation_contact_sheet,
                                           frame_metrics, write_json)
-from motion2video.frames.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate, ssim)
-from motion2video.frames.training import TrainFramesConfig, train_frames
+from motion2video.generator.model import (FrameGenerator, FrameGeneratorConfig, count_parameters, generate, ssim)
+from motion2video.generator.training import TrainFramesConfig, train_frames
 from motion2video.core.schedule import learning_rate
 from motion2video.core.skeletons import H36M_17
 
@@ -175,7 +175,7 @@ class Interrupt(Exception):
 
 @pytest.mark.slow
 def test_resume_continues_an_interrupted_run_exactly(tmp_path, monkeypatch):
-    import motion2video.frames.training as train_mod
+    import motion2video.generator.training as train_mod
 
     seqs = toy_sequences("body", num_sequences=6, frames_per_sequence=4, image_size=32)
     cfg = TrainFramesConfig(steps=12, batch_size=4, warmup_steps=3, log_every=3, checkpoint_every=6)
@@ -272,7 +272,7 @@ def test_head_metrics_known_answers():
     for scores in ev.results.values():
         assert scores.person["head_psnr"] == pytest.approx(scores.person["person_psnr"])
         assert scores.person["head_ssim"] == pytest.approx(scores.person["person_ssim"])
-    from motion2video.frames.evaluate import person_metrics
+    from motion2video.generator.scores import person_metrics
 
     target = seqs.images[:, 1]
     head = np.zeros(target.shape[:3], bool)
@@ -293,7 +293,7 @@ def test_head_metrics_known_answers():
 
 
 def test_training_crops_hold_both_poses():
-    from motion2video.frames.data import crop_origins
+    from motion2video.generator.data import crop_origins
 
     seqs = toy_sequences("body", num_sequences=3, frames_per_sequence=3, image_size=32)
     index = sample_pair_index(np.random.default_rng(1), seqs, 6)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from motion2video.cli import main
-from motion2video.frames.specs import DatasetSpec, is_test_clip
-from motion2video.frames.data import body_structures, cache_folder, evaluation_pair_index, load_or_generate, make_pairs
-from motion2video.frames.render_data import is_test_face_clip
+from motion2video.generator.specs import DatasetSpec, is_test_clip
+from motion2video.generator.data import body_structures, cache_folder, evaluation_pair_index, load_or_generate, make_pairs
+from motion2video.generator.render_data import is_test_face_clip
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 
@@ -140,7 +140,7 @@ WALK = DATA / "mocap" / "cmu" / "08_01.bvh"  # a held-out clip of the frame data
 
 
 def test_pose_windows_spread_over_the_clip():
-    from motion2video.frames.poses import PoseEvalSpec, window_frames
+    from motion2video.generator.poses import PoseEvalSpec, window_frames
 
     spec = PoseEvalSpec(windows_per_clip=3, frames_per_window=5, window_seconds=1.0)
     w = window_frames(273, 120.0, spec)
@@ -151,7 +151,7 @@ def test_pose_windows_spread_over_the_clip():
 
 @pytest.mark.slow
 def test_posed_windows_render_visible_heads():
-    from motion2video.frames.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
+    from motion2video.generator.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
 
     assert is_test_clip("cmu/08_01.bvh")
     spec = PoseEvalSpec(image_size=64, windows_per_clip=2, frames_per_window=3, num_identities=2)
@@ -169,8 +169,8 @@ def test_posed_windows_render_visible_heads():
 
 @pytest.mark.slow
 def test_evaluate_frames_posed_by_real_motion(tmp_path, capsys):
-    from motion2video.frames.checkpoint import save_frame_model
-    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+    from motion2video.generator.checkpoint import save_frame_model
+    from motion2video.generator.warp import WarpGenerator, WarpGeneratorConfig
 
     ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
     out = tmp_path / "real.json"
@@ -192,8 +192,8 @@ def test_evaluate_frames_posed_by_real_motion(tmp_path, capsys):
 
 
 def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
-    from motion2video.frames.checkpoint import save_frame_model
-    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+    from motion2video.generator.checkpoint import save_frame_model
+    from motion2video.generator.warp import WarpGenerator, WarpGeneratorConfig
 
     ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=32)), tmp_path / "warp.safetensors", step=0)
     repo = Path(__file__).resolve().parents[1]
@@ -202,7 +202,7 @@ def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
         assert main(["evaluate-frames", "--model", str(ckpt), "--poses", str(poses), "--no-progress"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and words in err and str(poses) in err
-    from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
+    from motion2video.generator.model import FrameGenerator, FrameGeneratorConfig
 
     face = save_frame_model(FrameGenerator(FrameGeneratorConfig(domain="face", structure_channels=1, image_size=32,
                                                                 channels=(8, 12, 16))),
@@ -217,7 +217,7 @@ def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
 def test_held_out_split_with_heads_renders_the_cached_frames(tmp_path):
     """The head masks of the held-out pairs come from rendering the split again: the same frames as its
     cached shards, with the heads inside the silhouettes."""
-    from motion2video.frames.render_data import render_body_split_with_heads
+    from motion2video.generator.render_data import render_body_split_with_heads
 
     spec = tiny_spec("body", "test")
     cached = load_or_generate(spec, cache_dir=tmp_path, progress=False)
@@ -231,8 +231,8 @@ def test_held_out_split_with_heads_renders_the_cached_frames(tmp_path):
 
 @pytest.mark.slow
 def test_evaluate_frames_head_on_held_out_pairs(tmp_path):
-    from motion2video.frames.checkpoint import save_frame_model
-    from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+    from motion2video.generator.checkpoint import save_frame_model
+    from motion2video.generator.warp import WarpGenerator, WarpGeneratorConfig
 
     ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
     out = tmp_path / "eval.json"
@@ -251,7 +251,7 @@ def test_pose_clips_from_a_folder_pass_over_what_is_not_a_body_motion(tmp_path):
     name order."""
     import shutil
 
-    from motion2video.frames.poses import load_body_clips
+    from motion2video.generator.poses import load_body_clips
 
     repo = Path(__file__).resolve().parents[1]
     for name in ("jump.npz", "smile.npz", "wave.npz", "reference_body.pose.npz"):

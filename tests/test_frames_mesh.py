@@ -1,5 +1,5 @@
-"""The mesh generator: the correspondence of two renders of one body mesh (motion2video.frames.mesh_flow), the
-network (motion2video.frames.mesh_warp), its training and evaluation, and synthesize through it.
+"""The mesh generator: the correspondence of two renders of one body mesh (motion2video.generator.mesh_flow), the
+network (motion2video.generator.mesh_warp), its training and evaluation, and synthesize through it.
 
 Real parts: Anny meshes rendered with pyrender/OSMesa from real captures in ../shared/data; tiny sizes.
 """
@@ -17,11 +17,11 @@ import torch
 
 from motion2video.cli import main
 from motion2video.core.errors import InputError
-from motion2video.frames.data import load_or_generate, make_pairs
-from motion2video.frames.mesh_flow import dense_flow, identity_flow, transform_uv
-from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
-from motion2video.frames.specs import DatasetSpec
-from motion2video.frames.warp import warp_image
+from motion2video.generator.data import load_or_generate, make_pairs
+from motion2video.generator.mesh_flow import dense_flow, identity_flow, transform_uv
+from motion2video.generator.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs
+from motion2video.generator.specs import DatasetSpec
+from motion2video.generator.warp import warp_image
 from renderers.mesh import vertex_visibility
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
@@ -103,7 +103,7 @@ def test_dense_flow_of_a_shifted_grid_is_the_shift():
 
 
 def test_barycentric_weights_of_corners_centroid_and_outside_points():
-    from motion2video.frames.mesh_flow import barycentric
+    from motion2video.generator.mesh_flow import barycentric
 
     tri = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 2.0]])
     points = np.array([[0.0, 0.0], [4.0, 0.0], [4 / 3, 2 / 3], [2.0, 1.0], [-1.0, 0.0]])
@@ -121,7 +121,7 @@ def test_triangle_flow_of_an_affine_motion_is_exact():
     """A grid mesh whose reference is an affine map of the target (a stretch, a shear and a shift; 3 px between
     vertices): read from the triangles, every pixel inside the mesh gets the map exactly, which the nearest
     vertices' weighted mean does not (it is exact only at the vertices)."""
-    from motion2video.frames.mesh_flow import triangle_map, triangle_pixels
+    from motion2video.generator.mesh_flow import triangle_map, triangle_pixels
 
     ys, xs = np.mgrid[0:11, 0:11]
     tgt_uv = np.stack([xs.ravel() * 3.0 + 2.0, ys.ravel() * 3.0 + 2.0], axis=1)  # (121, 2)
@@ -152,7 +152,7 @@ def test_an_opening_jaw_read_from_the_triangles_warps_closer_to_the_truth():
     import cv2
 
     from motion2video.core.motion import ARKIT_NAMES, FaceMotion
-    from motion2video.frames.mesh_flow import mesh_triangles
+    from motion2video.generator.mesh_flow import mesh_triangles
     from renderers.face import FaceRenderer, FaceStyle
 
     params = np.zeros((2, 58), np.float32)
@@ -174,7 +174,7 @@ def test_an_opening_jaw_read_from_the_triangles_warps_closer_to_the_truth():
 
 
 def test_extend_flow_continues_the_surface_into_a_band():
-    from motion2video.frames.mesh_flow import MeshFlow, extend_flow
+    from motion2video.generator.mesh_flow import MeshFlow, extend_flow
 
     sil = np.zeros((16, 16), bool)
     sil[4:12, 4:12] = True
@@ -193,7 +193,7 @@ def test_extend_flow_continues_the_surface_into_a_band():
 
 
 def test_hidden_surface_takes_the_nearest_shown_point_along_the_surface():
-    from motion2video.frames.mesh_flow import complete_reference_uv, surface_graph
+    from motion2video.generator.mesh_flow import complete_reference_uv, surface_graph
 
     graph = surface_graph()
     n = graph.shape[0]
@@ -217,7 +217,7 @@ def test_a_128_model_runs_at_256_with_the_same_weights():
 
 
 def test_eroded_silhouettes_erode_about_half_of_them():
-    from motion2video.frames.training import eroded_silhouettes
+    from motion2video.generator.training import eroded_silhouettes
 
     masks = np.zeros((40, 16, 16), bool)
     masks[:, 3:13, 3:13] = True
@@ -277,7 +277,7 @@ def test_untrained_mesh_generator_is_its_prior(mesh_seqs):
     net = MeshWarpGenerator(MeshWarpConfig(image_size=64))
     x = torch.from_numpy(pairs.ref_images).permute(0, 3, 1, 2).float() / 255
     ref_mask, flow, vis, sil = mesh_inputs(pairs)
-    from motion2video.frames.data import body_structures
+    from motion2video.generator.data import body_structures
 
     with torch.no_grad():
         out = net.forward_parts(x, ref_mask, flow, vis, sil, torch.from_numpy(body_structures(pairs.tgt_points, 64)))
@@ -285,7 +285,7 @@ def test_untrained_mesh_generator_is_its_prior(mesh_seqs):
     torch.testing.assert_close(out.flow, flow)  # no flow residual yet
     person = sil[:, 0] > 0.5
     # The prior samples the reference person, the background outside it given the nearest person colour.
-    from motion2video.frames.mesh_warp import person_colours
+    from motion2video.generator.mesh_warp import person_colours
 
     prior = warp_image(person_colours(x, ref_mask, out.plate), flow, "bicubic")
     err_in = (out.image - prior).abs().amax(dim=1)[person]
@@ -306,7 +306,7 @@ def train_tiny_mesh_model(domain: str, ckpt: Path, cache: Path, capsys) -> Path:
 def test_mesh_model_trains_saves_loads_and_evaluates(tmp_path, capsys):
     cache = tmp_path / "cache"
     ckpt = train_tiny_mesh_model("body", tmp_path / "mesh.safetensors", cache, capsys)
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
 
     loaded = load_frame_model(ckpt)
     assert loaded.kind == "mesh" and loaded.config.image_size == 64 and loaded.step == 2
@@ -347,7 +347,7 @@ def test_mesh_settings_are_checked(tmp_path, capsys):
 def test_lifted_reference_projects_onto_the_reference_pose():
     from motion2video.core.camera import fit_camera, project
     from motion2video.formats.io import load_motion
-    from motion2video.frames.mesh_fit import lift_reference
+    from motion2video.generator.mesh_fit import lift_reference
 
     from motion2video.core.skeletons import H36M_17
 
@@ -376,7 +376,7 @@ def test_lifted_reference_projects_onto_the_reference_pose():
 def test_width_fit_finds_a_stocky_body():
     from motion2video.core.camera import fit_camera
     from motion2video.formats.io import load_motion
-    from motion2video.frames.mesh_fit import fit_width, render_mesh_track
+    from motion2video.generator.mesh_fit import fit_width, render_mesh_track
 
     joints = load_motion(ROOT / "demo_inputs" / "cmu_walk.npz").joints[:1].astype(np.float64)
     camera = fit_camera(joints, 96, 96)
@@ -396,7 +396,7 @@ def test_width_fit_finds_a_stocky_body():
 def test_synthesize_through_the_mesh_generator(tmp_path, capsys):
     import imageio.v3 as iio
 
-    from motion2video.frames.checkpoint import save_frame_model
+    from motion2video.generator.checkpoint import save_frame_model
 
     torch.manual_seed(0)
     ckpt = save_frame_model(MeshWarpGenerator(MeshWarpConfig(image_size=64)), tmp_path / "mesh.safetensors", step=0)
@@ -436,7 +436,7 @@ def test_face_renderer_keeps_the_head_mesh_correspondence():
 
 
 def test_colour_difference_finds_hair_that_changed_colour():
-    from motion2video.frames.evaluate import mean_colour_difference, vertex_region_masks
+    from motion2video.generator.scores import mean_colour_difference, vertex_region_masks
 
     truth = np.full((16, 16, 3), (72, 48, 32), np.uint8)  # brown
     olive = np.full((16, 16, 3), (80, 80, 40), np.uint8)
@@ -475,7 +475,7 @@ def test_face_mesh_model_trains_evaluates_and_synthesizes(tmp_path, capsys):
 
 
 def test_unsharp_keeps_flat_colour_and_steepens_edges():
-    from motion2video.frames.mesh_warp import unsharp
+    from motion2video.generator.mesh_warp import unsharp
 
     flat = torch.full((1, 3, 16, 16), 0.4)
     torch.testing.assert_close(unsharp(flat, 0.5), flat)
@@ -491,7 +491,7 @@ def test_unsharp_keeps_flat_colour_and_steepens_edges():
 
 
 def test_only_fitted_vertices_that_land_on_the_person_count_as_shown():
-    from motion2video.frames.mesh_reference import on_person
+    from motion2video.generator.mesh_reference import on_person
 
     person = np.zeros((128, 128), bool)
     person[40:90, 50:80] = True

@@ -1,6 +1,6 @@
-"""The warping body generator (motion2video.frames.warp), the person metrics and the checkpoint kinds.
+"""The warping body generator (motion2video.generator.warp), the person metrics and the checkpoint kinds.
 
-Toy OpenCV puppets (frames.data.toy_sequences) and tiny configs; the rendered data and the shipped weights
+Toy OpenCV puppets (generator.data.toy_sequences) and tiny configs; the rendered data and the shipped weights
 are exercised by tests/test_frames_data.py and the evaluate-frames run of docs/results.md.
 """
 
@@ -11,18 +11,18 @@ import pytest
 import torch
 
 from motion2video.core.errors import InputError
-from motion2video.frames.checkpoint import load_frame_model, save_frame_model
-from motion2video.frames.data import body_structures, evaluation_pair_index, make_pairs, toy_sequences
-from motion2video.frames.evaluate import (evaluate_sequences, gradient_energy, person_metrics, region_psnr,
+from motion2video.generator.checkpoint import load_frame_model, save_frame_model
+from motion2video.generator.data import body_structures, evaluation_pair_index, make_pairs, toy_sequences
+from motion2video.generator.scores import (evaluate_sequences, gradient_energy, person_metrics, region_psnr,
                                           sharpness_ratio)
-from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
-from motion2video.frames.training import TrainFramesConfig, train_frames
-from motion2video.frames.warp import (NUM_COMPONENTS, WarpGenerator, WarpGeneratorConfig, part_logits, part_maps,
+from motion2video.generator.model import FrameGenerator, FrameGeneratorConfig
+from motion2video.generator.training import TrainFramesConfig, train_frames
+from motion2video.generator.warp import (NUM_COMPONENTS, WarpGenerator, WarpGeneratorConfig, part_logits, part_maps,
                                       person_crop, pixel_centres, warp_generate)
 
 
 def toy_pose(size: int = 64) -> np.ndarray:
-    from motion2video.frames.data import _TOY_REST
+    from motion2video.generator.data import _TOY_REST
 
     return (size / 2 + _TOY_REST * 0.8 * size).astype(np.float32)  # (17, 2)
 
@@ -46,7 +46,7 @@ def test_part_maps_follow_the_joints():
     v = wrist - elbow
     tgt[0, 16] = elbow + torch.stack([-v[1], v[0]])
     maps = part_maps(ref, tgt, 64, 64)
-    k = 1 + [n for n, _, _ in __import__("motion2video.frames.warp", fromlist=["SEGMENT_PARTS"]).SEGMENT_PARTS
+    k = 1 + [n for n, _, _ in __import__("motion2video.generator.warp", fromlist=["SEGMENT_PARTS"]).SEGMENT_PARTS
              ].index("right_forearm")
     x, y = tgt[0, 16].tolist()
     j, i = int(x), int(y)  # the pixel holding the new wrist
@@ -246,7 +246,7 @@ def test_flow_correction_grows_from_a_trained_model_and_starts_where_it_was(tmp_
 def test_bicubic_sampling_keeps_the_texture_sharper():
     """The same half-pixel shift of a random texture: bicubic sampling keeps more gradient energy than
     bilinear (which low-passes at sub-pixel offsets)."""
-    from motion2video.frames.warp import warp_image
+    from motion2video.generator.warp import warp_image
 
     rng = np.random.default_rng(0)
     image = torch.from_numpy(rng.random((1, 3, 32, 32))).float()

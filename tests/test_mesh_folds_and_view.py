@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from motion2video.core.camera import PinholeCamera, project
-from motion2video.frames.mesh_flow import dense_flow
+from motion2video.generator.mesh_flow import dense_flow
 from motion2video.stages.reference import load_reference
 from motion2video.stages.sampling import Forecast
 from motion2video.stages.structure import place_body, reference_in_view, view_to_fit
@@ -44,7 +44,7 @@ def test_flow_across_a_fold_never_lands_between_the_two_surfaces():
 
 
 def test_the_render_camera_widens_to_cover_a_body_above_the_framing():
-    from motion2video.frames.mesh_fit import camera_covering
+    from motion2video.generator.mesh_fit import camera_covering
 
     camera = PinholeCamera((0.0, -5.0, 1.0), (0.0, 0.0, 1.0), 0.6, 256, 256)
     points = np.random.default_rng(0).normal([0, 0, 1], 0.3, (20, 3))

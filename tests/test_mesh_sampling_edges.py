@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motion2video.frames.mesh_flow import complete_reference_uv, surface_graph, touching_other_part
-from motion2video.frames.mesh_warp import (fill_outside_person, person_colours, person_edge_refined,
+from motion2video.generator.mesh_flow import complete_reference_uv, surface_graph, touching_other_part
+from motion2video.generator.mesh_warp import (fill_outside_person, person_colours, person_edge_refined,
                                            segmented_core_px)
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
@@ -120,11 +120,11 @@ def test_vertices_of_two_body_parts_that_touch_in_the_picture_are_not_completion
 
 
 def fitted_reference(path: Path, *, observed: np.ndarray | None = None, futures: np.ndarray | None = None, **load):
-    """The reference picture at ``path`` and the :class:`~motion2video.stages.mesh_frames.MeshVideo` synthesize
+    """The reference picture at ``path`` and the :class:`~motion2video.stages.mesh_generation.MeshVideo` synthesize
     fits to it (the frames-body-mesh-256 generator). The motion: ``observed`` (T, 17, 3) and ``futures``
     (K, H, 17, 3) world joints; by default two frames of ``demo_inputs/cmu_walk.npz`` observed and two predicted."""
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.stages.frames import mesh_setup
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.stages.generation import mesh_setup
     from motion2video.stages.reference import load_reference
     from motion2video.stages.sampling import Forecast
     from motion2video.stages.structure import render_structures
@@ -139,7 +139,7 @@ def fitted_reference(path: Path, *, observed: np.ndarray | None = None, futures:
 
 
 def own_pixel(xy: np.ndarray, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
-    """A stand-in for :func:`motion2video.frames.mesh_flow.bilinear_footprint`: the pixel each point lies in, four
+    """A stand-in for :func:`motion2video.generator.mesh_flow.bilinear_footprint`: the pixel each point lies in, four
     times (the completion's colour test before 2026-11-27)."""
     x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
     y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
@@ -156,15 +156,15 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     mask, the pictured 3D pose), the hidden trousers vertices completed along the surface and sampled from what the
     generator samples. The hands hang beside the thighs and the fitted mesh reaches a little past the pictured
     person: without the rules here, many hidden trousers vertices took a skin or a white pixel."""
-    import motion2video.frames.mesh_flow as mesh_flow
+    import motion2video.generator.mesh_flow as mesh_flow
     import renderers.mesh
     from renderers import anny_model
 
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.mesh_warp import mesh_plate, sampled_colours
-    from motion2video.stages.mesh_frames import sampled_person
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.generator.mesh_warp import mesh_plate, sampled_colours
+    from motion2video.stages.mesh_generation import sampled_person
 
-    import motion2video.frames.mesh_reference as mesh_reference
+    import motion2video.generator.mesh_reference as mesh_reference
 
     # the completion's own rules, on the depth test's visibility (the touching-surface rule, which hides
     # thigh vertices under a hand in the reference, is tested below: test_a_forearm_against_the_waist_...; the
@@ -213,10 +213,10 @@ def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():
     legs, and its silhouette grown by her clothes margin (7 px) covers snow. Sampling the fitted silhouette joined
     with her segmented person painted white patches into her trousers in every frame; the segmented person alone
     does not."""
-    from motion2video.frames.mesh_flow import flows_to_targets, grow_masks
-    from motion2video.frames.mesh_warp import mesh_plate
-    from motion2video.frames.warp import warp_image
-    from motion2video.stages.mesh_frames import sampled_person
+    from motion2video.generator.mesh_flow import flows_to_targets, grow_masks
+    from motion2video.generator.mesh_warp import mesh_plate
+    from motion2video.generator.warp import warp_image
+    from motion2video.stages.mesh_generation import sampled_person
 
     photo = ROOT.parent / "shared" / "data" / "photos" / "skier.jpg"
     reference, video = fitted_reference(photo, crop_person=True)
@@ -245,8 +245,8 @@ def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():
 
 
 def test_clothes_margin_measures_how_far_a_person_reaches_past_the_fitted_body():
-    from motion2video.frames.mesh_flow import grow_masks
-    from motion2video.frames.mesh_reference import clothes_margin
+    from motion2video.generator.mesh_flow import grow_masks
+    from motion2video.generator.mesh_reference import clothes_margin
 
     silhouette = np.zeros((128, 128), bool)
     silhouette[30:100, 50:70] = True
@@ -298,7 +298,7 @@ def test_a_pose_files_padded_border_is_never_the_person(tmp_path):
 
     from motion2video.cli import main
     from motion2video.core.camera import affine_matrix
-    from motion2video.stages.frames import reference_person
+    from motion2video.stages.generation import reference_person
 
     photo = tmp_path / "man_by_truck.jpg"
     shutil.copy(ROOT.parent / "shared" / "data" / "photos" / "man_by_truck.jpg", photo)
@@ -320,7 +320,7 @@ def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     that lands on it; the pictured hand's colour is read at BlazePose's hand points, so a glove stays a glove."""
     from renderers import anny_model
 
-    from motion2video.frames.mesh_reference import hand_colour_sources
+    from motion2video.generator.mesh_reference import hand_colour_sources
 
     rest = anny_model.anny_rest({})
     left = anny_model.hand_vertices("L")
@@ -365,9 +365,9 @@ def test_the_demo_pictures_hands_sample_skin(monkeypatch):
     when a hand moves away). Now the hands sample skin and the trousers trousers."""
     from renderers import anny_model
 
-    from motion2video.frames.mesh_flow import complete_reference_uv
+    from motion2video.generator.mesh_flow import complete_reference_uv
 
-    import motion2video.frames.mesh_reference as mesh_reference
+    import motion2video.generator.mesh_reference as mesh_reference
 
     monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
 
@@ -400,7 +400,7 @@ def test_the_hidden_back_of_the_shirt_and_the_head_take_the_shirt_and_the_hair()
     shirt's outline vertices, which show the arms beside it, still gave 21%."""
     from renderers import anny_model
 
-    from motion2video.frames.mesh_flow import typical_colour_sources
+    from motion2video.generator.mesh_flow import typical_colour_sources
 
     reference, video = fitted_reference(ROOT / "demo_inputs" / "reference_body.png")
     x0, y0, side = video.crop
@@ -432,7 +432,7 @@ def test_completion_sources_keep_away_from_another_region():
     sources keeps all of its own."""
     from renderers.anny_model import SKIN, TOP, TROUSERS
 
-    from motion2video.frames.mesh_flow import COLOUR_MIN_SOURCES, interior_sources
+    from motion2video.generator.mesh_flow import COLOUR_MIN_SOURCES, interior_sources
 
     ys, xs = np.mgrid[0:10, 0:20]
     uv = np.stack([xs.ravel() + 0.5, ys.ravel() + 0.5], axis=1)
@@ -461,14 +461,14 @@ def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypa
     vertices; those beside the hanging hands lay within a pixel or two of them, and the generator's flow correction
     carried the samples onto the hands: 158 skin-coloured pixels where the target shows trousers or shirt. With the
     clothes sources kept INTERIOR_PX from other regions, none. Over all 240 future frames of the demo: 9,119 -> 1,237."""
-    import motion2video.frames.mesh_flow as mesh_flow
+    import motion2video.generator.mesh_flow as mesh_flow
     from renderers import anny_model
     from scipy.spatial import cKDTree
 
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.stages.mesh_frames import generate_mesh_frames
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.stages.mesh_generation import generate_mesh_frames
 
-    import motion2video.frames.mesh_reference as mesh_reference
+    import motion2video.generator.mesh_reference as mesh_reference
 
     monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
     monkeypatch.setattr(mesh_flow, "bilinear_footprint", own_pixel)  # nor the footprint test (end of file)
@@ -507,7 +507,7 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
     one the depth test hid."""
     import renderers.mesh as mesh
 
-    import motion2video.frames.mesh_reference as mesh_reference
+    import motion2video.generator.mesh_reference as mesh_reference
 
     monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
 
@@ -532,7 +532,7 @@ def test_a_forearm_against_the_waist_of_a_turned_body_is_drawn_as_one_surface(mo
 def test_facing_reads_how_squarely_a_surface_is_seen():
     """Two flat patches of one mesh, one square to the view and one turned 70 degrees about the vertical axis,
     projected orthographically: :func:`facing` gives 1 and cos(70) = 0.34 (relative to the square patch)."""
-    from motion2video.frames.mesh_reference import facing
+    from motion2video.generator.mesh_reference import facing
 
     def patch(angle_deg: float, x_offset: float) -> tuple[np.ndarray, np.ndarray]:
         ys, xs = np.mgrid[0:6, 0:6].astype(np.float64) * 0.02  # 10 cm square, 2 cm apart
@@ -565,8 +565,8 @@ def test_the_demo_pictures_limbs_do_not_lend_their_grazing_sides_where_they_touc
     fingers of make demo's future 2 at +41); with it, none."""
     from renderers import anny_model
 
-    import motion2video.frames.mesh_reference as mesh_reference
-    from motion2video.frames.mesh_flow import complete_reference_uv
+    import motion2video.generator.mesh_reference as mesh_reference
+    from motion2video.generator.mesh_flow import complete_reference_uv
 
     regions = anny_model.vertex_regions()
     trousers = regions == anny_model.TROUSERS
@@ -595,7 +595,7 @@ def test_the_demo_pictures_limbs_do_not_lend_their_grazing_sides_where_they_touc
 
 
 def test_bilinear_footprint_is_the_four_pixels_a_sample_reads():
-    from motion2video.frames.mesh_flow import bilinear_footprint
+    from motion2video.generator.mesh_flow import bilinear_footprint
 
     rows, cols = bilinear_footprint(np.array([[2.5, 3.5], [2.2, 3.9], [0.1, 0.1], [9.9, 9.9]]), 10, 10)
     np.testing.assert_array_equal(cols[0], [2, 3, 2, 3])  # a pixel centre: its pixel and the next ones (weight 0)
@@ -609,7 +609,7 @@ def test_bilinear_footprint_is_the_four_pixels_a_sample_reads():
 def test_a_completion_source_beside_another_colour_is_not_typical():
     """Skin with a white gap at column 10: a source whose own pixel is skin but whose bilinear sample reads the gap
     is no source; one whose sample stays on the skin is."""
-    from motion2video.frames.mesh_flow import typical_colour_sources
+    from motion2video.generator.mesh_flow import typical_colour_sources
 
     image = np.zeros((20, 20, 3), np.uint8)
     image[:] = (220, 170, 140)
@@ -633,8 +633,8 @@ def test_the_demo_pictures_hidden_forearms_sample_only_skin(monkeypatch):
     footprint test, no hidden forearm vertex samples anything but skin."""
     from renderers import anny_model
 
-    import motion2video.frames.mesh_flow as mesh_flow
-    from motion2video.frames.mesh_flow import bilinear_footprint, complete_reference_uv
+    import motion2video.generator.mesh_flow as mesh_flow
+    from motion2video.generator.mesh_flow import bilinear_footprint, complete_reference_uv
 
     names, dominant = anny_model.bone_names(), anny_model.dominant_bones()
     forearms = np.array([names[b].startswith(("lowerarm", "wrist")) for b in dominant])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from motion2video.cli import main
-from motion2video.frames.checkpoint import load_frame_model
+from motion2video.generator.checkpoint import load_frame_model
 from tests.test_pose import _cut_video
 
 

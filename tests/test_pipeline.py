@@ -20,7 +20,7 @@ from motion2video.apps.synthesize import (
     synthesize,
 )
 from motion2video.stages.structure import face_camera_front, follow_on_ground, place_body, similarity_fit
-from motion2video.stages.frames import generate_frames
+from motion2video.stages.generation import generate_frames
 from motion2video.stages import reference as R
 from motion2video.cli import main
 from motion2video.core.errors import InputError
@@ -79,9 +79,9 @@ def train_face_motion_model(face_dir: Path, folder: Path) -> Path:
 
 def train_frame_model(domain: str, folder: Path) -> Path:
     """A tiny 64 px generator trained for 2 steps on the toy set by the real training loop."""
-    from motion2video.frames.data import structure_channels, toy_sequences
-    from motion2video.frames.model import FrameGeneratorConfig
-    from motion2video.frames.training import TrainFramesConfig, train_frames
+    from motion2video.generator.data import structure_channels, toy_sequences
+    from motion2video.generator.model import FrameGeneratorConfig
+    from motion2video.generator.training import TrainFramesConfig, train_frames
 
     seqs = toy_sequences(domain, num_sequences=2, frames_per_sequence=3, image_size=FRAME_SIZE)
     config = FrameGeneratorConfig(domain=domain, image_size=FRAME_SIZE, structure_channels=structure_channels(domain),
@@ -227,7 +227,7 @@ def test_face_reference_pose_round_trip(tmp_path):
 @pytest.mark.parametrize("channels_last", [False, True])
 def test_cached_reference_generation_matches_the_model(channels_last):
     """generate_frames encodes the reference once; its frames equal the model's own forward pass."""
-    from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig, generate
+    from motion2video.generator.model import FrameGenerator, FrameGeneratorConfig, generate
 
     torch.manual_seed(0)
     for output in ("residual", "direct"):
@@ -333,8 +333,8 @@ def test_demo_runs_from_the_repository_alone(checkpoints, face_dir, tmp_path, ca
     demo = _demo_module()
     weights = tmp_path / "weights"
     weights.mkdir()
-    from motion2video.frames.checkpoint import save_frame_model
-    from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator
+    from motion2video.generator.checkpoint import save_frame_model
+    from motion2video.generator.mesh_warp import MeshWarpConfig, MeshWarpGenerator
 
     mesh = save_frame_model(MeshWarpGenerator(MeshWarpConfig(image_size=64)), tmp_path / "mesh.safetensors", step=0)
     face_mesh = save_frame_model(MeshWarpGenerator(MeshWarpConfig(domain="face", image_size=64, structure_channels=1)),

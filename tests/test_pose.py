@@ -231,7 +231,7 @@ def test_an_estimated_reference_keeps_the_person_found_in_the_photo(photos_dir):
     """The person's mask and eyes are found once, in the photo as given, and cut and resized with it: the border
     the crop replicates below the man's shoes is never the person (segmenting the cut picture again, as the mesh
     generator did, takes those replicated pixels for him: his trousers, repeated down to the frame's edge)."""
-    from motion2video.stages.frames import reference_person
+    from motion2video.stages.generation import reference_person
     from motion2video.stages.reference import ReferencePose, crop_to_person, load_reference
 
     path = photos_dir / "man_by_truck.jpg"

@@ -79,7 +79,7 @@ def test_pipeline_names_are_exported():
 
 
 def test_load_model_tells_motion_models_frame_models_and_baselines_apart():
-    from motion2video.frames.checkpoint import LoadedFrameModel
+    from motion2video.generator.checkpoint import LoadedFrameModel
     from motion2video.models.checkpoint import ModelBundle
 
     motion, frames, baseline = (motion2video.load_model(n) for n in ("mtvae-add", "frames-body-128", "zero-velocity"))

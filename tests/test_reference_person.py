@@ -10,7 +10,7 @@ import pytest
 
 from motion2video.cli import main
 from motion2video.core.errors import InputError
-from motion2video.frames.checkpoint import load_frame_model
+from motion2video.generator.checkpoint import load_frame_model
 from motion2video.models.checkpoint import shipped_names
 from motion2video.stages.reference import cut_edges, load_reference, pose_margins
 

@@ -137,9 +137,9 @@ def test_bad_input_one_line_exit_2_and_no_partial_files(ckpt, body_args, mocap_d
 
 def _warp_frame_model(folder: Path) -> Path:
     """A 64 px warp generator trained for 2 steps on the toy set by the real training loop."""
-    from motion2video.frames.data import toy_sequences
-    from motion2video.frames.training import TrainFramesConfig, train_frames
-    from motion2video.frames.warp import WarpGeneratorConfig
+    from motion2video.generator.data import toy_sequences
+    from motion2video.generator.training import TrainFramesConfig, train_frames
+    from motion2video.generator.warp import WarpGeneratorConfig
 
     seqs = toy_sequences("body", num_sequences=2, frames_per_sequence=3, image_size=FRAME_SIZE)
     result = train_frames(seqs, output=folder / "frames_warp.safetensors",

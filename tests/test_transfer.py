@@ -18,7 +18,7 @@ from motion2video.formats.io import load_motion, save_motion
 from motion2video.evaluation.metrics import MeanStd
 from motion2video.core.motion import Motion
 from motion2video.models.training import TrainConfig, train_model
-from motion2video.evaluation.transfer import TABLE1_TIMESTEPS, evaluate_transfer, regression_error, transfer_pairs
+from motion2video.evaluation.transfer_protocol import TABLE1_TIMESTEPS, evaluate_transfer, regression_error, transfer_pairs
 from motion2video.stages.clips import LoadedClip, load_clip
 from motion2video.apps.transfer import transfer_behavior
 from motion2video.formats.video import read_image, read_video, write_image
@@ -205,8 +205,8 @@ def test_transfer_mesh_shows_another_person(ckpts, clips, tmp_path):
 @pytest.fixture(scope="module")
 def frame_ckpt(tmp_path_factory):
     """An untrained (residual: it starts as copy-reference) tiny body frame generator."""
-    from motion2video.frames.checkpoint import save_frame_model
-    from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
+    from motion2video.generator.checkpoint import save_frame_model
+    from motion2video.generator.model import FrameGenerator, FrameGeneratorConfig
 
     torch.manual_seed(0)
     gen = FrameGenerator(FrameGeneratorConfig(image_size=32, channels=(4, 8)))
@@ -282,7 +282,7 @@ def test_the_table1_protocol_runs_on_tiny_models(ckpts, small_data):
 def test_sample_realism_measures_every_sample_and_one_per_window(ckpts, small_data):
     """Liveliness over all K samples per window, the ground truth's from the windows themselves (the same
     for every model), classifier accuracies in [0, 1]."""
-    from motion2video.evaluation.transfer import motion_liveliness, sample_realism
+    from motion2video.evaluation.transfer_protocol import motion_liveliness, sample_realism
 
     for ckpt in (ckpts["behavior"], ckpts["mtvae"]):
         bundle = load_model(ckpt)

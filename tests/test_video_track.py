@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion2video.evaluation.video_frames import protocol_frames, tail_start
+from motion2video.evaluation.reconstruction import protocol_frames, tail_start
 from motion2video.pose.estimate import estimate_video, iter_video_frames, track_frames
 from motion2video.stages.people import track_cache_path, video_pose, video_track
 from tests.test_pose import _cut_video

@@ -47,8 +47,8 @@ from motion2video.core.motion import FaceMotion, Motion
 from motion2video.data.dataset import DatasetConfig
 from motion2video.formats.bvh_write import check_bvh_dir, write_bvh_files
 from motion2video.formats.video import VIDEO_SUFFIXES, VideoWriter
-from motion2video.frames.checkpoint import FORMAT as FRAMES_FORMAT
-from motion2video.frames.checkpoint import LoadedFrameModel, load_frame_model
+from motion2video.generator.checkpoint import FORMAT as FRAMES_FORMAT
+from motion2video.generator.checkpoint import LoadedFrameModel, load_frame_model
 from motion2video.models import checkpoint
 from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import ModelBundle
@@ -85,7 +85,7 @@ def load_model(name_or_path: str | Path, *, device: str = "cpu"):
         device: torch device of a motion model (frame generators run on the CPU).
     Returns:
         A :class:`~motion2video.models.checkpoint.ModelBundle` (motion models and baselines; ``.model``,
-        ``.data_config``) or a :class:`~motion2video.frames.checkpoint.LoadedFrameModel` (frame generators;
+        ``.data_config``) or a :class:`~motion2video.generator.checkpoint.LoadedFrameModel` (frame generators;
         ``.model``, ``.config``), as the checkpoint says.
     Raises:
         InputError: no such file or name, or not a motion2video checkpoint.

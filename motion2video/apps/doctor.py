@@ -175,7 +175,7 @@ def check_checkpoints() -> list[Check]:
     """Every shipped checkpoint loads (motion models and frame generators)."""
     from motion2video.models.checkpoint import WEIGHTS_DIR, load_model
     from motion2video.core.errors import InputError
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
 
     checks = []
     for path in sorted(WEIGHTS_DIR.glob("*.safetensors")):

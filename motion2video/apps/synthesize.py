@@ -5,12 +5,12 @@ The stages are plain functions with typed results, so each can be called (and ti
 1. :func:`motion2video.stages.reference.load_reference`: the reference appearance image at the frame generator's size, and its pose.
 2. :func:`~motion2video.stages.sampling.sample_forecast`: K futures of the observed clip from a motion model.
 3. :func:`render_structures`: where the person is in every frame, in the generator's structure conventions
-   (the same functions that made its training pairs, :mod:`motion2video.frames.data`):
+   (the same functions that made its training pairs, :mod:`motion2video.generator.data`):
 
    - body: 2D joints in generator pixels; :func:`structure_maps` turns them into 17 Gaussian heatmaps + 16
-     limb maps (:func:`motion2video.frames.data.body_structures`).
+     limb maps (:func:`motion2video.generator.data.body_structures`).
    - face: the Anny face rendered in the shaded grey ``"structure"`` style on black, in each frame's head
-     pose and expression (:func:`motion2video.frames.data.face_structures`).
+     pose and expression (:func:`motion2video.generator.data.face_structures`).
 4. :func:`generate_frames`: the frame generator turns (reference image, reference structure, target
    structure) into the target frame, for the observed frames and every future, so the whole video is
    one consistent person.
@@ -52,7 +52,7 @@ import numpy as np
 from motion2video.core.atomic import check_output_path
 from motion2video.core.errors import InputError
 from motion2video.stages.reference import load_reference
-from motion2video.stages.frames import GeneratedFrames, default_generator_threads, iter_generated
+from motion2video.stages.generation import GeneratedFrames, default_generator_threads, iter_generated
 from motion2video.stages.sampling import sample_forecast
 from motion2video.stages.structure import (
     DOMAIN_OF_LAYOUT, Structures, reference_in_view, render_structures, structure_previews,
@@ -302,7 +302,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
         config: the options.
         reference_pose: the reference pose file (default: ``IMAGE.pose.npz`` when it exists).
         on_chunk: called with every generated chunk, ``(start, frames, previews)`` as
-            :func:`~motion2video.stages.frames.iter_generated` yields them, before it is written.
+            :func:`~motion2video.stages.generation.iter_generated` yields them, before it is written.
         progress: called with ``(stage, fraction)``: ``"loading"``, ``"sampling"``, ``"structures"``, then
             ``"frames"`` after every chunk (fraction of the video's steps done). An exception it raises (a
             cancelled request) stops the work and leaves no file.
@@ -313,7 +313,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     """
     from motion2video.models.checkpoint import load_model
     from motion2video.stages.clips import load_clip
-    from motion2video.frames.checkpoint import load_frame_model
+    from motion2video.generator.checkpoint import load_frame_model
     from motion2video.formats.video import VideoWriter, write_image
 
     timings: dict[str, float] = {}

@@ -1,6 +1,6 @@
 """Training a frame generator on synthetic Anny renders from the command's settings (the ``train-frames``
 command's work): the generator's config checked before the data, the appearance dataset rendered (or read from
-the cache), and :func:`motion2video.frames.training.train_frames` run. Fine-tuning on one person's video is
+the cache), and :func:`motion2video.generator.training.train_frames` run. Fine-tuning on one person's video is
 :func:`motion2video.evaluation.personalise.personalise`."""
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ from pathlib import Path
 from motion2video.core.errors import InputError
 from motion2video.data.licences import licence_record
 from motion2video.formats.manifest import read_manifest
-from motion2video.frames.data import default_cache_dir, load_or_generate, structure_channels
-from motion2video.frames.mesh_warp import MeshWarpConfig
-from motion2video.frames.specs import default_data_root, default_spec
-from motion2video.frames.training import TrainFramesConfig, TrainFramesResult, train_frames
-from motion2video.frames.warp import WarpGeneratorConfig
+from motion2video.generator.data import default_cache_dir, load_or_generate, structure_channels
+from motion2video.generator.mesh_warp import MeshWarpConfig
+from motion2video.generator.specs import default_data_root, default_spec
+from motion2video.generator.training import TrainFramesConfig, TrainFramesResult, train_frames
+from motion2video.generator.warp import WarpGeneratorConfig
 
 MODEL_KINDS = ("analogy", "warp", "mesh")
 
@@ -37,9 +37,9 @@ class FrameTrainingSettings:
         domain: ``body`` or ``face``.
         output: the checkpoint (``.safetensors``; its ``.state`` resume file beside it).
         steps, batch_size, lr, adversarial, checkpoint_every, seed: as
-            :class:`motion2video.frames.training.TrainFramesConfig` (``seed`` also seeds the rendered data).
+            :class:`motion2video.generator.training.TrainFramesConfig` (``seed`` also seeds the rendered data).
         size: frame size (64, 128 or 256).
-        cache: folder of the rendered npz shards (None: :func:`motion2video.frames.data.default_cache_dir`).
+        cache: folder of the rendered npz shards (None: :func:`motion2video.generator.data.default_cache_dir`).
         data_root: folder with mocap/ and face/ captures (None: ../shared/data beside the repository).
         train_sequences: rendered training sequences (None: the spec's 240).
         crop: training crop (0: whole frames; None: half the frame).

@@ -26,7 +26,7 @@ Frame indices given by the user (``--target-frame``, ``--behavior-start``) count
 own rate; clips are resampled to the model's rate (25 fps by default) and indices converted
 (:func:`model_frame`).
 
-The Table 1 / Table 3 protocol is :mod:`motion2video.evaluation.transfer`; :func:`transfer_to_files` is the
+The Table 1 / Table 3 protocol is :mod:`motion2video.evaluation.transfer_protocol`; :func:`transfer_to_files` is the
 ``transfer`` command's work.
 """
 
@@ -46,11 +46,11 @@ from motion2video.core.errors import InputError
 from motion2video.data import windows as W
 from motion2video.formats.bvh_write import write_bvh_files
 from motion2video.formats.video import VideoWriter
-from motion2video.frames.checkpoint import load_frame_model
+from motion2video.generator.checkpoint import load_frame_model
 from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import ModelBundle, load_model
 from motion2video.stages.clips import LoadedClip, load_clip, model_frame
-from motion2video.stages.frames import generate_video_frames
+from motion2video.stages.generation import generate_video_frames
 from motion2video.stages.reference import Reference, ReferencePose, load_reference
 from motion2video.stages.latents import (
     ADAPT_STEPS,
@@ -307,13 +307,13 @@ def transfer_forecast(result: TransferResult):
 
 def render_with_frame_model(result: TransferResult, frame_model, *, size: int, reference=None) -> list[np.ndarray]:
     """Draw the re-enactments with the keypoint-conditioned frame generator, through the ``synthesize``
-    pipeline's conventions (:mod:`motion2video.stages.structure`, :mod:`motion2video.stages.frames`): the target's start posture plays the observed
+    pipeline's conventions (:mod:`motion2video.stages.structure`, :mod:`motion2video.stages.generation`): the target's start posture plays the observed
     frame, each re-enactment a future; bodies are turned to face the camera at the start posture, followed
     on the ground, and aligned to the reference image's pose (its ``.pose.npz`` when there is one, else the
     start posture as a single-frame render frames it).
 
     Args:
-        frame_model: a loaded frame generator (:func:`motion2video.frames.checkpoint.load_frame_model`).
+        frame_model: a loaded frame generator (:func:`motion2video.generator.checkpoint.load_frame_model`).
         reference: a :class:`motion2video.stages.reference.Reference` (:func:`motion2video.stages.reference.load_reference`),
             or None for 3D body models: the start posture rendered with the target's Anny look (and its
             exact pose) becomes the reference.

@@ -1,5 +1,5 @@
 """The learning-rate schedule of both training loops (motion models: :mod:`motion2video.models.training`; the frame
-generator: :mod:`motion2video.frames.training`). Pure: no torch, no state."""
+generator: :mod:`motion2video.generator.training`). Pure: no torch, no state."""
 
 from __future__ import annotations
 

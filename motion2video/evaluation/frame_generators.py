@@ -1,6 +1,6 @@
 """Scoring a frame generator (the ``evaluate-frames`` command's work): on the held-out synthetic pairs, on pairs
 posed by real motion (``poses``), or by the reconstruction protocol on a real video (``video``,
-:mod:`motion2video.evaluation.video_frames`), each next to the previous generator as a named baseline."""
+:mod:`motion2video.evaluation.reconstruction`), each next to the previous generator as a named baseline."""
 
 from __future__ import annotations
 
@@ -13,15 +13,15 @@ from tqdm import tqdm
 
 from motion2video.core.atomic import write_json
 from motion2video.core.errors import InputError
-from motion2video.evaluation.video_frames import evaluate_video
-from motion2video.frames.checkpoint import load_frame_model
-from motion2video.frames.data import default_cache_dir, load_or_generate
-from motion2video.frames.evaluate import (FrameEvaluation, evaluate_sequences, evaluation_contact_sheet,
+from motion2video.evaluation.reconstruction import evaluate_video
+from motion2video.generator.checkpoint import load_frame_model
+from motion2video.generator.data import default_cache_dir, load_or_generate
+from motion2video.generator.scores import (FrameEvaluation, evaluate_sequences, evaluation_contact_sheet,
                                           face_region_masks, json_payload)
-from motion2video.frames.evaluate import write_json as write_evaluation_json
-from motion2video.frames.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
-from motion2video.frames.render_data import SequencesWithHeads, render_body_split_with_heads
-from motion2video.frames.specs import default_spec
+from motion2video.generator.scores import write_json as write_evaluation_json
+from motion2video.generator.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
+from motion2video.generator.render_data import SequencesWithHeads, render_body_split_with_heads
+from motion2video.generator.specs import default_spec
 
 # The previous generator, scored next to every new one: the keypoint warp next to the body mesh generator, the
 # feature-analogy face generator next to the face mesh generator, the feature-analogy body generator next to the

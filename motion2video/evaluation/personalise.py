@@ -2,11 +2,11 @@
 
 The video is tracked once (BlazePose, cached: :func:`motion2video.stages.people.video_track`). Its first
 ``train_fraction`` of frames (80% by default) are the training data: every frame with the person, cut to one
-square around the person over those frames (:func:`~motion2video.evaluation.video_frames.square_box`, the crop
+square around the person over those frames (:func:`~motion2video.evaluation.reconstruction.square_box`, the crop
 of the reconstruction protocol) and resized to the model's size, with its tracked joints and BlazePose's person
 mask; a training pair is any two of them. The rest of the video (the tail) is never trained on: it is scored
 afterwards by the reconstruction protocol of ``evaluate-frames --video`` with the same start fraction
-(:func:`~motion2video.evaluation.video_frames.video_frames`: frame 0 the reference, targets from the tail
+(:func:`~motion2video.evaluation.reconstruction.video_frames`: frame 0 the reference, targets from the tail
 only), for the fine-tuned model and the model it started from, on the same pairs.
 
 Frame 0 is the reference at test time and also a training frame: the protocol's reference is always
@@ -24,9 +24,9 @@ from typing import Callable
 import numpy as np
 
 from motion2video.core.errors import InputError
-from motion2video.evaluation.video_frames import (VideoEvaluation, crop_frames, evaluate_video_frames,
+from motion2video.evaluation.reconstruction import (VideoEvaluation, crop_frames, evaluate_video_frames,
                                                   protocol_frames, square_box, tail_start, video_frames)
-from motion2video.frames.specs import FrameSequences
+from motion2video.generator.specs import FrameSequences
 from motion2video.pose.track import VideoTrack
 
 TRAIN_FRACTION = 0.8
@@ -86,7 +86,7 @@ class PersonaliseSettings:
 
     Attributes:
         steps, batch_size, lr, crop, edge_weight, person_weight, seed, checkpoint_every: as
-            :class:`motion2video.frames.training.TrainFramesConfig`; ``crop`` 0 trains on whole frames, as the
+            :class:`motion2video.generator.training.TrainFramesConfig`; ``crop`` 0 trains on whole frames, as the
             protocol generates them (the warp generator's inference crop is then the whole square; a smaller
             training crop is centred on the pair's joints when they do not fit, so it would seldom see the hands).
         flip: mirror pairs left-right (off: a person is not symmetric, e.g. gloves of two colours).
@@ -119,7 +119,7 @@ class PersonaliseResult:
         evaluation: the protocol on the tail: ``generator`` is the fine-tuned model, ``generic_name`` the
             one it started from, next to copy-reference and limb-warp.
         data: the training part.
-        train: the :class:`motion2video.frames.training.TrainFramesResult`.
+        train: the :class:`motion2video.generator.training.TrainFramesResult`.
         wall_s: seconds of the whole run (tracking, data, training, scoring).
         settings: how it was fine-tuned.
     """
@@ -184,8 +184,8 @@ def personalise(video: str | Path, *, init_from: str | Path, output: str | Path,
     Raises:
         InputError: not a body generator, an unreadable video, no person, a video too short to split.
     """
-    from motion2video.frames.checkpoint import load_frame_model
-    from motion2video.frames.training import TrainFramesConfig, train_frames
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.generator.training import TrainFramesConfig, train_frames
     from motion2video.stages.people import video_track
 
     t0 = time.perf_counter()

@@ -1,5 +1,5 @@
 """One person followed through a whole video as the tracker saw them, frame by frame, with BlazePose's
-person segmentation: what the reconstruction protocol (:mod:`motion2video.evaluation.video_frames`) and
+person segmentation: what the reconstruction protocol (:mod:`motion2video.evaluation.reconstruction`) and
 fine-tuning a frame generator on a video read.
 
 Unlike :class:`~motion2video.pose.estimate.VideoPose` (smoothed, gaps interpolated, ends trimmed, no

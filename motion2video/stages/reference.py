@@ -59,7 +59,7 @@ class ReferencePose:
         camera_joints: body, optional: (17, 3) the pictured pose in 3D, in the picture camera's axes (metres; x
             right, y up, z away from the camera; any origin): BlazePose's world landmarks for a photo, the known
             pose for a render. The mesh generator's body fit takes its bone lengths and depth from it
-            (:func:`motion2video.frames.mesh_fit.lift_reference`).
+            (:func:`motion2video.generator.mesh_fit.lift_reference`).
     """
 
     kind: str
@@ -280,7 +280,7 @@ class Reference:
         path: the image file.
         person: the person's mask, eyes and hands in these pixels when the pose was estimated here (None with a
             pose file: the mesh generator then segments the image itself,
-            :func:`motion2video.stages.frames.mesh_setup`).
+            :func:`motion2video.stages.generation.mesh_setup`).
         picture: (S, S) float32, 1 where these pixels come from the image file, 0 where a pad or zoom replicated its
             border (None: all of them come from it).
     """
@@ -544,7 +544,7 @@ def load_reference(path: str | Path, *, size: int, domain: str,
     if pose is not None:
         pose = _fit_pose(pose, fit, size, (h, w))
         if domain == "body":  # a person to move: joints inside the image, and the image shows them
-            from motion2video.frames.warp import check_reference_person, check_reference_points
+            from motion2video.generator.warp import check_reference_person, check_reference_points
 
             check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
             check_reference_person(fitted, pose.points, path=path)

@@ -2,11 +2,11 @@
 
 The renderer dispatch is one table, :data:`renderers.registry.RENDERERS`: :func:`renderer_for` (layout, style)
 gives the renderer, :meth:`~renderers.registry.StructureRenderer.draw` draws a sequence with it. The table lives
-with the renderers so the frame generator's training data (:mod:`motion2video.frames.render_data`, below the
+with the renderers so the frame generator's training data (:mod:`motion2video.generator.render_data`, below the
 stages) draws through the same table; every application draws through this module.
 
 The frame generator's structures (:func:`render_structures`) follow its training data's conventions
-(:mod:`motion2video.frames.data`):
+(:mod:`motion2video.generator.data`):
 
 - body: 2D joints in generator pixels (:func:`place_body`: the clip turned to face the camera at its first
   frame, followed on the ground, one camera fitted to the observed frames, then a 2D similarity onto the
@@ -28,7 +28,7 @@ from motion2video.stages.reference import Reference
 from renderers.registry import PIXELS, renderer_for
 
 if TYPE_CHECKING:  # annotations only: the mesh code is imported where it is used
-    from motion2video.frames.mesh_flow import MeshTrack
+    from motion2video.generator.mesh_flow import MeshTrack
 
 # Two clearly different Anny identities: the source keeps the renderer's default look, the target gets
 # another phenotype and other clothes, so the video shows the behaviour moving to another person.
@@ -244,7 +244,7 @@ class Structures:
         observed: To. samples: K. horizon: Tf.
         placement: the body placement (body only), for the mesh video.
         face_mesh: face: the head mesh's correspondence in the same rows
-            (:class:`motion2video.frames.mesh_flow.MeshTrack`: vertex pixels, front-surface flags, silhouettes),
+            (:class:`motion2video.generator.mesh_flow.MeshTrack`: vertex pixels, front-surface flags, silhouettes),
             for the mesh generator.
     """
 
@@ -270,7 +270,7 @@ def structure_maps(structures: Structures, rows: slice | np.ndarray) -> np.ndarr
     Returns:
         (R, C, S, S) float32: body 17 heatmaps + 16 limb maps, face 1 grey channel.
     """
-    from motion2video.frames.data import body_structures, face_structures
+    from motion2video.generator.data import body_structures, face_structures
 
     if structures.domain == "body":
         return body_structures(structures.points[rows], structures.size)
@@ -305,9 +305,9 @@ def render_structures(forecast, *, domain: str, size: int, reference: Reference)
 
 def _render_face_structures(forecast, size: int, reference: Reference):
     """(1 + To + K*Tf, S, S) uint8 grey structure renders (reference, observed, futures) and the head mesh's
-    :class:`~motion2video.frames.mesh_flow.MeshTrack` in the same rows."""
+    :class:`~motion2video.generator.mesh_flow.MeshTrack` in the same rows."""
     from motion2video.core.motion import FaceMotion
-    from motion2video.frames.mesh_flow import MeshTrack
+    from motion2video.generator.mesh_flow import MeshTrack
 
     k, tf = forecast.futures.shape[:2]
     pose = reference.pose

@@ -1,10 +1,10 @@
 """The Anny body fitted to a pictured person and its correspondence track: what the mesh generator
-(:mod:`motion2video.frames.mesh_warp`) takes as input for a picture and a motion.
+(:mod:`motion2video.generator.mesh_warp`) takes as input for a picture and a motion.
 
 :func:`lift_reference` lifts a picture's 2D joints to 3D (on their pixels' rays, at the pictured bone lengths
 when the picture's own 3D pose is known); :func:`fit_width` picks Anny's weight whose silhouette best covers the
 person's mask; :func:`render_mesh_track` poses that one body on every frame's joints and renders each vertex's
-pixel and front-surface flag (:class:`motion2video.frames.mesh_flow.MeshTrack`) through a camera widened to the
+pixel and front-surface flag (:class:`motion2video.generator.mesh_flow.MeshTrack`) through a camera widened to the
 whole output square (:func:`camera_covering`).
 """
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from motion2video.core.camera import affine_matrix, project
 from motion2video.core.skeletons import H36M_17
-from motion2video.frames.mesh_flow import MeshTrack
+from motion2video.generator.mesh_flow import MeshTrack
 from renderers import anny_model
 from renderers.body import fitted_scale, pose_anny_from_joints, posed_vertices
 from renderers.collision import arms_clear_of_torso

@@ -25,8 +25,8 @@ import cv2
 import numpy as np
 
 from motion2video.core.errors import InputError
-from motion2video.frames.data import FramePairs, body_structures
-from motion2video.frames.evaluate import FrameEvaluation, evaluate_pairs
+from motion2video.generator.data import FramePairs, body_structures
+from motion2video.generator.scores import FrameEvaluation, evaluate_pairs
 from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose
 from motion2video.pose.estimate import default_model, estimate_image, iter_video_frames, landmarks_to_joints
 from motion2video.pose.h36m import blazepose_to_h36m
@@ -181,21 +181,21 @@ def video_pairs(frames: VideoFrames) -> FramePairs:
 
 
 def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
-    """The pairs with the correspondence of Anny fitted to every frame (:func:`stages.mesh_frames.video_mesh_track`),
+    """The pairs with the correspondence of Anny fitted to every frame (:func:`stages.mesh_generation.video_mesh_track`),
     for the mesh generator: the fitted mesh's silhouettes, grown by the person's clothes margin in frame 0
-    (:func:`frames.mesh_reference.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
+    (:func:`generator.mesh_reference.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
     person masks). As in ``synthesize``, a vertex frame 0 shows counts as shown only where it lands on the person
-    (:func:`frames.mesh_reference.on_person`), and the colours are sampled from the segmented person
-    (:func:`frames.mesh_warp.mesh_source_mask`)."""
+    (:func:`generator.mesh_reference.on_person`), and the colours are sampled from the segmented person
+    (:func:`generator.mesh_warp.mesh_source_mask`)."""
     from dataclasses import replace
 
-    from motion2video.frames.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.frames.mesh_reference import clothes_margin, on_person
-    from motion2video.stages.mesh_frames import video_mesh_track
+    from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
+    from motion2video.generator.mesh_reference import clothes_margin, on_person
+    from motion2video.stages.mesh_generation import video_mesh_track
 
     size = frames.images.shape[1]
     track = video_mesh_track(frames.joints3d, frames.points, size=size, person_mask=frames.masks[0])
-    # as synthesize does (stages.mesh_frames.mesh_video): a vertex frame 0 shows counts as shown only on the person
+    # as synthesize does (stages.mesh_generation.mesh_video): a vertex frame 0 shows counts as shown only on the person
     shown = track.visible.copy()
     shown[0] &= on_person(track.uv[0], frames.masks[0])
     track = MeshTrack(track.uv, shown, track.masks)

@@ -29,13 +29,13 @@ import numpy as np
 import torch
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
-from motion2video.frames.background import composite, inpaint_background, soft_matte
-from motion2video.frames.baselines import BASELINES, run_baseline
-from motion2video.frames.data import FramePairs, evaluation_pair_index, make_pairs
-from motion2video.frames.specs import FrameSequences
-from motion2video.frames.mesh_warp import MeshWarpGenerator, mesh_inputs, mesh_source_mask
-from motion2video.frames.model import FrameGenerator, generate, images_to_tensor
-from motion2video.frames.warp import WarpGenerator, warp_generate
+from motion2video.generator.background import composite, inpaint_background, soft_matte
+from motion2video.generator.image_baselines import BASELINES, run_baseline
+from motion2video.generator.data import FramePairs, evaluation_pair_index, make_pairs
+from motion2video.generator.specs import FrameSequences
+from motion2video.generator.mesh_warp import MeshWarpGenerator, mesh_inputs, mesh_source_mask
+from motion2video.generator.model import FrameGenerator, generate, images_to_tensor
+from motion2video.generator.warp import WarpGenerator, warp_generate
 
 METHODS = ("generator",) + BASELINES
 MOVING_THRESHOLD = 10  # uint8 levels: a pixel "moved" when reference and target differ by more
@@ -123,7 +123,7 @@ def vertex_region_masks(uv: np.ndarray, visible: np.ndarray, masks: np.ndarray, 
     """
     from scipy.spatial import cKDTree
 
-    from motion2video.frames.mesh_flow import pixel_centres
+    from motion2video.generator.mesh_flow import pixel_centres
 
     out = {name: np.zeros(masks.shape, bool) for name in regions}
     for i in range(len(masks)):
@@ -241,7 +241,7 @@ class FrameEvaluation:
         predictions: method name -> (N, H, W, 3) uint8 frames (for contact sheets), plus ``reference`` and
             ``target``.
         pairs: ``"held-out"`` (the frame test split) or ``"poses"`` (posed by real motion, with head metrics:
-            :mod:`motion2video.frames.poses`); it picks the targets.
+            :mod:`motion2video.generator.poses`); it picks the targets.
     """
 
     results: dict[str, MethodScores]
@@ -321,9 +321,9 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
 
     Pairs of real frames with a fitted body (``mesh_ref_masks`` given) are drawn as ``synthesize`` draws them: the
     reference's person (its segmentation joined with the fitted silhouette) inpainted
-    (:func:`motion2video.frames.background.inpaint_background`) is the plate, and the generated person is laid
-    over it through its soft matte (:func:`~motion2video.frames.background.soft_matte`). Rendered pairs keep the
-    generator's own composite over its plate (:func:`~motion2video.frames.mesh_warp.mesh_plate`), as in training.
+    (:func:`motion2video.generator.background.inpaint_background`) is the plate, and the generated person is laid
+    over it through its soft matte (:func:`~motion2video.generator.background.soft_matte`). Rendered pairs keep the
+    generator's own composite over its plate (:func:`~motion2video.generator.mesh_warp.mesh_plate`), as in training.
     """
     if pairs.mesh_flow is None:
         raise ValueError("the mesh generator needs pairs with their mesh correspondence (sequences that keep "

@@ -1,21 +1,21 @@
 """Generate body frames through a body mesh: the mesh generator's stage, which composes the generator's parts.
 
-The keypoint generators take 2D joints; the mesh generator (:mod:`motion2video.frames.mesh_warp`) takes the
+The keypoint generators take 2D joints; the mesh generator (:mod:`motion2video.generator.mesh_warp`) takes the
 correspondence of one body mesh in the reference pose and in each target pose. This stage makes that mesh
 for a placed video (:func:`mesh_video`) and runs the generator on it (:func:`generate_mesh_frames`):
 
 1. **The reference person's body.** Anny with the reference's phenotype (``pose.identity`` of the reference
    pose file, Anny's defaults otherwise), in the reference pose lifted to 3D through the placement's camera
-   (:func:`motion2video.frames.mesh_fit.lift_reference`), its weight fitted to the person's mask
-   (:func:`~motion2video.frames.mesh_fit.fit_width`).
+   (:func:`motion2video.generator.mesh_fit.lift_reference`), its weight fitted to the person's mask
+   (:func:`~motion2video.generator.mesh_fit.fit_width`).
 2. **Every target pose on that body.** Anny's inverse kinematics follows the driving joints' directions, so
    the target meshes keep the motion's joint angles with the reference person's proportions (one scale for
    the whole video, fitted to leg + torso length; feet flat on the floor near it).
 3. **Correspondence.** Each mesh is rendered (depth and silhouette) through the placement's camera
-   (:func:`~motion2video.frames.mesh_fit.render_mesh_track`); where the reference lends its colours is decided by
-   :mod:`motion2video.frames.mesh_reference`; :func:`motion2video.frames.mesh_flow.dense_flow` makes the flow.
+   (:func:`~motion2video.generator.mesh_fit.render_mesh_track`); where the reference lends its colours is decided by
+   :mod:`motion2video.generator.mesh_reference`; :func:`motion2video.generator.mesh_flow.dense_flow` makes the flow.
 
-The crop follows the keypoint warp generator's (:func:`motion2video.frames.warp.person_crop`): the person is generated
+The crop follows the keypoint warp generator's (:func:`motion2video.generator.warp.person_crop`): the person is generated
 at the model's size inside a square crop holding both poses and composited with a soft matte over the reference
 picture with its person inpainted at the output's resolution (:func:`reference_background`), so the background keeps
 its resolution and the reference person leaves no ghost.
@@ -31,13 +31,13 @@ import torch
 
 from motion2video.core.camera import fit_camera, project
 from motion2video.core.errors import InputError
-from motion2video.frames.background import MATTE_FEATHER_PX, composite, inpaint_background, soft_matte
-from motion2video.frames.data import body_structures, face_structures
-from motion2video.frames.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
-from motion2video.frames.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
-from motion2video.frames.mesh_reference import clothes_margin, hand_colour_sources, reference_sampling
-from motion2video.frames.mesh_warp import mesh_plate, person_colours, sampled_colours
-from motion2video.frames.warp import limb_region, person_crop
+from motion2video.generator.background import MATTE_FEATHER_PX, composite, inpaint_background, soft_matte
+from motion2video.generator.data import body_structures, face_structures
+from motion2video.generator.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
+from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
+from motion2video.generator.mesh_reference import clothes_margin, hand_colour_sources, reference_sampling
+from motion2video.generator.mesh_warp import mesh_plate, person_colours, sampled_colours
+from motion2video.generator.warp import limb_region, person_crop
 from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
 from renderers import anny_model
 
@@ -52,9 +52,9 @@ class MeshVideo:
         ref_points, tgt_points: (17, 2) / (N, 17, 2) joints in crop pixels (for the structure maps).
         person: (S, S) bool the person segmented in the reference crop, or None when not segmented.
         margin: pixels (at S) by which the person's clothes and hair reach past the fitted mesh in the reference
-            (:func:`~motion2video.frames.mesh_reference.clothes_margin`); every silhouette is grown by it.
+            (:func:`~motion2video.generator.mesh_reference.clothes_margin`); every silhouette is grown by it.
         uv_sources: (V,) int64, or None: after the surface completion, vertex v samples where vertex
-            ``uv_sources[v]`` does (:func:`~motion2video.frames.mesh_reference.hand_colour_sources`: a fitted hand
+            ``uv_sources[v]`` does (:func:`~motion2video.generator.mesh_reference.hand_colour_sources`: a fitted hand
             sampling beside the pictured hand).
         background: (S_out, S_out, 3) uint8 the reference picture with its person inpainted
             (:func:`reference_background`), or None (made from the fitted silhouette and the joints when needed).
@@ -84,15 +84,15 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         output_size: the output frames' side; model_size: the generator's.
         person: what BlazePose found of the reference person in output pixels
             (:class:`motion2video.stages.reference.ReferencePerson`), or None. Anny's weight is fitted to its mask
-            (:func:`~motion2video.frames.mesh_fit.fit_width`, when ``fit_to_mask``); where the colours are sampled,
+            (:func:`~motion2video.generator.mesh_fit.fit_width`, when ``fit_to_mask``); where the colours are sampled,
             a vertex the reference mesh shows counts as shown only where it lands on the person, and the fitted head
             is moved onto its eyes
-            (:func:`~motion2video.frames.mesh_reference.reference_sampling`).
+            (:func:`~motion2video.generator.mesh_reference.reference_sampling`).
         image: (output_size, output_size, 3) uint8 the reference picture, or None: a fitted hand vertex that lands
             beside the pictured hand samples where a hand vertex on it does
-            (:func:`~motion2video.frames.mesh_reference.hand_colour_sources`).
+            (:func:`~motion2video.generator.mesh_reference.hand_colour_sources`).
         pictured: (17, 3) the reference picture's own 3D pose in its camera's axes (its pose file's
-            ``camera_joints``), or None (:func:`~motion2video.frames.mesh_fit.lift_reference`).
+            ``camera_joints``), or None (:func:`~motion2video.generator.mesh_fit.lift_reference`).
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -137,13 +137,13 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
 def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray | None,
                          points: np.ndarray) -> np.ndarray:
     """(S, S, 3) uint8: the reference picture with its person inpainted
-    (:func:`motion2video.frames.background.inpaint_background`), the background every generated person is
+    (:func:`motion2video.generator.background.inpaint_background`), the background every generated person is
     composited over.
 
     The hole is the person BlazePose segments (or the picture's alpha channel, ``person`` (S, S) in [0, 1]) joined
     with the fitted reference body's silhouette grown by the clothes margin, which covers a limb the segmentation
     missed; with no segmented person, the silhouette joined with the pose's limbs drawn thick
-    (:func:`motion2video.frames.warp.limb_region` of ``points`` (17, 2), output pixels), as hair and clothes reach
+    (:func:`motion2video.generator.warp.limb_region` of ``points`` (17, 2), output pixels), as hair and clothes reach
     past the body model.
     """
     h, w = image.shape[:2]
@@ -170,7 +170,7 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         joints3d: (N, 17, 3) canonical joints (z up). points2d: (N, 17, 2) the same joints in frame pixels.
         size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
         person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it
-            (:func:`~motion2video.frames.mesh_fit.fit_width`).
+            (:func:`~motion2video.generator.mesh_fit.fit_width`).
     """
     joints3d = np.asarray(joints3d, np.float64)
     camera = fit_camera(joints3d, size, size, elevation_deg=0.0)
@@ -191,7 +191,7 @@ def sampled_person(video: MeshVideo):
     """(1, 1, S, S) float tensor: the reference pixels whose colours the mesh generator samples (its
     ``source_mask``): the person BlazePose segments in the reference; None when nobody is segmented (the generator
     then samples inside the fitted silhouette it is given). A fitted silhouette reaches past a real person where
-    the fit is off (:func:`motion2video.frames.mesh_warp.mesh_source_mask` says what that cost)."""
+    the fit is off (:func:`motion2video.generator.mesh_warp.mesh_source_mask` says what that cost)."""
     if video.person is None or not video.person.any():
         return None
     return torch.from_numpy(video.person[None, None].astype(np.float32))
@@ -201,11 +201,11 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
                          batch_size: int = 8) -> np.ndarray:
     """Frames of the mesh generator for target ``rows`` of ``video``: the generated person (at the model's size,
     resized to the crop) laid over the reference's background (``video.background``, :func:`reference_background`)
-    through its soft matte (:func:`motion2video.frames.background.soft_matte` of the generator's alpha), so where
+    through its soft matte (:func:`motion2video.generator.background.soft_matte` of the generator's alpha), so where
     the reference person stood shows the background, and no background colour is mixed into the person.
 
     Args:
-        net: a :class:`motion2video.frames.mesh_warp.MeshWarpGenerator`.
+        net: a :class:`motion2video.generator.mesh_warp.MeshWarpGenerator`.
         image: (S, S, 3) uint8 the reference at the output size.
         video: from :func:`mesh_video`.
         rows: (R,) indices into ``video.targets``.
@@ -262,7 +262,7 @@ def generate_face_mesh_frames(net, image: np.ndarray, structures, rows: np.ndarr
     and each target row (the whole frame: a face close-up fills it).
 
     Args:
-        net: a face :class:`motion2video.frames.mesh_warp.MeshWarpGenerator`.
+        net: a face :class:`motion2video.generator.mesh_warp.MeshWarpGenerator`.
         image: (S, S, 3) uint8 the reference at the model's size.
         structures: face :class:`motion2video.stages.structure.Structures` with ``face_mesh``.
         rows: (R,) target indices.

@@ -5,8 +5,8 @@ writes a second file beside it, ``NAME.state.safetensors``, with the optimiser (
 run can resume; it is never shipped.
 
 Metadata keys (all strings): ``format`` = ``"motion2video-frames"``, ``kind`` (``"analogy"``: the feature-analogy
-:class:`FrameGenerator`; ``"warp"``: the warping :class:`~motion2video.frames.warp.WarpGenerator`; ``"mesh"``: the mesh-correspondence
-:class:`~motion2video.frames.mesh_warp.MeshWarpGenerator`; absent in
+:class:`FrameGenerator`; ``"warp"``: the warping :class:`~motion2video.generator.warp.WarpGenerator`; ``"mesh"``: the mesh-correspondence
+:class:`~motion2video.generator.mesh_warp.MeshWarpGenerator`; absent in
 older checkpoints, which are analogy models), ``config`` (the kind's config as JSON), ``version`` (package version), ``step`` (training steps done), ``train`` (JSON summary: training
 config, data summary, wall time, ...).
 """
@@ -28,9 +28,9 @@ from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_ver
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
 from motion2video.data.licences import licence_note, model_licences
-from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator
-from motion2video.frames.model import FrameGenerator, FrameGeneratorConfig
-from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+from motion2video.generator.mesh_warp import MeshWarpConfig, MeshWarpGenerator
+from motion2video.generator.model import FrameGenerator, FrameGeneratorConfig
+from motion2video.generator.warp import WarpGenerator, WarpGeneratorConfig
 
 FORMAT = "motion2video-frames"
 WEIGHTS_DIR = Path(__file__).resolve().parents[1] / "weights"

@@ -1,8 +1,8 @@
 """Generate frames: the one path from structures to RGB frames with the keypoint-conditioned frame generator.
 
-:func:`generate_frames` encodes the reference once (:meth:`~motion2video.frames.model.FrameGenerator.encode_reference`)
-and decodes every target structure from it (:meth:`~motion2video.frames.model.FrameGenerator.decode`), the same
-two methods :func:`motion2video.frames.model.generate` (evaluation) runs per pair; :func:`generate_video_frames`
+:func:`generate_frames` encodes the reference once (:meth:`~motion2video.generator.model.FrameGenerator.encode_reference`)
+and decodes every target structure from it (:meth:`~motion2video.generator.model.FrameGenerator.decode`), the same
+two methods :func:`motion2video.generator.model.generate` (evaluation) runs per pair; :func:`generate_video_frames`
 runs it over the observed frames and every future of :class:`~motion2video.stages.structure.Structures`.
 """
 
@@ -23,27 +23,27 @@ GENERATE_CHUNK = 64  # target structures materialised at once (33 x 128 x 128 fl
 
 
 def is_warp(net) -> bool:
-    """Whether ``net`` is the warp generator (:mod:`motion2video.frames.warp`), which takes keypoints and
+    """Whether ``net`` is the warp generator (:mod:`motion2video.generator.warp`), which takes keypoints and
     frames of any size, rather than the feature-analogy generator, which takes structure maps."""
     return getattr(net, "kind", "analogy") == "warp"
 
 
 def is_mesh(net) -> bool:
-    """Whether ``net`` is the mesh generator (:mod:`motion2video.frames.mesh_warp`), which takes the body mesh's
-    correspondence (:mod:`motion2video.stages.mesh_frames`) and frames of any size."""
+    """Whether ``net`` is the mesh generator (:mod:`motion2video.generator.mesh_warp`), which takes the body mesh's
+    correspondence (:mod:`motion2video.stages.mesh_generation`) and frames of any size."""
     return getattr(net, "kind", "analogy") == "mesh"
 
 
 def mesh_setup(net, reference: Reference, structures: Structures):
-    """Body: the :class:`~motion2video.stages.mesh_frames.MeshVideo` of every target row of ``structures``: the
+    """Body: the :class:`~motion2video.stages.mesh_generation.MeshVideo` of every target row of ``structures``: the
     reference person's Anny body (the reference pose file's phenotype; without one, Anny's weight fitted to the
     person BlazePose segments) in the reference pose and in every target pose; only the reference vertices that land
     on that segmented person count as shown, the fitted head is moved onto the eyes BlazePose finds
-    (:func:`~motion2video.frames.mesh_reference.align_face`) and a fitted hand vertex that lands beside the pictured
-    hand samples the pictured hand (:func:`~motion2video.frames.mesh_reference.hand_colour_sources`). Face: None (the face
+    (:func:`~motion2video.generator.mesh_reference.align_face`) and a fitted hand vertex that lands beside the pictured
+    hand samples the pictured hand (:func:`~motion2video.generator.mesh_reference.hand_colour_sources`). Face: None (the face
     structures carry their head mesh)."""
     from motion2video.core.errors import InputError
-    from motion2video.stages.mesh_frames import mesh_video
+    from motion2video.stages.mesh_generation import mesh_video
 
     if net.config.domain != structures.domain:
         raise InputError(f"the mesh frame generator makes {net.config.domain} frames, not {structures.domain} frames")
@@ -70,7 +70,7 @@ def mesh_frames(net, reference: Reference, structures: Structures, video, rows: 
                 batch_size: int = 4) -> np.ndarray:
     """(R, S, S, 3) uint8 frames of the mesh generator for target ``rows`` (0 = the first observed frame):
     body through ``video`` (:func:`mesh_setup`), face through the structures' head mesh."""
-    from motion2video.stages.mesh_frames import generate_face_mesh_frames, generate_mesh_frames
+    from motion2video.stages.mesh_generation import generate_face_mesh_frames, generate_mesh_frames
 
     if structures.domain == "face":
         return generate_face_mesh_frames(net, reference.image, structures, rows, batch_size=batch_size)
@@ -103,7 +103,7 @@ def generate_frames(model, reference_image: np.ndarray, reference_structure: np.
     """Frames of one reference appearance in many target structures.
 
     ``decoder(enc_img(x_ref) - enc_pose(p_ref) + enc_pose(p_tgt))`` (+ ``x_ref`` for residual models) through
-    :meth:`~motion2video.frames.model.FrameGenerator.encode_reference` and ``decode``: the reference image and
+    :meth:`~motion2video.generator.model.FrameGenerator.encode_reference` and ``decode``: the reference image and
     structure are encoded once, not once per target (the reference is the same for the whole video), under
     ``torch.inference_mode``.
 
@@ -119,7 +119,7 @@ def generate_frames(model, reference_image: np.ndarray, reference_structure: np.
     """
     import torch
 
-    from motion2video.frames.model import images_to_tensor, tensor_to_images
+    from motion2video.generator.model import images_to_tensor, tensor_to_images
 
     net = getattr(model, "model", model)
     cfg = net.config
@@ -159,7 +159,7 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
                           threads: int | None = None, channels_last: bool = True) -> GeneratedFrames:
     """Run :func:`generate_frames` over every observed and future frame of :class:`Structures`, building
     the structure maps a chunk at a time (so a long video never holds all of them). A warp generator
-    (:class:`~motion2video.frames.warp.WarpGenerator`) goes through its ``encode_reference`` / ``decode``
+    (:class:`~motion2video.generator.warp.WarpGenerator`) goes through its ``encode_reference`` / ``decode``
     at the structures' size instead (the person generated at the model's size, pasted into the reference)."""
     net = getattr(model, "model", model)
     if is_mesh(net):

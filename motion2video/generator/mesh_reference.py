@@ -14,7 +14,7 @@ import numpy as np
 from scipy.ndimage import binary_erosion, distance_transform_edt
 from scipy.spatial import cKDTree
 
-from motion2video.frames.mesh_flow import touching_other_part
+from motion2video.generator.mesh_flow import touching_other_part
 from renderers import anny_model
 
 # clothes_margin: the quantile, over the fitted silhouette's outline, of how far the person reaches past each outline
@@ -218,7 +218,7 @@ def grazing_where_touching(uv: np.ndarray, shown: np.ndarray, *, rest, size: int
     """(V,) bool: shown vertices of a body *fitted* to a picture that the picture shows at a grazing angle
     (:func:`facing` under :data:`GRAZING_FACING`) where another body part lies beside them (within
     :data:`GRAZING_TOUCH_PX` at 128 of a shown vertex 10 cm away on the body:
-    :func:`motion2video.frames.mesh_flow.touching_other_part`); the head's are never flagged (its face is moved
+    :func:`motion2video.generator.mesh_flow.touching_other_part`); the head's are never flagged (its face is moved
     onto the pictured eyes).
 
     Such a vertex is squeezed into the last pixel of its part's outline, where the fit is a pixel off the picture
@@ -227,7 +227,7 @@ def grazing_where_touching(uv: np.ndarray, shown: np.ndarray, *, rest, size: int
     trousers and dark fingers (`make demo`'s future 2 at +41 and +48). Counted as hidden, they take their colour
     by the surface completion from squarely seen vertices of their own region. A grazing vertex at the person's
     outer outline is left alone (the background there is filled from inside the person,
-    :func:`motion2video.frames.mesh_warp.fill_outside_person`): made hidden everywhere, 14% of the demo
+    :func:`motion2video.generator.mesh_warp.fill_outside_person`): made hidden everywhere, 14% of the demo
     reference's shown vertices, it cost 0.2-0.5 dB of person PSNR on fitted references (docs/results.md).
 
     Args:
@@ -306,7 +306,7 @@ def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, ha
     told from the hand, and is left). Reaching along the forearm to the elbow as well was measured and not kept:
     on the demo 12 more trousers pixels, on the fitted held-out references 0.03-0.05 dB less person PSNR. Applied
     after the surface completion
-    (:func:`motion2video.frames.mesh_flow.complete_reference_uv`), whose test of a thigh touching the hand must see
+    (:func:`motion2video.generator.mesh_flow.complete_reference_uv`), whose test of a thigh touching the hand must see
     the fitted hand where it lies.
 
     Args:

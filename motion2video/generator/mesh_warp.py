@@ -1,16 +1,16 @@
 """A body frame generator that moves the reference person through a body mesh.
 
-The keypoint warp (:mod:`motion2video.frames.warp`) guesses a dense flow from 2D joints: per-limb rigid
+The keypoint warp (:mod:`motion2video.generator.warp`) guesses a dense flow from 2D joints: per-limb rigid
 transforms blended by soft part masks. 2D joints carry neither limb twist nor which side of a limb faces the
 camera, so moved limbs tear and blur. Here the flow comes from the correspondence of one body mesh rendered in
-the reference pose and in the target pose (:mod:`motion2video.frames.mesh_flow`), as in Liquid Warping GAN
+the reference pose and in the target pose (:mod:`motion2video.generator.mesh_flow`), as in Liquid Warping GAN
 (Liu et al., ICCV 2019) and Dense Pose Transfer (Neverova et al., ECCV 2018):
 
 1. *Background.* The reference person's silhouette (grown by :data:`PLATE_GROW_PX`) is removed from the
    reference and filled by OpenCV's Telea inpainting: the plate every target frame is composited over in training.
    On a real picture (``synthesize``, the reconstruction protocol) the plate is the picture with its segmented
    person inpainted at the output's resolution, and the person (:attr:`MeshWarpOutput.person`) is laid over it
-   through a soft matte of ``alpha`` (:mod:`motion2video.frames.background`).
+   through a soft matte of ``alpha`` (:mod:`motion2video.generator.background`).
 2. *Prior.* Inside the target silhouette the reference is sampled along the mesh flow; the mesh's visibility
    map says where the reference shows that surface point. The reference person is sampled with the background
    outside it given the nearest person colour (:func:`fill_outside_person`, :func:`person_edge_refined`), so a
@@ -39,7 +39,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from motion2video.frames.warp import FLOW_UNIT, SAMPLE_MODES, Pyramid, UpDecoder, _conv, warp_image
+from motion2video.generator.warp import FLOW_UNIT, SAMPLE_MODES, Pyramid, UpDecoder, _conv, warp_image
 
 PLATE_GROW_PX = 3  # the reference silhouette is grown by this many pixels (at 128 px) before inpainting
 ALPHA_PRIOR = 4.0  # logit of the person's alpha from the target silhouette: +-this
@@ -133,7 +133,7 @@ def fill_outside_person(image: torch.Tensor, person: torch.Tensor, core_px: int 
     Euclidean distance transform): what the person's colours are sampled from.
 
     The flow of a surface point the reference shows only at a grazing angle, or not at all (the completed
-    hidden side of a limb, :func:`motion2video.frames.mesh_flow.complete_reference_uv`), lands on the person's
+    hidden side of a limb, :func:`motion2video.generator.mesh_flow.complete_reference_uv`), lands on the person's
     outline, where bicubic sampling reached the background: white specks along turned legs and around a hand
     that passes a thigh, which the network's inpainting (a change to the sampled colour) kept. With the outside
     filled, a sample near the outline takes the person's colour. Measured alone on the real-mocap pairs of
@@ -263,7 +263,7 @@ class MeshWarpOutput:
         flow: (B, H, W, 2) the final backward flow, reference pixels.
         plate: (B, 3, H, W) the background without the reference person.
         person: (B, 3, H, W) the person's colours, ``visibility * warped + (1 - visibility) * inpainting`` (what
-            ``image`` lays over the plate through ``alpha``; :func:`motion2video.frames.background.composite` lays
+            ``image`` lays over the plate through ``alpha``; :func:`motion2video.generator.background.composite` lays
             it over a full-resolution background).
     """
 
@@ -307,7 +307,7 @@ class MeshWarpGenerator(nn.Module):
         Args: as :meth:`forward`, and plate: (B, 3, H, W) the background (:func:`mesh_plate` of the reference
             when None); source_mask: (B, 1, H, W) the reference pixels that are the person, whose colours are
             sampled (:func:`fill_outside_person`; ``ref_mask`` when None). For a fitted body, the segmented
-            person (:func:`mesh_source_mask`, :func:`motion2video.stages.mesh_frames.sampled_person`), whose
+            person (:func:`mesh_source_mask`, :func:`motion2video.stages.mesh_generation.sampled_person`), whose
             outside is filled from inside its outline (:func:`segmented_core_px`).
             colours: (B, 3, H, W) :func:`sampled_colours` of the reference when the caller has them already (one
             reference for many batches of targets); ``source_mask`` is then not used.
@@ -366,7 +366,7 @@ def mesh_source_mask(pairs) -> torch.Tensor | None:
 
 
 def mesh_inputs(pairs) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """The mesh generator's inputs besides the images, from :class:`frames.data.FramePairs` that carry the mesh
+    """The mesh generator's inputs besides the images, from :class:`generator.data.FramePairs` that carry the mesh
     correspondence: ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility (B, 1, H, W), silhouette (B, 1, H, W) (the
     fitted mesh's silhouettes when the pairs carry them, else the person masks)."""
     ref = pairs.ref_masks if pairs.mesh_ref_masks is None else pairs.mesh_ref_masks

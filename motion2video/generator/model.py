@@ -13,7 +13,7 @@ mask-composite ``m * x_ref + (1 - m) * rgb`` was tried first: its mask saturated
 and the generator stayed a copy of the reference.)
 
 Structures are maps of ``structure_channels`` channels at the image size: Gaussian heatmaps plus limb maps
-for bodies, the rendered shaded face mesh for faces (see :mod:`motion2video.frames.data`).
+for bodies, the rendered shaded face mesh for faces (see :mod:`motion2video.generator.data`).
 
 Images entering and leaving the network are float tensors in [0, 1], (B, 3, H, W). No pretrained parts.
 """
@@ -38,7 +38,7 @@ class FrameGeneratorConfig:
     """Architecture of a frame generator.
 
     Attributes:
-        domain: ``"body"`` or ``"face"``; decides how structures are made (see frames.data).
+        domain: ``"body"`` or ``"face"``; decides how structures are made (see generator.data).
         image_size: square frame size in pixels (128 default, 256 configurable); a multiple of 2**levels.
         structure_channels: channels of a structure map (body: heatmaps + limb maps; face: 1 shaded grey).
         channels: feature channels per encoder level, level 0 at full resolution; len(channels) - 1

@@ -1,7 +1,7 @@
 """Training loop of the frame generator: L1 + SSIM (+ an optional LSGAN patch discriminator), Adam with
 warm-up and cosine decay, periodic resumable checkpoints.
 
-Batches are drawn on the fly from rendered sequences (:mod:`motion2video.frames.data`): any two frames of a
+Batches are drawn on the fly from rendered sequences (:mod:`motion2video.generator.data`): any two frames of a
 sequence make a pair. The batch at step ``s`` depends only on ``(seed, s)``, so a resumed run sees the same
 batches as an uninterrupted one.
 """
@@ -18,14 +18,14 @@ import torch
 
 from motion2video.core.errors import InputError
 from motion2video.core.schedule import learning_rate  # the one schedule of both training loops
-from motion2video.frames.checkpoint import (build_model, load_frame_model, load_train_state, model_kind,
+from motion2video.generator.checkpoint import (build_model, load_frame_model, load_train_state, model_kind,
                                             save_frame_model, save_train_state, state_path)
-from motion2video.frames.specs import FrameSequences
-from motion2video.frames.data import make_pairs, sample_pair_index, structure_channels
-from motion2video.frames.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
+from motion2video.generator.specs import FrameSequences
+from motion2video.generator.data import make_pairs, sample_pair_index, structure_channels
+from motion2video.generator.model import (FrameGeneratorConfig, PatchDiscriminator, count_parameters,
                                        images_to_tensor, reconstruction_loss)
-from motion2video.frames.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs, mesh_source_mask
-from motion2video.frames.warp import WarpGenerator, WarpGeneratorConfig
+from motion2video.generator.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs, mesh_source_mask
+from motion2video.generator.warp import WarpGenerator, WarpGeneratorConfig
 
 
 @dataclass(frozen=True)

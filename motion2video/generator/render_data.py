@@ -1,4 +1,4 @@
-"""Rendering the synthetic appearance sequences of :mod:`motion2video.frames.data` with the Anny renderers.
+"""Rendering the synthetic appearance sequences of :mod:`motion2video.generator.data` with the Anny renderers.
 
 Bodies: a window of a real mocap clip (loaded as canonical h36m-17 through the BVH loader), posed on an
 Anny body by the body renderer's IK, one identity (phenotype + region colours), a background crop, a camera
@@ -22,7 +22,7 @@ from typing import Callable
 import numpy as np
 
 from motion2video.core.errors import InputError
-from motion2video.frames.specs import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
+from motion2video.generator.specs import (DatasetSpec, FrameSequences, Identity, background_crop, background_images,
                                        default_data_root, identities, is_test_clip)
 
 # Camera and light variation per sequence.

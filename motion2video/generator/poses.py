@@ -2,9 +2,9 @@
 
 ``evaluate-frames --poses PATH`` renders, for every clip at PATH (a motion file or a folder of them), a few
 windows spread evenly over the clip; each window is rendered with the Anny body renderer exactly as the
-training data is (:func:`motion2video.frames.render_data.render_body_window`: background crop, camera yaw and
+training data is (:func:`motion2video.generator.render_data.render_body_window`: background crop, camera yaw and
 elevation, light level, the camera fitted over the window) as one of the frame test split's held-out
-identities (:func:`motion2video.frames.specs.identities` ``("test", ...)``), with the visible head masks. Frame
+identities (:func:`motion2video.generator.specs.identities` ``("test", ...)``), with the visible head masks. Frame
 0 of a window is the reference, each later frame a target whose truth is its render.
 
 Everything is a pure function of the clips and :class:`PoseEvalSpec` (fixed seeds), so two runs give the same
@@ -21,10 +21,10 @@ import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.core.motion import FaceMotion, Motion
-from motion2video.frames.specs import FrameSequences, background_images, default_spec, identities
+from motion2video.generator.specs import FrameSequences, background_images, default_spec, identities
 
 if TYPE_CHECKING:  # pragma: no cover
-    from motion2video.frames.render_data import SequencesWithHeads
+    from motion2video.generator.render_data import SequencesWithHeads
 
 # Files a --poses folder may hold (body motions); other files (manifest.csv, READMEs, face captures) are
 # passed over.
@@ -132,7 +132,7 @@ def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, 
     """Render every window of every clip (:func:`window_frames`) as the held-out identities in turn; window
     ``i`` draws its look from ``np.random.default_rng([spec.seed, 3, i])``. The sequences' ``clip`` holds the
     clip names, ``start`` each window's first source frame."""
-    from motion2video.frames.render_data import SequencesWithHeads, render_body_window
+    from motion2video.generator.render_data import SequencesWithHeads, render_body_window
 
     people = identities("test", spec.num_identities, seed=spec.seed)
     pool = background_images()

@@ -34,7 +34,7 @@ import numpy as np
 from motion2video.core.atomic import save_npz, write_text
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import H36M_17
-from motion2video.frames.specs import (
+from motion2video.generator.specs import (
     DATA_VERSION,
     DatasetSpec,
     FrameSequences,
@@ -114,7 +114,7 @@ class FramePairs:
         ref_structures, tgt_structures: (B, S, H, W) float32 structure maps.
         ref_masks, tgt_masks: (B, H, W) bool person silhouettes, or None when the sequences have none.
         mesh_flow: (B, H, W, 2) float32 the mesh correspondence target -> reference (reference pixels), or
-            None when the sequences keep no mesh vertices (:func:`frames.mesh_flow.dense_flow`).
+            None when the sequences keep no mesh vertices (:func:`generator.mesh_flow.dense_flow`).
         mesh_visibility: (B, H, W) float32 how much of each target pixel's surface the reference shows, or None.
         mesh_ref_masks, mesh_tgt_masks: (B, H, W) bool silhouettes of the fitted mesh when they differ from the
             person masks (a body fitted to real frames), or None (rendered data: the masks are the mesh's).
@@ -218,14 +218,14 @@ def pair_mesh_flows(seqs: FrameSequences, index: np.ndarray, flip: np.ndarray | 
                     tgt_masks: np.ndarray, *, ref_images: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The mesh correspondence of every pair of ``index`` (B, 3) after its flip and crop (``origins`` (B, 2)
     or None), filling the (already flipped and cropped) target silhouettes ``tgt_masks`` (B, h, w) and a band
-    around them (:func:`frames.mesh_flow.extend_flow`). ``ref_images`` (B, h, w, 3), the flipped and cropped
+    around them (:func:`generator.mesh_flow.extend_flow`). ``ref_images`` (B, h, w, 3), the flipped and cropped
     reference images, let the completion of hidden surface test its sources' colours
-    (:func:`frames.mesh_flow.complete_reference_uv`).
+    (:func:`generator.mesh_flow.complete_reference_uv`).
 
     Returns:
         flow (B, h, w, 2) float32 reference pixels, visibility (B, h, w) float32.
     """
-    from motion2video.frames.mesh_flow import band_width, dense_flow, extend_flow, mesh_triangles, transform_uv
+    from motion2video.generator.mesh_flow import band_width, dense_flow, extend_flow, mesh_triangles, transform_uv
 
     triangles = mesh_triangles()  # the flow is read from the target's triangles where they show whole
     flows, vis = [], []
@@ -342,7 +342,7 @@ def load_or_generate(spec: DatasetSpec, *, cache_dir: str | Path, data_root: str
     shards = [folder / f"shard-{k:05d}.npz" for k in range(spec.num_shards)]
     missing = [k for k, p in enumerate(shards) if not p.is_file()]
     if missing:
-        from motion2video.frames.render_data import render_shard, SequenceSource
+        from motion2video.generator.render_data import render_shard, SequenceSource
 
         source = SequenceSource.create(spec, data_root=data_root)
         try:

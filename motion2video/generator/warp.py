@@ -479,7 +479,7 @@ class WarpGenerator(nn.Module):
         """
         import cv2
 
-        from motion2video.frames.data import body_structures
+        from motion2video.generator.data import body_structures
 
         targets = np.asarray(target_keypoints, np.float64).reshape(-1, NUM_JOINTS, 2)
         if not np.all(np.isfinite(targets)):

@@ -1,7 +1,7 @@
 """Dense correspondence between two renders of the same body mesh: where each target pixel's surface point
 was in the reference frame, and whether the reference shows it.
 
-The mesh generator (:mod:`motion2video.frames.mesh_warp`) moves the reference person along this flow
+The mesh generator (:mod:`motion2video.generator.mesh_warp`) moves the reference person along this flow
 instead of along per-limb transforms of 2D keypoints (the idea of Liquid Warping GAN, Liu et al. 2019, and
 Dense Pose Transfer, Neverova et al. 2018): the mesh carries limb twist, foreshortening and which side of a
 limb faces the camera, which 2D keypoints do not.
@@ -333,7 +333,7 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
 @lru_cache(maxsize=1)
 def mesh_triangles() -> np.ndarray:
     """(F, 3) int64 Anny's triangles, which every mesh flow is read from (:func:`dense_flow`): the training
-    pairs (:func:`motion2video.frames.data.pair_mesh_flows`) and :func:`flows_to_targets`."""
+    pairs (:func:`motion2video.generator.data.pair_mesh_flows`) and :func:`flows_to_targets`."""
     from renderers import anny_model
 
     return np.ascontiguousarray(anny_model.triangles(), dtype=np.int64)
@@ -492,7 +492,7 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
 
 def transform_uv(uv: np.ndarray, *, size: int, flip: bool = False, origin: tuple[float, float] = (0.0, 0.0)
                  ) -> np.ndarray:
-    """Vertex pixel positions (..., 2) after the pair augmentations of :func:`frames.data.make_pairs`: a
+    """Vertex pixel positions (..., 2) after the pair augmentations of :func:`generator.data.make_pairs`: a
     left-right mirror of a ``size``-wide image, then a crop whose top-left corner is ``origin`` (x0, y0)."""
     out = np.array(uv, np.float32, copy=True)
     if flip:
@@ -556,7 +556,7 @@ def flows_to_targets(ref_uv: np.ndarray, ref_visible: np.ndarray, targets: MeshT
             per reference, not once per target); ref_visible: (V,) bool.
         targets: the target frames; rows: indices into them.
         margin: pixels the person's silhouettes are grown by
-            (:func:`motion2video.frames.mesh_reference.clothes_margin`): the flow is carried :func:`band_width` past the silhouette, or half that past the margin when further.
+            (:func:`motion2video.generator.mesh_reference.clothes_margin`): the flow is carried :func:`band_width` past the silhouette, or half that past the margin when further.
     Returns:
         flow (R, H, W, 2) float32, visibility (R, H, W) float32.
     """

@@ -1,8 +1,8 @@
 """What the frame generator's synthetic dataset is made of: the dataset specification, the sequences
 container, the train/test split of captures, the identities (phenotype and colours) and the backgrounds.
 
-Split out of :mod:`motion2video.frames.data` so that :mod:`motion2video.frames.render_data` (which renders
-sequences) and :mod:`motion2video.frames.data` (which caches them, rendering missing shards) do not import each
+Split out of :mod:`motion2video.generator.data` so that :mod:`motion2video.generator.render_data` (which renders
+sequences) and :mod:`motion2video.generator.data` (which caches them, rendering missing shards) do not import each
 other: both import this module.
 """
 
@@ -46,7 +46,7 @@ class FrameSequences:
         start: (N,) int64, the first source frame of each sequence.
         masks: (N, T, H, W) bool silhouettes of the person (rendered), or None (old caches).
         vertex_uv: (N, T, V, 2) float16 the body mesh vertices' pixel positions, or None.
-        vertex_visible: (N, T, V) bool, each vertex is the front surface (:mod:`frames.mesh_flow`), or None.
+        vertex_visible: (N, T, V) bool, each vertex is the front surface (:mod:`generator.mesh_flow`), or None.
     """
 
     domain: str
