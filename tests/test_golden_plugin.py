@@ -1,5 +1,5 @@
 """The pytest plugin (fixture ``golden_frames``, ``--update-golden``, ``--golden-results``, the session summary),
-run through pytest's own ``pytester``: the README's example file in a fresh project directory, and bad goldens.
+run through pytest's own ``pytester``: the example file of docs/testing.md in a fresh project directory, and bad goldens.
 """
 
 from __future__ import annotations
@@ -18,12 +18,12 @@ from motion2video.formats.video import read_image, write_image
 
 pytest_plugins = ["pytester"]
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+TESTING_DOC = Path(__file__).resolve().parents[1] / "docs" / "testing.md"
 
 
 def readme_example() -> str:
-    """The first python block of the README section "Golden-frame tests for your renders"."""
-    text = README.read_text()
+    """The first python block of the docs/testing.md section "Golden-frame tests for your renders"."""
+    text = TESTING_DOC.read_text()
     section = text[text.index("## Golden-frame tests for your renders"):]
     start = section.index("```python\n") + len("```python\n")
     return section[start:section.index("```", start)]

@@ -199,8 +199,8 @@ def test_a_reference_image_without_a_person_is_refused(body_args, tmp_path, caps
 
 
 def test_a_blank_reference_without_a_pose_file_is_refused_naming_it(ckpt, mocap_dir, tmp_path, capsys):
-    """The shipped warp generator given a uniform picture and no pose file (the first observed pose is assumed):
-    one line naming the picture, exit 2, nothing written."""
+    """The shipped warp generator given a uniform picture and no pose file: the person is looked for in the picture
+    and none is found: one line naming the picture, exit 2, nothing written."""
     from motion2video.formats.video import read_image, write_image
 
     image = read_image(DEMO / "reference_body_128.png")
@@ -210,4 +210,4 @@ def test_a_blank_reference_without_a_pose_file_is_refused_naming_it(ckpt, mocap_
     err = _fails(["synthesize", "--motion-model", str(ckpt["body"]), "--frame-model", "frames-body-128",
                   str(mocap_dir / "cmu" / "131_02.bvh"), "--observed", "6", "--horizon", "4", "--reference", str(blank),
                   "--samples", "1", "-o", str(out)], capsys, out)
-    assert f"{blank}: the reference image shows no visible person" in err
+    assert f"{blank}: no person found in the reference image" in err

@@ -26,8 +26,7 @@ examples:
   motion2video evaluate --model runs/cvae.safetensors --data ../shared/data/mocap/cmu/13_10.bvh
   motion2video evaluate --model mtvae-add-face --data ../shared/data/face/livelinkface/S07-001.csv
   motion2video evaluate --model mixture-periodic --model mirror-periodic --data ../shared/data/mocap
-  motion2video evaluate --model mixture-periodic --data ../shared/data/mocap --data ../shared/data/bandai \
-      --split subjects --stride 64
+  motion2video evaluate --model mixture-periodic --data ../shared/data/mocap --data ../shared/data/bandai --split subjects
 
 Windows: every (observed + future)-frame window, --stride frames apart, of the clips of --split: by default
 the checkpoint's held-out test clips plus any clip it has never seen whose subject it did not train or
