@@ -19,7 +19,7 @@ import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, TypeVar
 
 import numpy as np
 
@@ -31,6 +31,9 @@ from motion2video.pose.track import VideoTrack, load_video_track, save_video_tra
 
 if TYPE_CHECKING:  # the face track module loads Anny and the face renderer: imported when a face is tracked
     from motion2video.pose.face_track import FaceTrack
+
+T = TypeVar("T")  # what a cache entry holds
+
 
 def is_video(path: str | Path) -> bool:
     """A video file by its extension (``.mp4``, ``.avi``, ``.mov``, ...)."""
@@ -82,15 +85,6 @@ def track_cache_path(video: str | Path, person: str | int, folder: str | Path | 
     return pose.with_name(pose.name.removesuffix(".npz") + ".track.npz")
 
 
-def _read_cached_track(cached: Path | None) -> VideoTrack | None:
-    if cached is None or not cached.is_file():
-        return None
-    try:
-        return load_video_track(cached)
-    except InputError:
-        return None  # a damaged (or older) entry is tracked again and overwritten
-
-
 def video_track(path: str | Path, *, person: str | int = "largest", cache: str | Path | None | bool = None,
                 note: Callable[[str], None] | None = None, model=None) -> VideoTrack:
     """Every frame's landmarks and person segmentation of one person in a video, read from the cache when it
@@ -109,7 +103,7 @@ def video_track(path: str | Path, *, person: str | int = "largest", cache: str |
     if not path.is_file():
         raise InputError("no such video file", path)
     cached = None if cache is False else track_cache_path(path, person, None if cache is None else cache)
-    track = _read_cached_track(cached)
+    track = _read_cache(cached, load_video_track)
     if track is not None:
         if note:
             note(f"track of {path.name} read from the cache {cached}")
@@ -120,11 +114,7 @@ def video_track(path: str | Path, *, person: str | int = "largest", cache: str |
                   if track.unsure.any() else "")
         note(f"tracked {path.name} (BlazePose full): the person in {int(track.found.sum())} of "
              f"{track.num_frames} frames{unsure}")
-    if cached is not None:
-        try:
-            save_video_track(cached, track)
-        except OSError:
-            pass  # a read-only cache only costs the next run the tracking
+    _write_cache(cached, save_video_track, track)
     return track
 
 
@@ -144,15 +134,12 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
     if not path.is_file():
         raise InputError("no such video file", path)
     cached = None if cache is False else cache_path(path, person, None if cache is None else cache)
-    if cached is not None and cached.is_file():
-        try:
-            pose = load_video_pose(cached)
-            if note:
-                note(f"pose of {path.name} read from the cache {cached}" + _unsure_note(pose))
-            return pose
-        except InputError:
-            pass  # a damaged cache entry is estimated again and overwritten
-    track = None if cache is False else _read_cached_track(track_cache_path(path, person, cache or None))
+    pose = _read_cache(cached, load_video_pose)
+    if pose is not None:
+        if note:
+            note(f"pose of {path.name} read from the cache {cached}" + _unsure_note(pose))
+        return pose
+    track = None if cache is False else _read_cache(track_cache_path(path, person, cache or None), load_video_track)
     if track is not None:  # tracked before by evaluate-frames / train-frames --video: the same landmarks
         pose = poses_from_landmarks([track.landmarks(i) for i in range(track.num_frames)], fps=track.fps,
                                     width=track.width, height=track.height, unsure=track.unsure, source=path)
@@ -162,12 +149,30 @@ def video_pose(path: str | Path, *, person: str | int = "largest", cache: str | 
         how = "from its cached track" if track is not None else "BlazePose full"
         note(f"estimated the pose of {path.name} ({how}): {pose.num_frames} frames at {pose.fps:g} fps"
              + (f", {pose.gaps} gap frames interpolated" if pose.gaps else "") + _unsure_note(pose))
-    if cached is not None:
-        try:
-            save_video_pose(cached, pose)
-        except OSError:
-            pass  # a read-only cache only costs the next run the estimate
+    _write_cache(cached, save_video_pose, pose)
     return pose
+
+
+def _read_cache(cached: Path | None, load: Callable[[Path], T]) -> T | None:
+    """What ``load`` reads from the cache entry ``cached``, or None when there is none or it is damaged or of an
+    older version (it is then computed again and overwritten)."""
+    if cached is None or not cached.is_file():
+        return None
+    try:
+        return load(cached)
+    except InputError:
+        return None
+
+
+def _write_cache(cached: Path | None, save: Callable[[Path, T], object], value: T) -> None:
+    """Save ``value`` to the cache entry ``cached`` (None: no cache); a read-only cache only costs the next run
+    the computation."""
+    if cached is None:
+        return
+    try:
+        save(cached, value)
+    except OSError:
+        pass
 
 
 def _unsure_note(pose: VideoPose) -> str:
@@ -203,23 +208,16 @@ def face_video_track(path: str | Path, *, cache: str | Path | None | bool = None
     if not path.is_file():
         raise InputError("no such video file", path)
     cached = None if cache is False else face_cache_path(path, None if cache is None else cache)
-    if cached is not None and cached.is_file():
-        try:
-            track = load_face_track(cached)
-            if note:
-                note(f"face track of {path.name} read from the cache {cached}")
-            return track
-        except InputError:
-            pass  # a damaged cache entry is tracked again and overwritten
+    track = _read_cache(cached, load_face_track)
+    if track is not None:
+        if note:
+            note(f"face track of {path.name} read from the cache {cached}")
+        return track
     track = track_face_video(path)
     if note:
         note(f"tracked the face in {path.name} (face mesh + Anny head): {track.num_frames} frames at "
              f"{track.motion.fps:g} fps" + (f", {track.gaps} gap frames interpolated" if track.gaps else ""))
-    if cached is not None:
-        try:
-            save_face_track(cached, track)
-        except OSError:
-            pass  # a read-only cache only costs the next run the tracking
+    _write_cache(cached, save_face_track, track)
     return track
 
 
