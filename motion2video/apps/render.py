@@ -234,16 +234,9 @@ def render_file(request: RenderRequest) -> RenderResult:
             and not (src.is_file() and is_deepmimic_file(src))):
         # OpenPose keypoints carry no frame rate: --fps is the rate of the video they came from.
         input_fps = float(request.fps)
-    futures = None if is_video(src) else _joint_futures(request.input, input_fps)
-    if is_video(src):
-        motion = video_motion(src, style=request.style, input_fps=request.input_fps)
-        if request.fps is not None:
-            motion = resample_motion(motion, float(request.fps))
-        if request.start != 0 or request.frames is not None:
-            motion = motion.slice(request.start, request.frames)
-        frames = iter_frames(motion, style=request.style, size=size, palette=request.palette,
-                             progress=request.progress)
-    elif futures is not None:
+    video = is_video(src)
+    futures = None if video else _joint_futures(request.input, input_fps)
+    if futures is not None:
         if request.style != "skeleton":
             raise InputError(f"a joint array of {len(futures)} clips renders as a skeleton grid only, not "
                              f"--style {request.style}", request.input)
@@ -254,7 +247,10 @@ def render_file(request: RenderRequest) -> RenderResult:
         motion = futures[0]
         frames = iter_futures_grid(futures, size=size, palette=request.palette)
     else:
-        motion = load_motion(src, fps=input_fps, character=request.character, rig_map=request.rig_map)
+        if video:
+            motion = video_motion(src, style=request.style, input_fps=request.input_fps)
+        else:
+            motion = load_motion(src, fps=input_fps, character=request.character, rig_map=request.rig_map)
         if request.fps is not None:
             motion = resample_motion(motion, float(request.fps))
         if request.start != 0 or request.frames is not None:
