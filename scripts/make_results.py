@@ -1397,7 +1397,7 @@ def five_minute_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rev", default=OLD_REV)
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--cache", default="/tmp/motion2video-git-weights",
-                        help="where the old checkpoints are written (as make_results_per_action.py --cache)")
+                        help="where the old checkpoints are written (as `make_results.py per-action --cache`)")
     args = parser.parse_args(argv)
 
     import torch
@@ -1809,7 +1809,7 @@ def frames_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cache", default=None, help="frame-data cache folder (evaluate-frames --cache)")
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames.json"))
-    parser.add_argument("--bench", default=None, help="a bench_pipeline.py JSON: adds the generators' speed")
+    parser.add_argument("--bench", default=None, help="a `bench.py pipeline` JSON: adds the generators' speed")
     parser.add_argument("--no-analysis", action="store_true",
                         help="leave out scripts/make_results.py frames-analysis (a few minutes: it fits oracle flows)")
     args = parser.parse_args(argv)
