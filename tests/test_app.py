@@ -102,15 +102,15 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
             page.goto(app_url)
             page.wait_for_selector("#animate")
             page.locator("#clip input[type=file]").set_input_files(long_video)
-            page.wait_for_selector("#clip :text('dancer.avi')", timeout=60_000)
+            page.wait_for_selector("#clip :text('dancer.avi')", timeout=180_000)
             page.click("#animate")  # with the demo photo
             too_long = _status(page, "#status", "dancer.avi")
             page.click("#clip button[aria-label=Clear]")
 
             page.locator("#clip input[type=file]").set_input_files(clip)
-            page.wait_for_selector("#clip :text('mass_walk.bvh')", timeout=60_000)  # uploaded
+            page.wait_for_selector("#clip :text('mass_walk.bvh')", timeout=180_000)  # uploaded
             page.locator("#photo input[type=file]").set_input_files(wall)
-            page.wait_for_selector("#photo img", timeout=60_000)
+            page.wait_for_selector("#photo img", timeout=180_000)
 
             page.click("#animate")
             message = _status(page, "#status", "wall.png")
