@@ -38,7 +38,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from motion2video.core.atomic import write_json, write_section
+from motion2video.core.atomic import check_section, write_json, write_section
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import (H36M_17, H36M_BONES_MM, H36M_LEG_MM, L_ANKLE, L_HIP, PELVIS, R_ANKLE, R_HIP,
                                          leg_length, proportion_ratios)
@@ -2986,8 +2986,12 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stdout if asked else sys.stderr)
         return 0 if asked else 2
     run, _ = COMMANDS[argv[0]]
-    # forecasting and card share one parser (card writes what forecasting's evaluation measured)
-    return run(argv if run is forecasting_main else argv[1:]) or 0
+    try:
+        # forecasting and card share one parser (card writes what forecasting's evaluation measured)
+        return run(argv if run is forecasting_main else argv[1:]) or 0
+    except InputError as err:  # e.g. a page without the sub-command's markers: one line, nothing written
+        print(f"make_results.py {argv[0]}: error: {err}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":
