@@ -8,7 +8,6 @@ the page between its markers and keeps the rest, and the raw numbers as JSON und
     python scripts/make_results.py known-answer       # the known-answer multimodal benchmark of one latent model
     python scripts/make_results.py per-action         # every body model per action (ADE / FDE to zero-velocity)
     python scripts/make_results.py five-minute-models # retrain the 5-minute models that per-action compares
-    python scripts/make_results.py skeleton           # the body models before / after the canonical skeleton
     python scripts/make_results.py skeleton-figure    # docs/images/skeletons.png
     python scripts/make_results.py frames             # the body frame generator on the person, with baselines
     python scripts/make_results.py frames-analysis    # where a warp body generator's error comes from
@@ -1425,100 +1424,6 @@ def five_minute_main(argv: list[str] | None = None) -> int:
         (out / f"{name}.json").write_text(json.dumps(record, indent=1))
         print(f"{name}: {result.steps} steps in {record['wall_time_s']:.0f} s, clips {record['clips']}, "
               f"wrote {result.path}", flush=True)
-    return 0
-
-
-# ----------------------------------------------------------------------------------------------------------------
-# skeleton: The shipped body models before and after the canonical skeleton change, in docs/results.md.
-# ----------------------------------------------------------------------------------------------------------------
-
-
-SKELETON_DOC = """The shipped body models before and after the canonical skeleton change, in docs/results.md.
-
-    python scripts/make_results.py skeleton --evals out/train_shipped     # after scripts/train_shipped.sh
-
-Reads the ``<name>.eval.json`` that ``scripts/train_shipped.sh`` writes for every retrained model (``motion2video
-evaluate --samples 50`` on the pinned held-out test subjects) and the per-source proportions of every reader,
-and writes the section between ``<!-- skeleton:begin -->`` and ``<!-- skeleton:end -->`` of docs/results.md. The
-version-1 numbers are the ones the same command gave for the models trained on the old joints (the corpus-models
-table of docs/results.md, git e22f63c), kept beside the new ones.
-"""
-
-SKELETON_BEGIN, SKELETON_END = "<!-- skeleton:begin -->", "<!-- skeleton:end -->"
-
-
-VERSION1 = {
-    "mtvae-add": (0.825, 0.696, 3.579),
-    "mtvae-add-dlow": (0.797, 0.681, 5.236),
-    "lcpvae": (0.867, 0.717, 3.171),
-    "behavior": (0.878, 0.714, 5.019),
-}
-
-
-MODELS = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior")
-
-
-def model_row(results: dict, name: str) -> dict | None:
-    """The pooled result of ``name`` in an evaluate JSON (its ``results`` list or mapping), or None."""
-    rows = results.get("results", results)
-    if isinstance(rows, dict):
-        return rows.get(name)
-    for row in rows:
-        if row.get("model") == name or row.get("label") == name:
-            return row
-    return None
-
-
-def _skeleton_render(evals: Path) -> str:
-    lines = [
-        "## One canonical skeleton (version 2)",
-        "",
-        "Every reader now lands on Human3.6M's body points (docs/data.md, \"The canonical body points\"; the per-source "
-        "proportions before and after are tabled there, and `docs/images/skeletons.png` draws them). The corpus "
-        "statistics (clips, minutes, splits, actions) do not depend on where the joints sit and are unchanged. "
-        "Every shipped body model was retrained on the new joints with the same command as before "
-        "(`scripts/train_shipped.sh`, their cards); the frame generators were fine-tuned on renders posed with the "
-        "new joints (their cards).",
-        "",
-        "Held-out test subjects, best of 50, ratio to zero-velocity on the same clips (`motion2video evaluate "
-        "--model NAME --data ../shared/data/mocap --samples 50`; the windows are the same, the joints moved, so "
-        "zero-velocity's own error changed too):",
-        "",
-        "| model | v1 ADE / ZV | v1 FDE / ZV | v1 APD | v2 ADE / ZV | v2 FDE / ZV | v2 APD |",
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
-    ]
-    for name in MODELS:
-        path = evals / f"{name}.eval.json"
-        old = VERSION1[name]
-        if not path.is_file():
-            lines.append(f"| {name} | {old[0]:.3f} | {old[1]:.3f} | {old[2]:.2f} | (not retrained here) | | |")
-            continue
-        data = json.loads(path.read_text())
-        row = model_row(data, name) or {}
-        zv = model_row(data, "zero-velocity") or {}
-
-        def ratio(a: dict, b: dict, key: str) -> str:
-            return f"{a[key] / b[key]:.3f}" if key in a and key in b and b[key] else "-"
-
-        apd = f"{row['apd']:.2f}" if "apd" in row else "-"
-        lines.append(f"| {name} | {old[0]:.3f} | {old[1]:.3f} | {old[2]:.2f} | {ratio(row, zv, 'ade')} | "
-                     f"{ratio(row, zv, 'fde')} | {apd} |")
-    lines.append("")
-    lines.append("The retrained models score within 1-2% of their version-1 selves: the change is in what the joints "
-                 "mean, not in how well the models forecast them. Per action and macro over actions: the per-action "
-                 "section (`scripts/make_results.py per-action`, re-run with the retrained models). "
-                 "Regenerate this table: `python scripts/make_results.py skeleton --evals out/train_shipped`.")
-    return "\n".join(lines)
-
-
-def skeleton_main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=SKELETON_DOC.split("\n\n")[0])
-    parser.add_argument("--evals", type=Path, default=ROOT / "out" / "train_shipped",
-                        help="folder with <model>.eval.json from scripts/train_shipped.sh")
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results.md")
-    args = parser.parse_args(argv)
-    write_section(args.out, SKELETON_BEGIN, SKELETON_END, _skeleton_render(args.evals))
-    print(f"wrote the skeleton section of {args.out}")
     return 0
 
 
@@ -2966,7 +2871,6 @@ COMMANDS = {
     "known-answer": (known_answer_main, KNOWN_ANSWER_DOC),
     "per-action": (per_action_main, PER_ACTION_DOC),
     "five-minute-models": (five_minute_main, FIVE_MINUTE_DOC),
-    "skeleton": (skeleton_main, SKELETON_DOC),
     "skeleton-figure": (skeleton_figure_main, SKELETON_FIGURE_DOC),
     "frames": (frames_main, FRAMES_DOC),
     "frames-analysis": (frames_analysis_main, FRAMES_ANALYSIS_DOC),

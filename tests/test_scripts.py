@@ -28,7 +28,7 @@ def test_scripts_are_few_and_import_the_package():
 @pytest.mark.parametrize("script, subcommands", [
     ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh")),
     ("make_results", ("forecasting", "card", "corpus", "known-answer", "per-action", "five-minute-models",
-                      "skeleton", "skeleton-figure", "frames", "frames-analysis", "frames-real", "transfer",
+                      "skeleton-figure", "frames", "frames-analysis", "frames-real", "transfer",
                       "transfer-benchmark")),
 ])
 def test_entry_points_list_their_subcommands_and_refuse_unknown_ones(script, subcommands, monkeypatch, capsys):
