@@ -1897,17 +1897,14 @@ For each clip of :data:`CLIPS` (real CMU captures held out of the frame training
 CLIP`` runs (the same functions, once per clip: the held-out identities posed by 4 windows of the clip, the truth
 the Anny render of each pose) and writes:
 
-- the section between ``<!-- frames-real-motion:begin -->`` and ``<!-- frames-real-motion:end -->`` of
-  docs/results.md: whole-frame, person and head PSNR / SSIM and the person sharpness ratio per clip and method,
-  and the targets per clip;
-- docs/images/frames_real_motion.png: reference | truth | generator | (previous generator, when it loads) |
-  limb-warp, two pairs per clip, each frame at twice its size with the head region enlarged beside it;
+- the block between ``<!-- frames-real-motion:begin -->`` and ``<!-- frames-real-motion:end -->`` of
+  docs/results.md (under "Body frames driven by real motion"): the commands, person / head PSNR and SSIM, person
+  sharpness and whole-frame PSNR per clip and method, and the targets per clip;
+- docs/images/frames_real_motion.png: reference | truth | generator | previous generator | limb-warp, two pairs
+  per clip, each frame at twice its size with the head region enlarged beside it;
 - out/results_frames_real.json: the evaluate-frames JSON of each clip.
 
-With ``--held-out``, also runs ``motion2video evaluate-frames --model MODEL --head`` (the project's held-out pairs,
-rendered again with head masks) and adds its person and head metrics to the section, for comparison.
-
-About 2 minutes on 2 cores, plus about 3 with ``--held-out``.
+About 2 minutes on 2 cores.
 """
 
 FRAMES_REAL_BEGIN, FRAMES_REAL_END = "<!-- frames-real-motion:begin -->", "<!-- frames-real-motion:end -->"
@@ -1951,16 +1948,14 @@ HEAD_BOX = 24  # pixels (frame scale) of the enlarged head crop beside each cell
 def evaluate_clip(model_name: str, clip: Path):
     """The evaluation of ``evaluate-frames --model model_name --poses clip --windows WINDOWS``, its JSON payload
     (the same functions the command runs) and (N, 2, H, W) bool head masks of each pair's target and reference."""
-    from motion2video.generator.data import evaluation_pair_index
-    from motion2video.commands.evaluate_frames import evaluate_posed, load_baselines
-    from motion2video.generator.checkpoint import load_frame_model
-    from motion2video.generator.scores import json_payload
+    from motion2video.evaluation.frame_generators import evaluate_posed, load_baselines
     from motion2video.generator.poses import load_body_clips
+    from motion2video.generator.scores import json_payload
 
     loaded = load_frame_model(model_name)
     baselines, left_out = load_baselines(None, loaded)
-    args = argparse.Namespace(poses=str(clip), windows=WINDOWS, pairs=None, no_progress=True)
-    posed = evaluate_posed(loaded.model, load_body_clips(clip), args, baselines)
+    posed = evaluate_posed(loaded.model, load_body_clips(clip), poses_path=clip, windows=WINDOWS,
+                           baselines=baselines, progress=False)
     evaluation, rendered = posed.evaluation, posed.rendered
     index = evaluation_pair_index(rendered.sequences)  # (N, 3) sequence, reference, target: the evaluated pairs
     heads = np.stack([rendered.head_masks[index[:, 0], index[:, 2]], rendered.head_masks[index[:, 0], index[:, 1]]],
@@ -2022,18 +2017,6 @@ def _frames_real_table(payloads: dict[str, dict], model: str) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def margins(payloads: dict[str, dict]) -> str:
-    lines = []
-    for clip, payload in payloads.items():
-        res = payload["results"]
-        g, w, c = res["generator"], res["limb-warp"], res["copy-reference"]
-        lines.append(f"- `{clip}` ({payload['num_pairs']} pairs): person PSNR {g['person_psnr'] - w['person_psnr']:+.2f} dB "
-                     f"over limb-warp, {g['person_psnr'] - c['person_psnr']:+.2f} dB over copy-reference; head PSNR "
-                     f"{g['head_psnr'] - w['head_psnr']:+.2f} dB over limb-warp, "
-                     f"{g['head_psnr'] - c['head_psnr']:+.2f} dB over copy-reference.")
-    return "\n".join(lines)
-
-
 def targets(payloads: dict[str, dict]) -> str:
     head = "| target | " + " | ".join(f"`{c}`" for c in payloads) + " |\n| --- |" + " --- |" * len(payloads)
     rows = [f"| {text} | " + " | ".join("met" if p["targets_met"].get(key) else "**missed**"
@@ -2041,57 +2024,34 @@ def targets(payloads: dict[str, dict]) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def held_out_text(payload: dict | None, model: str) -> str:
-    """The held-out pairs' person and head metrics (``evaluate-frames --head``), or nothing."""
-    if payload is None:
-        return ""
-    return f"""For comparison, the project's held-out pairs (poses of held-out clips drawn like the training data's, the same
-identities), `motion2video evaluate-frames --model {model} --head` ({payload['num_pairs']} pairs):
-
-{_frames_real_table({'held-out pairs': payload}, model)}
-"""
-
-
-def _frames_real_section(payloads: dict[str, dict], model: str, minutes: float, note: str = "",
-            held_out: dict | None = None) -> str:
+def _frames_real_section(payloads: dict[str, dict], model: str) -> str:
+    """The block between the frames-real markers of docs/results.md (no heading: the page's own stands above it)."""
     left_out = {k: v for p in payloads.values() for k, v in p.get("baselines_left_out", {}).items()}
     old = ("" if not left_out else
-           f" The previous generator (`{', '.join(left_out)}`) is left out: it was trained on the previous canonical "
-           "skeleton (version 1), and the loader refuses it on the new joints until it is fine-tuned on them.")
+           f"\nThe previous generator (`{', '.join(left_out)}`) is left out: the loader refuses it ({'; '.join(left_out.values())}).")
     clips = "\n".join(f"motion2video evaluate-frames --model {model} --poses ../shared/data/mocap/{c}" for c in payloads)
-    return f"""## Body frames driven by real motion
-
-One run per clip (`python scripts/make_results.py frames-real` runs the same functions and writes this section):
+    return f"""One run per clip (`python scripts/make_results.py frames-real` runs the same functions and writes this section):
 
 ```
 {clips}
 ```
 
-The frame test split's 8 held-out identities, posed by {WINDOWS} windows spread evenly
-over each real CMU capture (9 frames over 1.2 s each; frame 0 of a window is the reference, the 8 later frames
-the targets), rendered by the Anny body renderer exactly as the training data is (background, camera yaw and
-elevation, light); the truth is the render of each pose. None of these clips is in the frame training data
-(`motion2video.generator.specs.is_test_clip`; `cmu/02_01.bvh` is a training clip, so a held-out
-walk is used instead). The head is the target's visible head: the pixels where Anny's head vertices (dominant
-bone `head` or below it) are the front surface, by a depth test, so a hand in front of the face is not head.{old}
-
-{note}
+The frame test split's 8 held-out identities, posed by {WINDOWS} windows spread evenly over each real CMU capture (9
+frames over 1.2 s each; frame 0 of a window is the reference, the 8 later frames the targets), rendered by the Anny
+body renderer exactly as the training data is; the truth is the render of each pose. None of these clips is in the
+frame training data (`motion2video.generator.specs.is_test_clip`). The head is the target's visible head: the pixels
+where Anny's head vertices are the front surface, by a depth test, so a hand in front of the face is not head.{old}
 
 {_frames_real_table(payloads, model)}
 
-{margins(payloads)}
-
-{held_out_text(held_out, model)}
-The targets, driven by real motion:
+The targets driven by real motion:
 
 {targets(payloads)}
 
-Reference | truth | new | old | limb-warp (old: the previous generator, when it loads), two pairs per clip ({', '.join(f'`{c}`' for c in payloads)}, top to
-bottom), at twice the frame size, each with the head region enlarged beside it (top right):
+Reference | truth | new | old | limb-warp, two pairs per clip ({', '.join(f'`{c}`' for c in payloads)},
+top to bottom), at twice the frame size, each with the head region enlarged beside it (top right):
 
 ![real motion sheet](images/frames_real_motion.png)
-
-_Generated {time.strftime('%Y-%m-%d %H:%M:%S')} in {minutes:.1f} min by `python scripts/make_results.py frames-real`._
 """
 
 
@@ -2108,14 +2068,11 @@ def frames_real_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--sheet", default=str(ROOT / "docs" / "images" / "frames_real_motion.png"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames_real.json"))
-    parser.add_argument("--held-out", action="store_true",
-                        help="also run evaluate-frames --head on the held-out pairs and add it to the section")
-    parser.add_argument("--note", default="", help="a paragraph added to the section (e.g. which checkpoint --model is)")
     args = parser.parse_args(argv)
+    check_section(args.doc, FRAMES_REAL_BEGIN, FRAMES_REAL_END)
 
     from motion2video.generator.specs import is_test_clip
 
-    start = time.perf_counter()
     payloads, columns = {}, []
     for clip in CLIPS:
         assert is_test_clip(clip), f"{clip} is a frame training clip"
@@ -2123,19 +2080,12 @@ def frames_real_main(argv: list[str] | None = None) -> int:
         payloads[clip] = payload
         columns.append(sheet_columns(evaluation, heads, list(SHEET_ROWS)))
         print(f"{clip}: {json.dumps({k: v['person_psnr'] for k, v in payload['results'].items()})}", flush=True)
-    held_out = None
-    if args.held_out:
-        held_json = Path(args.json).with_name("results_frames_head.json")
-        subprocess.run([sys.executable, "-m", "motion2video.cli", "evaluate-frames", "--model", args.model, "--head",
-                        "--json", str(held_json), "--no-progress"], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
-        held_out = json.loads(held_json.read_text())
     merged = {k: np.concatenate([c[k] for c in columns]) for k in columns[0]}
     sheet = Path(args.sheet)
     sheet.parent.mkdir(parents=True, exist_ok=True)
     iio.imwrite(sheet, contact_sheet(merged, label_height=22))
     write_json(args.json, payloads)
-    write_section(args.doc, FRAMES_REAL_BEGIN, FRAMES_REAL_END, _frames_real_section(payloads, args.model, (time.perf_counter() - start) / 60,
-                                                args.note, held_out))
+    write_section(args.doc, FRAMES_REAL_BEGIN, FRAMES_REAL_END, _frames_real_section(payloads, args.model))
     print(f"wrote {args.doc}, {sheet} and {args.json}")
     return 0
 
