@@ -5,7 +5,7 @@ the page between its markers and keeps the rest, and the raw numbers as JSON und
     python scripts/make_results.py card --checkpoint motion2video/weights/mtvae-add.safetensors \\
         --eval out/mtvae-add.eval.json --command "..."    # one model card (scripts/train_shipped.sh calls this)
     python scripts/make_results.py corpus             # LCP-VAE's learned prior: the 5-minute model against the shipped one
-    python scripts/make_results.py known-answer       # the known-answer multimodal benchmark of one latent model
+    python scripts/make_results.py known-answer       # the known-answer multimodal benchmark of the latent models
     python scripts/make_results.py per-action         # every body model per action (ADE / FDE to zero-velocity)
     python scripts/make_results.py five-minute-models # retrain the 5-minute models that per-action compares
     python scripts/make_results.py skeleton-figure    # docs/images/skeletons.png
@@ -713,22 +713,27 @@ def corpus_main(argv: list[str] | None = None) -> int:
 # ----------------------------------------------------------------------------------------------------------------
 
 
-KNOWN_ANSWER_DOC = """The known-answer multimodal benchmark for any shipped latent model and DLow on it (target: coverage and
-precision >= 0.9 at K = 10).
+KNOWN_ANSWER_DOC = """The known-answer multimodal benchmark for the shipped latent models and DLow on each (target: coverage
+and precision >= 0.9 at K = 10).
 
-    python scripts/make_results.py known-answer [--model mixer-cvae] [--steps 4000] [--dlow-steps 600]
-        [--runs out/known_answer] [--json out/known_answer.json]
+    python scripts/make_results.py known-answer [--model mtvae-add --model lcpvae --model mixer-cvae]
+        [--steps 4000] [--dlow-steps 600] [--runs out/known_answer] [--json out/known_answer.json]
 
-The model is retrained from scratch on ``procedural:multimodal`` (sequences whose future is one of the observed
-mode's known next modes) with the shipped checkpoint's config and ``--steps`` steps (seed 0, batch 64), then DLow
+Each model is retrained from scratch on ``procedural:multimodal`` (sequences whose future is one of the observed
+mode's known next modes) with its shipped checkpoint's config and ``--steps`` steps (seed 0, batch 64), then DLow
 with the shipped ``mtvae-add-dlow`` config and K = 10 maps (``--dlow-steps``, batch 16); both are scored with K = 10
 samples per test sequence: coverage (share of valid modes hit by a sample), precision (share of samples in a valid
-mode) and TV (total variation between sampled and true mode frequencies). ``scripts/make_results.py corpus``'s
-table for mtvae-add and lcpvae is made with the same two functions (:func:`train_with_dlow`, :func:`score`). A
-model whose loss is in metres (``feature_scale``, mixer-cvae) gets this dataset's scales, as ``motion2video train``
-gives them.
-About 14 minutes on one thread for mixer-cvae (2026-11-27).
+mode) and TV (total variation between sampled and true mode frequencies). A model whose loss is in metres
+(``feature_scale``, mixer-cvae) gets this dataset's scales, as ``motion2video train`` gives them. Checkpoints
+already in --runs are reused. Writes the table between ``<!-- known-answer:begin -->`` and
+``<!-- known-answer:end -->`` of docs/results.md ("Known-answer multimodal benchmark") and the raw numbers to --json.
+About 14 minutes on one thread per model (2026-11-27).
 """
+
+KNOWN_ANSWER_BEGIN, KNOWN_ANSWER_END = "<!-- known-answer:begin -->", "<!-- known-answer:end -->"
+
+
+KNOWN_ANSWER_MODELS = ("mtvae-add", "lcpvae", "mixer-cvae")
 
 SAMPLES = 10
 
@@ -771,30 +776,62 @@ def score(path: Path, test: WindowSet, samples: int = SAMPLES) -> dict[str, floa
     return {"coverage": sc.coverage, "precision": sc.precision, "distribution_tv": sc.distribution_tv}
 
 
+def _known_answer_section(report: dict[str, dict], *, command: str, train_sequences: int, test_sequences: int,
+                          steps: int, dlow_steps: int) -> str:
+    """The block between the known-answer markers of docs/results.md; ``report``: label -> :func:`score`'s dict.
+    Coverage and precision are bold where both reach the 0.9 target."""
+    rows = []
+    for label, r in report.items():
+        met = r["coverage"] >= 0.9 and r["precision"] >= 0.9
+        cov, prec = (f"**{r[k]:.3f}**" if met else f"{r[k]:.3f}" for k in ("coverage", "precision"))
+        rows.append(f"| {label} | {cov} | {prec} | {r['distribution_tv']:.3f} |")
+    return f"""Procedural clips (`motion2video/data/multimodal.py`, `--data {MULTIMODAL_SOURCE}`): the {MM_CONFIG.observed} observed frames show
+one mode (walk, stand, run), the {MM_CONFIG.future} future frames one of its possible next modes with known probabilities; {train_sequences}
+training / {test_sequences} test sequences; the shipped configs trained {steps} steps, DLow {dlow_steps} steps with K = {SAMPLES} maps; K = {SAMPLES}
+samples per test sequence. Coverage: share of the valid modes hit by a sample; precision: share of samples in a
+valid mode; TV: total variation between sampled and true mode frequencies. Target: >= 0.9 on coverage and
+precision. `{command}` (about 14 min on one thread per model):
+
+| model | coverage | precision | TV |
+|---|---|---|---|
+""" + "\n".join(rows)
+
+
 def known_answer_main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=KNOWN_ANSWER_DOC.splitlines()[0])
-    parser.add_argument("--model", default="mixer-cvae", help="a shipped latent model (its config is retrained)")
+    parser.add_argument("--model", action="append", default=None,
+                        help="a shipped latent model whose config is retrained (repeatable; default: "
+                        + ", ".join(KNOWN_ANSWER_MODELS) + ")")
     parser.add_argument("--steps", type=int, default=4000)
     parser.add_argument("--dlow-steps", type=int, default=600)
     parser.add_argument("--runs", default=str(ROOT / "out" / "known_answer"))
+    parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--json", default=str(ROOT / "out" / "known_answer.json"))
     args = parser.parse_args(argv)
+    check_section(args.doc, KNOWN_ANSWER_BEGIN, KNOWN_ANSWER_END)
+    models = args.model or list(KNOWN_ANSWER_MODELS)
     torch.set_num_threads(1)
     start = time.time()
-
-    shipped = load_model(WEIGHTS_DIR / f"{args.model}.safetensors")
-    base_out, dlow_out = train_with_dlow(shipped.name, shipped.meta.config, Path(args.runs), steps=args.steps,
-                                         dlow_steps=args.dlow_steps)
-    test = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG).windows("test")
+    dataset = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG)
+    test = dataset.windows("test")
     report = {}
-    print("| model | coverage | precision | TV |\n|---|---|---|---|")
-    for label, path in ((args.model, base_out), (f"{args.model} + dlow", dlow_out)):
-        report[label] = r = score(path, test)
-        print(f"| {label} | {r['coverage']:.3f} | {r['precision']:.3f} | {r['distribution_tv']:.3f} |")
+    for name in models:
+        shipped = load_model(WEIGHTS_DIR / f"{name}.safetensors")
+        base_out, dlow_out = train_with_dlow(shipped.name, shipped.meta.config, Path(args.runs), steps=args.steps,
+                                             dlow_steps=args.dlow_steps)
+        for label, path in ((name, base_out), (f"{name} + dlow", dlow_out)):
+            report[label] = r = score(path, test)
+            print(f"{label}: coverage {r['coverage']:.3f}, precision {r['precision']:.3f}, "
+                  f"TV {r['distribution_tv']:.3f}", flush=True)
+    command = "python scripts/make_results.py known-answer" + "".join(
+        f" --{k.replace('_', '-')} {v}" for k, v in (("steps", args.steps), ("dlow_steps", args.dlow_steps))
+        if v != parser.get_default(k)) + ("".join(f" --model {m}" for m in models) if args.model else "")
+    write_section(args.doc, KNOWN_ANSWER_BEGIN, KNOWN_ANSWER_END, _known_answer_section(
+        report, command=command, train_sequences=len(dataset.split.train), test_sequences=len(test),
+        steps=args.steps, dlow_steps=args.dlow_steps))
     write_json(args.json, {"samples": SAMPLES, "steps": args.steps, "dlow_steps": args.dlow_steps,
-                           "test_sequences": len(test),
-                           "models": report})
-    print(f"wrote {args.json} in {time.time() - start:.0f} s")
+                           "test_sequences": len(test), "models": report})
+    print(f"wrote {args.doc} and {args.json} in {time.time() - start:.0f} s")
     return 0
 
 
