@@ -47,19 +47,22 @@ def test_entry_points_list_their_subcommands_and_refuse_unknown_ones(script, sub
 
 
 
-def test_every_results_section_has_its_markers_on_the_page(monkeypatch):
-    """Each sub-command of make_results.py that writes docs/results.md finds its marker pair there (write_section
+def test_every_results_section_has_its_markers_on_its_page(monkeypatch):
+    """Each sub-command of make_results.py that writes a results page finds its marker pairs there (write_section
     refuses a page without them), each pair once, in order."""
     from motion2video.core.atomic import check_section
 
     monkeypatch.syspath_prepend(str(SCRIPTS))
     module = importlib.import_module("make_results")
-    page = SCRIPTS.parent / "docs" / "results.md"
-    text = page.read_text()
-    for part in ("FORECASTING", "CORPUS", "KNOWN_ANSWER", "PER_ACTION", "FRAMES", "FRAMES_REAL"):
-        begin, end = getattr(module, f"{part}_BEGIN"), getattr(module, f"{part}_END")
-        check_section(page, begin, end)
-        assert text.count(begin) == 1 and text.count(end) == 1, part
+    docs = SCRIPTS.parent / "docs"
+    pages = {"results.md": ("FORECASTING", "CORPUS", "KNOWN_ANSWER", "PER_ACTION", "FRAMES", "FRAMES_REAL"),
+             "results_transfer.md": ("TRANSFER_ANALOGY", "TRANSFER_CLAIMS", "TRANSFER_BENCHMARK")}
+    for name, parts in pages.items():
+        text = (docs / name).read_text()
+        for part in parts:
+            begin, end = getattr(module, f"{part}_BEGIN"), getattr(module, f"{part}_END")
+            check_section(docs / name, begin, end)
+            assert text.count(begin) == 1 and text.count(end) == 1, (name, part)
 
 @pytest.mark.slow
 def test_make_results_skeleton_figure_draws_every_source(tmp_path, mocap_dir):
