@@ -375,7 +375,14 @@ def cmd_card(args: argparse.Namespace) -> int:
         "",
     ]
     out = WEIGHTS_DIR / f"{path.stem}.md" if args.out is None else Path(args.out)
-    out.write_text("\n".join(lines))
+    # The data licence block is scripts/shipped_licences.py's (write_section needs its markers): an existing
+    # card's is kept, a new card gets the empty marker pair for it to fill.
+    from motion2video.data.licences import CARD_BEGIN, CARD_END
+
+    licence = f"{CARD_BEGIN}\n{CARD_END}"
+    if out.is_file() and CARD_BEGIN in (old := out.read_text()) and CARD_END in old.split(CARD_BEGIN, 1)[1]:
+        licence = CARD_BEGIN + old.split(CARD_BEGIN, 1)[1].split(CARD_END, 1)[0] + CARD_END
+    write_text(out, "\n".join(lines) + "\n" + licence + "\n")
     print(f"wrote {out}")
     return 0
 

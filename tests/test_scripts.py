@@ -64,6 +64,32 @@ def test_every_results_section_has_its_markers_on_its_page(monkeypatch):
             check_section(docs / name, begin, end)
             assert text.count(begin) == 1 and text.count(end) == 1, (name, part)
 
+
+def test_card_keeps_the_data_licence_block_of_the_card_it_replaces(tmp_path, monkeypatch):
+    """make_results.py card rewrites a model card but keeps the block scripts/shipped_licences.py writes between
+    its markers (a new card gets the empty pair, which shipped_licences fills)."""
+    import json
+
+    from motion2video.core.atomic import write_section
+    from motion2video.data.licences import CARD_BEGIN, CARD_END
+
+    monkeypatch.syspath_prepend(str(SCRIPTS))
+    module = importlib.import_module("make_results")
+    evaluation = tmp_path / "mtvae-add.eval.json"
+    row = {"ade": 0.66, "fde": 0.69, "mmade": 0.69, "mmfde": 0.69, "apd": 3.7}
+    evaluation.write_text(json.dumps({"protocol": {"windows": 301, "clips": ["cmu/131_01.bvh"], "samples": 50,
+                                                   "units": "metres"}, "results": {"mtvae-add": row}}))
+    card = tmp_path / "mtvae-add.md"
+    argv = ["card", "--checkpoint", str(SCRIPTS.parent / "motion2video" / "weights" / "mtvae-add.safetensors"),
+            "--eval", str(evaluation), "--command", "motion2video train ...", "--out", str(card)]
+    assert module.main(argv) == 0
+    text = card.read_text()
+    assert text.startswith("# mtvae-add\n") and "| mtvae-add | 0.660 | 0.690 |" in text
+    assert text.rstrip().endswith(f"{CARD_BEGIN}\n{CARD_END}")
+    write_section(card, CARD_BEGIN, CARD_END, "## Data licence\n\nCC0 files only.")
+    assert module.main(argv) == 0
+    assert card.read_text().rstrip().endswith(f"{CARD_BEGIN}\n## Data licence\n\nCC0 files only.\n{CARD_END}")
+
 @pytest.mark.slow
 def test_make_results_skeleton_figure_draws_every_source(tmp_path, mocap_dir):
     out = tmp_path / "skeletons.png"
