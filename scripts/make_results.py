@@ -902,11 +902,11 @@ def per_action_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# five_minute: Retrain the 5-minute models on today's joints: the per-action comparison needs them.
+# five_minute: Retrain the 5-minute models on today's joints: per-action, corpus and forecasting compare them.
 # ----------------------------------------------------------------------------------------------------------------
 
 
-FIVE_MINUTE_DOC = """Retrain the 5-minute models on today's joints: the per-action comparison needs them.
+FIVE_MINUTE_DOC = """Retrain the 5-minute models on today's joints: per-action, corpus and forecasting compare them.
 
     python scripts/make_results.py five-minute-models [--out out/five_minute] [--models mtvae-add,lcpvae,behavior]
         [--mocap ../shared/data/mocap] [--rev 805c753]
@@ -917,7 +917,7 @@ Each is retrained here with what its checkpoint records: the model name and conf
 72-clip split (train / val / test clip names; only those clips are loaded) and the training config (2000 steps,
 batch 64, seed 0). The joints are version 2 and the code is today's: config fields added since take their defaults
 (each is off unless a card says otherwise), and the normalisation statistics are computed on the training windows.
-Writes ``OUT/NAME.safetensors`` (with a ``.json`` of the run), for ``scripts/make_results.py per-action --model``.
+Writes ``OUT/NAME.safetensors`` (with a ``.json`` of the run), which ``per-action``, ``corpus`` and ``forecasting`` read.
 About 3-5 minutes per model on one thread (2026-11-26).
 """
 
