@@ -126,6 +126,27 @@ def test_the_two_paintings_are_fitted_in_their_own_head_poses(photos_dir):
     assert yaw["portrait_pearl_earring"] > 25 and yaw["portrait_mona_lisa"] < yaw["portrait_pearl_earring"] - 10
 
 
+@pytest.mark.parametrize("name", ["fashion_man_red_jacket.png", "man_by_truck.jpg"])
+def test_a_small_face_in_a_full_length_photo_is_found_in_squares_of_it(photos_dir, name):
+    """The detector finds no face in the whole picture (the jacket man's head is 8% of its width; beside the man by
+    the truck it finds a pattern that the face mesh rejects): the squares of half the picture find it, and the
+    framed reference holds it as a portrait's."""
+    from motion2video.pose.face_portrait import fit_portrait, portrait_framing
+    from motion2video.pose.face_track import default_face_model
+    from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
+    from motion2video.stages.reference import read_reference_image
+
+    image, _ = read_reference_image(photos_dir / name)
+    model = default_face_model()
+    assert all(model.landmarks(image, detection_roi(d)).score < MIN_PRESENCE for d in model.detect(image))
+    portrait = fit_portrait(image, model=model)
+    assert portrait is not None and portrait.relative_error() < 0.03 and portrait.size < 0.1 * image.shape[1]
+    framing = portrait_framing(portrait, 128)
+    moved = portrait.landmarks * framing.scale + framing.offset
+    assert 0.4 * 128 < np.max(moved.max(axis=0) - moved.min(axis=0)) < 0.8 * 128 and framing.error < 0.03
+    assert np.all(np.abs(moved.mean(axis=0) - 64) < 20)  # the face in the middle of the square
+
+
 def _no_face_pictures(photos_dir: Path, folder: Path) -> list[Path]:
     """A plain colour and a landscape (the painted one behind Mona Lisa)."""
     plain, land = folder / "plain.png", folder / "landscape.jpg"

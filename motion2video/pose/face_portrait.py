@@ -1,8 +1,9 @@
 """A portrait (a photo or a painting of a face) as the face frame generator's reference: the Anny head fitted to
 the face in one image, and the square of the image framed as the face renderer's close-up frames its head.
 
-- :func:`fit_portrait`: the face mesh on the largest face (its ROI taken twice: from the detection, then from
-  the first landmarks, as the tracker's second frame would), then the head's pose and 52 ARKit coefficients fitted
+- :func:`fit_portrait`: the face mesh on the largest face (searched in squares of the picture when the detector
+  finds none in the whole, :func:`face_candidates`; its ROI taken twice: from the detection, then from the first
+  landmarks, as the tracker's second frame would), then the head's pose and 52 ARKit coefficients fitted
   to the 470 points (:func:`.face_fit.fit_frame`) with a ridge that keeps the person's own face shape out of the
   coefficients (:data:`PORTRAIT_RIDGE`).
 - :func:`portrait_framing`: the similarity (scale, shift; no turn: the head's roll is in its pose) that takes the
@@ -20,6 +21,7 @@ both.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import cv2
@@ -29,7 +31,9 @@ from motion2video.core.camera import PinholeCamera
 from motion2video.core.motion import FACE_DIM, NUM_EXPRESSIONS
 from motion2video.pose.face_anny import head_basis, posed_landmarks
 from motion2video.pose.face_fit import FitConfig, FrameFit, fit_frame
-from motion2video.pose.facemesh import MIN_PRESENCE, FaceMesh, detection_roi
+from motion2video.pose.blazepose import weighted_nms
+from motion2video.pose.facemesh import (MIN_PRESENCE, NMS_MIN_IOU, FaceDetection, FaceLandmarks, FaceMesh,
+                                        detection_roi)
 
 # The coefficients' ridge for one picture, where no other frame tells the person's face from their expression: at
 # the tracker's 1e-6 a dozen coefficients of either shared portrait went to 1 (the face's shape taken for an
@@ -37,6 +41,10 @@ from motion2video.pose.facemesh import MIN_PRESENCE, FaceMesh, detection_roi
 # median landmark 1.3% and 2.0% of the face size from the fitted head's.
 PORTRAIT_RIDGE = 1e-4
 PORTRAIT_FIT = FitConfig(ridge=PORTRAIT_RIDGE, first_iterations=6)
+# face_candidates: squares of a picture searched for a face on their own, down to a quarter of its short side (a
+# face over about a 40th of it: a standing person's head in a full-length photo) and no smaller than 96 px
+TILE_LEVELS = 2
+SMALLEST_TILE = 96
 
 
 @dataclass(frozen=True)
@@ -72,25 +80,64 @@ class PortraitFit:
         return float(np.median(self.fit.residual) / self.size)
 
 
+def face_candidates(image: np.ndarray, model: FaceMesh, *, levels: int = TILE_LEVELS) -> Iterator[list[FaceDetection]]:
+    """Faces the detector finds in an (H, W, 3) uint8 RGB picture, coarse to fine: on the whole picture, then on
+    overlapping squares of half its short side, then a quarter (``levels`` halvings, none under
+    :data:`SMALLEST_TILE` pixels), each square at the detector's input size: the short-range detector sees a face
+    only when it is over about a tenth of its 128 px input (the head of a person in a full-length photo is
+    smaller). Detections of one face in overlapping squares are merged (weighted NMS, as the detector's own).
+
+    Yields:
+        per level, the detections in the picture's pixels, best score first (maybe none).
+    """
+    yield model.detect(image)
+    h, w = image.shape[:2]
+    for level in range(1, levels + 1):
+        side = min(h, w) >> level
+        if side < SMALLEST_TILE:
+            return
+        boxes, scores = [], []
+        for y in _starts(h, side, side // 2):
+            for x in _starts(w, side, side // 2):
+                for det in model.detect(np.ascontiguousarray(image[y:y + side, x:x + side])):
+                    boxes.append(np.concatenate([det.box + (x, y, x, y), (det.keypoints + (x, y)).reshape(-1)]))
+                    scores.append(det.score)
+        if not boxes:
+            yield []
+            continue
+        merged, best = weighted_nms(np.stack(boxes), np.array(scores), NMS_MIN_IOU)
+        yield [FaceDetection(float(sc), b[:4].copy(), b[4:].reshape(-1, 2).copy()) for b, sc in zip(merged, best)]
+
+
+def _starts(length: int, side: int, step: int) -> list[int]:
+    """First pixels of squares of ``side`` every ``step`` along ``length``, the last one flush with the end."""
+    last = max(length - side, 0)
+    return sorted(set(list(range(0, last + 1, step)) + [last]))
+
+
 def fit_portrait(image: np.ndarray, *, model: FaceMesh | None = None) -> PortraitFit | None:
-    """Fit the Anny head to the largest face of an (H, W, 3) uint8 RGB picture; None when no face is found (no
-    detection, or a face-presence score under the tracker's threshold)."""
+    """Fit the Anny head to the largest face of an (H, W, 3) uint8 RGB picture (the largest of the first level of
+    :func:`face_candidates` whose face mesh confirms a face); None when no face is found (no detection, or none
+    with a face-presence score over the tracker's threshold)."""
     from motion2video.pose.face_track import default_face_model
 
     model = model or default_face_model()
-    detections = model.detect(image)
-    if not detections:
-        return None
-    lm = model.landmarks(image, detection_roi(max(detections, key=lambda d: d.area)))
-    if lm.score < MIN_PRESENCE:
-        return None
-    again = model.landmarks(image, lm.next_roi())  # the ROI a tracked face gets: the landmarks' own box and turn
-    if again.score >= MIN_PRESENCE:
-        lm = again
+    for detections in face_candidates(image, model):
+        for det in sorted(detections, key=lambda d: d.area, reverse=True):
+            lm = model.landmarks(image, detection_roi(det))
+            if lm.score < MIN_PRESENCE:  # not a face after all (a face-like pattern, a mask)
+                continue
+            again = model.landmarks(image, lm.next_roi())  # the ROI a tracked face gets: the landmarks' own box
+            return _fit(again if again.score >= MIN_PRESENCE else lm, len(detections))
+    return None
+
+
+def _fit(lm: FaceLandmarks, faces: int) -> PortraitFit:
+    """The head fitted to one face's landmarks (:data:`PORTRAIT_FIT`); ``faces`` found beside it."""
     xy = lm.points()
     basis = head_basis()
     fit = fit_frame(basis.neutral, basis.basis, xy, PORTRAIT_FIT, None, PORTRAIT_FIT.weights())
-    return PortraitFit(xy, lm.score, fit, len(detections))
+    return PortraitFit(xy, lm.score, fit, faces)
 
 
 @dataclass(frozen=True)
