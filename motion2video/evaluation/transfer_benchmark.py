@@ -66,7 +66,7 @@ RELATIVE = S.ROOT_RELATIVE_SIGNATURES
 MIN_RELATIVE_AMPLITUDE = 0.05
 
 # Chosen by manifest label, then the window with the largest signature in the clip (sliding, 25 fps,
-# stride 4; scripts/make_results.py transfer --benchmark prints each source's signature).
+# stride 4; evaluation.signatures.signature scores a window).
 CASES = (
     # held-out: CMU subjects 2, 5, 7, 131 and 94 (Indian dance), the pinned split's test groups
     Case("jump", "cmu/02_04.bvh", 0, 48, "held-out", "jump, balance: pelvis rises and falls 0.75 m"),
