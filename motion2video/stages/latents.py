@@ -156,6 +156,69 @@ def adapt_to_source(model: BehaviorModel, source: np.ndarray, z: np.ndarray, *, 
     return adapted
 
 
+# How long the target's posture takes to give way to the source's limb motion in a retargeted goal
+# (:func:`reenactment_goal`): about half a walking step, set once from that and not tuned on the clips scored.
+BLEND_SECONDS = 0.4
+
+
+def reenactment_goal(bundle: ModelBundle, sources: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """What a re-enactment should be, as normalised features: the sources' root-relative limb motion and root
+    path retargeted onto the start postures (:func:`motion2video.core.retarget.retarget_motion`: the start's
+    bone lengths, the start posture blended into the source's over :data:`BLEND_SECONDS`), for 3D bodies.
+
+    Fitting the decoder to the source from the source's OWN start (as it was trained) did not carry over to
+    another start: from a walker's posture an adapted decoder swung the arms 0.29-0.39 of a held-out jump's and
+    bent the knee of a kick 0.50 of the source's, with 300 or 1000 steps alike, while from the source's own
+    start it reproduced all of them (0.92-1.03; docs/results.md). The decoder is therefore fitted to the
+    re-enactment it is asked for, from the start it is run from. Other layouts (2D pixels, faces) have no
+    skeleton to retarget onto: their goal is the source itself.
+
+    Args:
+        sources: (N, 1 + H, 17, 3) world joints (or (N, 1 + H, ...) other layouts), start posture first.
+        starts: (N, 17, 3) the target postures.
+    Returns:
+        (N, 1 + H, F) float32 normalised features, each anchored at its first frame (:func:`encode_sequences`);
+        for 3D bodies the first frame is the target's posture.
+    """
+    if bundle.data_config.layout != "body3d":
+        return encode_sequences(bundle, sources)[0]
+    from motion2video.core.retarget import retarget_motion
+
+    blend = int(round(BLEND_SECONDS * bundle.data_config.fps))
+    goals = np.stack([retarget_motion(s, p, blend_frames=blend) for s, p in zip(sources, starts)])
+    return encode_sequences(bundle, goals)[0]
+
+
+def reenact_source(bundle: ModelBundle, source: np.ndarray, start: np.ndarray, *, adapt_steps: int = ADAPT_STEPS
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Re-enact one behaviour source from one start posture, as ``motion2video transfer`` does: z = the
+    encoder's behaviour of the source; the decoder fitted for ``adapt_steps`` steps to the source retargeted
+    onto the start (:func:`reenactment_goal`, :func:`adapt_to_source`; 0: the decoder as trained), then run
+    from the start along the goal's root path; 3D bodies keep the start's bone lengths (:func:`rigid_bones`).
+
+    Args:
+        source: (1 + H, ...) display coordinates at the model's rate (world joints, pixels or face parameters),
+            its start posture first.
+        start: (...) the target's posture, in the same coordinates.
+    Returns:
+        z (1, Z); the re-enactment (1, 1 + H, ...) (the start, then H generated frames); the source as the model
+        reads it back (1 + H, ...) (for display).
+    """
+    model = behavior_model(bundle)
+    horizon = source.shape[0] - 1
+    src_feats, src_frame = encode_sequences(bundle, source[None])  # (1, 1+H, F)
+    tgt_feats, tgt_frame = encode_sequences(bundle, start[None, None])  # (1, 1, F)
+    z = behavior_latents(model, src_feats)  # (1, Z)
+    goal = reenactment_goal(bundle, source[None], start[None])  # (1, 1+H, F)
+    fitted = adapt_to_source(model, goal, z, steps=adapt_steps)
+    root = behavior_root(fitted, goal, tgt_feats[:, 0])  # (1, H, R) or None
+    gen = reenact(fitted, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)
+    seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)
+    reenacted = rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])
+    shown = decode_sequences(bundle, src_feats[:, None], src_frame)[0, 0]
+    return z, reenacted, shown
+
+
 @torch.no_grad()
 def reenact(model: BehaviorModel, z: np.ndarray, start: np.ndarray, *, horizon: int,
             root: np.ndarray | None = None) -> np.ndarray:
