@@ -105,21 +105,24 @@ def behavior_root(model: BehaviorModel, source: np.ndarray, start: np.ndarray) -
 # benchmark's TRAINING cases (transfer_benchmark.CASES, split "train"; 2026-11-26): the mean |log ratio| over their
 # behaviour and root-relative signatures was 0.389 as trained, 0.253 / 0.203 / 0.198 / 0.199 / 0.187 after 25 / 50 /
 # 100 / 200 / 300 Adam steps at 1e-3 (measured on the transfer benchmark); 300 is the best of those (about 6 s
-# per source on one CPU thread).
+# per source on one CPU thread). The step count was kept when the fit's goal became the source retargeted onto the
+# target (:func:`reenactment_goal`); a fit from the source's own start reproduced the source after 300 steps as
+# closely as after 1000 (docs/results.md, "Transfer from any posture").
 ADAPT_STEPS = 300
 ADAPT_LR = 1e-3
 
 
 def adapt_to_source(model: BehaviorModel, source: np.ndarray, z: np.ndarray, *, steps: int = ADAPT_STEPS,
                     lr: float = ADAPT_LR) -> BehaviorModel:
-    """A copy of ``model`` whose decoder was fine-tuned to re-enact ONE source from its own start posture.
+    """A copy of ``model`` whose decoder was fine-tuned to enact ``source`` from its own first frame.
 
     The trained decoder averages rare, large limb motions away: re-enacted from another posture, a held-out kick
     kept 0.23 of its ankle lift relative to the pelvis, and refining z alone did not bring it back
     (docs/results_transfer.md). Here z (the encoder's behaviour of the source) stays fixed and only the decoder's
     weights move, by ``steps`` Adam steps on the model's own reconstruction error of the source (its root path
-    given, as in a re-enactment). The adapted decoder is then run from the target's posture: the behaviour is
-    the source's, the start is the target's. Deterministic: no noise, the same steps for the same inputs.
+    given, as in a re-enactment). ``transfer`` passes the source retargeted onto the target's posture
+    (:func:`reenactment_goal`), so the decoder is fitted from the start it is then run from: the behaviour is the
+    source's, the start is the target's. Deterministic: no noise, the same steps for the same inputs.
 
     Args:
         model: a trained behaviour model (left unchanged).
