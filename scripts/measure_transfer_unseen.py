@@ -16,7 +16,8 @@ renderer.
 
     python scripts/measure_transfer_unseen.py --json out/transfer_unseen.json --sheet out/transfer_unseen.png
 
-About 20 minutes on one loaded CPU thread (two fits of about 25 s per pair).
+About 25 minutes on a loaded 2-core machine (two fits per pair). ``--held-out-benchmark`` prints the known-answer
+transfer benchmark's held-out rows instead (``evaluation.transfer_benchmark``, one fit per case and target).
 """
 
 from __future__ import annotations
@@ -100,9 +101,14 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--json", type=Path, default=None)
     p.add_argument("--sheet", type=Path, default=None, help="contact sheet PNG of the pairs in SHEET")
+    p.add_argument("--held-out-benchmark", action="store_true",
+                   help="instead: the known-answer transfer benchmark's held-out cases (transfer rows, medians)")
     args = p.parse_args()
     torch.set_num_threads(1)
     bundle = load_model("behavior")
+    if args.held_out_benchmark:
+        held_out_benchmark(bundle)
+        return
     rows, pairs, sheet = [], [], []
     for label, path, subject, start in SOURCES:
         clip = load_clip(bundle, path).data
@@ -151,6 +157,18 @@ def main() -> None:
         print(f"wrote {args.sheet}")
 
 
+def held_out_benchmark(bundle) -> None:
+    """Print the held-out rows of :mod:`motion2video.evaluation.transfer_benchmark` for ``transfer`` as it is."""
+    from motion2video.evaluation import transfer_benchmark as B
+
+    cases = tuple(c for c in B.CASES if c.split == "held-out")
+    for row in B.summarise(B.run_benchmark(str(MOCAP), transfer=bundle, cases=cases)):
+        if row["method"] == "transfer":
+            print(f"| {row['behaviour']} | {row['median_ratio']:.2f} | "
+                  + " | ".join(fmt(row["relative"][n]) for n in RELATIVE)
+                  + f" | {row['start_error']:.3f} | {fmt(row['posture_kept'])} |", flush=True)
+
+
 def contact_sheet(items) -> np.ndarray:
     """One row per pair: the source, then the re-enactment before and after, every 8th frame (mesh style)."""
     from motion2video.formats.video import label as put_label
@@ -160,8 +178,8 @@ def contact_sheet(items) -> np.ndarray:
     for label, path, tpath, shown, before, after in items:
         cells = []
         for name, made in (("before", before), ("after", after)):
-            result = TransferResult(source=shown[picks].astype(np.float32), reenacted=made[None, picks].astype(np.float32),
-                                    z=np.zeros((1, 1)), fps=FPS / 8, layout="body3d", source_name=str(path),
+            result = TransferResult(source=shown[picks].astype(np.float32),
+                                    reenacted=made[None, picks].astype(np.float32), z=np.zeros((1, 1)), fps=FPS / 8, layout="body3d", source_name=str(path),
                                     target_name=str(tpath), target_frame=0)
             frames = render_transfer(result, style="mesh", size=160)  # (7, 160, 322, 3): source | re-enactment
             if not cells:

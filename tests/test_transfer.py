@@ -388,8 +388,8 @@ def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys)
 
 @pytest.mark.slow
 def test_shipped_behavior_carries_held_out_jumps_kicks_and_speeds(mocap_dir, tmp_path, capsys):
-    """The shipped checkpoint: on held-out subjects, re-enacted from other subjects'
-    postures as ``motion2video transfer`` does it (the decoder fitted to the source retargeted onto each posture), the median signature
+    """The shipped checkpoint: on held-out subjects, re-enacted from other subjects' postures as ``motion2video
+    transfer`` does it (the decoder fitted to the source retargeted onto each posture), the median signature
     ratio of jumps (pelvis excursion), kicks (ankle above the knee) and walks / runs (root speed) is within
     0.6-1.4, and so are the jumps' and kicks' root-relative signatures (leg extension, arm swing, knee bend, ankle
     lift: 0.61-1.10 when measured, docs/results_transfer.md; asserted from 0.55, which the decoder as trained

@@ -49,8 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--behavior-start", type=int, default=0, help="first frame of the source's behaviour (default 0)")
     p.add_argument("--horizon", type=int, default=None, help="generated frames (default: the model's, 48)")
     p.add_argument("--adapt-steps", type=int, default=None, metavar="N",
-                   help="fit the decoder for N steps to the source retargeted onto the target's posture and bones before "
-                   "re-enacting it, so that large, rare limb motions (a jump's arm swing, a kick) come across from "
+                   help="fit the decoder for N steps to the source retargeted onto the target's posture and bones "
+                   "before re-enacting it, so that large, rare limb motions (a jump's arm swing, a kick) come across from "
                    "any posture (default 300, about 6 s; 0: the model as trained)")
     p.add_argument("--style", choices=STYLES, default=None,
                    help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
