@@ -29,7 +29,7 @@ def test_scripts_are_few_and_import_the_package():
     ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh")),
     ("make_results", ("forecasting", "card", "corpus", "known-answer", "per-action", "five-minute-models",
                       "skeleton-figure", "frames", "frames-analysis", "frames-real", "transfer",
-                      "transfer-benchmark")),
+                      "transfer-benchmark", "transfer-unseen")),
 ])
 def test_entry_points_list_their_subcommands_and_refuse_unknown_ones(script, subcommands, monkeypatch, capsys):
     monkeypatch.syspath_prepend(str(SCRIPTS))  # as when the script runs: its folder first on the path
