@@ -175,7 +175,7 @@ def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray
 
 
 def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, phenotype: dict | None = None,
-                     person_mask: np.ndarray | None = None) -> MeshTrack:
+                     person_mask: np.ndarray | None = None) -> tuple[MeshTrack, dict]:
     """The body mesh of a person seen in a real video, in the pixels of its frames.
 
     The estimator's 3D joints (canonical metres) pose Anny; a frontal camera fitted over the frames renders it,
@@ -187,6 +187,8 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
         person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it
             (:func:`~motion2video.generator.mesh_fit.fit_width`).
+    Returns:
+        the track, and the phenotype it was rendered with (the fitted width's).
     """
     joints3d = np.asarray(joints3d, np.float64)
     camera = fit_camera(joints3d, size, size, elevation_deg=0.0)
@@ -199,8 +201,9 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
                                  person_mask=person_mask, phenotype=phenotype)
     # the joints are this person's own, observed in every frame: no arms moved out of a torso (moved, dancer.avi's
     # person PSNR fell 21.26 -> 19.88 dB while L1 0.0191 -> 0.0174 and akd 3.42 -> 2.79 px; docs/results.md)
-    return render_mesh_track(joints3d, phenotype=phenotype or {}, camera=camera, transform=(scales, shifts),
-                             size=size, clear_arms=False)
+    phenotype = phenotype or {}
+    return render_mesh_track(joints3d, phenotype=phenotype, camera=camera, transform=(scales, shifts), size=size,
+                             clear_arms=False), phenotype
 
 
 def sampled_person(video: MeshVideo):
