@@ -324,8 +324,9 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
     reference's person (its segmentation joined with the fitted silhouette) inpainted
     (:func:`motion2video.generator.background.inpaint_background`) is the plate, and the generated person is laid
     over it through its soft matte (:func:`~motion2video.generator.background.soft_matte`), and the reference's face
-    over the generated head where the pairs carry it (:func:`~motion2video.generator.head_paste.paste_head`). Rendered pairs keep the
-    generator's own composite over its plate (:func:`~motion2video.generator.mesh_warp.mesh_plate`), as in training.
+    over the generated head where the pairs carry it (:func:`~motion2video.generator.head_paste.paste_head`).
+    Rendered pairs keep the generator's own composite over its plate
+    (:func:`~motion2video.generator.mesh_warp.mesh_plate`), as in training.
     """
     if pairs.mesh_flow is None:
         raise ValueError("the mesh generator needs pairs with their mesh correspondence (sequences that keep "

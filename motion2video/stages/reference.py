@@ -475,7 +475,8 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path,
                      person=person, picture=picture,
                      source=reference.image if reference.source is None else reference.source,
-                     source_scale=reference.source_scale * k, source_offset=tuple((np.asarray(reference.source_offset) - [x0, y0]) * k))
+                     source_scale=reference.source_scale * k,
+                     source_offset=tuple((np.asarray(reference.source_offset) - [x0, y0]) * k))
 
 
 def load_reference(path: str | Path, *, size: int, domain: str,
