@@ -131,8 +131,17 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
         return frame.copy()
     affine = pixel_index_affine(affine)
     scale = float(np.sqrt(abs(np.linalg.det(affine[:, :2]))))
-    source = np.asarray(source)
     matte = np.asarray(matte, np.float32)
+    ys, xs = np.nonzero(matte > 0)
+    if len(xs) == 0:
+        return frame.copy()
+    # the matte's box only, 2 pixels grown: the rest of the picture is never laid over
+    h, w = matte.shape
+    sx0, sy0 = max(0, xs.min() - 2), max(0, ys.min() - 2)
+    sx1, sy1 = min(w, xs.max() + 3), min(h, ys.max() + 3)
+    source = np.asarray(source)[sy0:sy1, sx0:sx1]
+    matte = matte[sy0:sy1, sx0:sx1]
+    affine = compose_affine(affine, np.array([[1.0, 0.0, sx0], [0.0, 1.0, sy0]]))
     if scale < 1.0:  # shrink by area first, then warp the shrunk picture by affine o (shrunk -> source)
         h, w = matte.shape
         sw, sh = max(1, int(round(w * scale))), max(1, int(round(h * scale)))
@@ -142,13 +151,25 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
         # a pixel centre c of the shrunk image is (c + 0.5) * w / sw - 0.5 in the source
         unshrink[:, 2] = 0.5 * np.array([w / sw, h / sh]) - 0.5
         affine = compose_affine(affine, unshrink)
+    # only the box the warped matte covers is warped and blended (a face is about 1% of a frame)
     height, width = frame.shape[:2]
-    face = cv2.warpAffine(source, affine, (width, height), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    alpha = cv2.warpAffine(matte, affine, (width, height), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                           borderValue=0.0)
+    out = frame.copy()
+    mh, mw = matte.shape
+    corners = np.array([[-1, -1], [mw, -1], [-1, mh], [mw, mh]], np.float64) @ affine[:, :2].T + affine[:, 2]
+    x0, y0 = np.maximum(np.floor(corners.min(axis=0)).astype(int) - 1, 0)
+    x1, y1 = np.minimum(np.ceil(corners.max(axis=0)).astype(int) + 2, [width, height])
+    if x1 <= x0 or y1 <= y0:
+        return out
+    box = affine.copy()
+    box[:, 2] -= [x0, y0]
+    size = (int(x1 - x0), int(y1 - y0))
+    face = cv2.warpAffine(source, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    alpha = cv2.warpAffine(matte, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
     alpha = np.clip(alpha * float(weight), 0.0, 1.0)[..., None]
-    mixed = alpha * face.astype(np.float32) + (1.0 - alpha) * frame.astype(np.float32)
-    return np.clip(np.rint(mixed), 0, 255).astype(np.uint8)
+    under = frame[y0:y1, x0:x1].astype(np.float32)
+    mixed = alpha * face.astype(np.float32) + (1.0 - alpha) * under
+    out[y0:y1, x0:x1] = np.clip(np.rint(mixed), 0, 255).astype(np.uint8)
+    return out
 
 
 def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.ndarray, face_weights: np.ndarray,
