@@ -4,7 +4,8 @@ For each photo (a body reference, its pose estimated), the clip's observed frame
 (``synthesize``'s path: the motion model only supplies the structures of the observed frames, which are the clip's
 own) and each picked frame is drawn twice: the generator's own head, and with the photo's face laid over it
 (:mod:`motion2video.generator.head_paste`). The sheet shows the whole frame and a close-up of the head (nearest
-neighbour, so the pixels are the frame's).
+neighbour, so the pixels are the frame's); ``--json`` records, per photo, how much of the face each frame took and
+in what share of all the frames a face detector finds a face on the head, either way.
 
     python scripts/face_sheet.py ../shared/data/mocap/cmu/08_01.bvh ../shared/data/photos/fashion_woman_shorts.png \
         ../shared/data/photos/woman_blue_tracksuit.jpg -o docs/images/face_sheet.png --columns 4
@@ -41,9 +42,22 @@ def label(image: np.ndarray, text: str) -> np.ndarray:
     return out
 
 
+def detected_share(frames: np.ndarray, points: np.ndarray) -> float:
+    """The share of (N, S, S, 3) frames in which BlazeFace finds a face in the square of 3 x the thorax-to-head
+    distance around the head of their (N, 17, 2) joints, enlarged to 192 px: a face a detector can read."""
+    from motion2video.stages.pictured_face import cut_square, face_mesh, head_square
+
+    found = 0
+    for frame, p in zip(frames, points):
+        square = cv2.resize(cut_square(frame, head_square(p)), (192, 192), interpolation=cv2.INTER_CUBIC)
+        found += bool(face_mesh().detect(np.ascontiguousarray(square)))
+    return found / max(1, len(frames))
+
+
 def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, columns: int, crop_person: bool
                ) -> tuple[list[np.ndarray], dict]:
-    """Two rows (the generator's head, the photo's face) for one photo, and the paste weights of the picked frames."""
+    """Two rows (the generator's head, the photo's face) for one photo; the paste weights of the picked frames and
+    the share of all the frames where a face detector finds the face (:func:`detected_share`), either way."""
     from dataclasses import replace
 
     from motion2video.stages.generation import mesh_frames, mesh_setup
@@ -55,9 +69,13 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
     fc = sample_forecast(bundle, clip, samples=1, observed=frames, horizon=1, start=0, seed=0)
     structures = render_structures(fc, domain="body", size=size, reference=ref)
     video = mesh_setup(net, ref, structures)
+    every = np.arange(frames)
+    all_after = mesh_frames(net, ref, structures, video, every)
+    all_before = mesh_frames(net, ref, structures, replace(video, face=None), every)
+    detected = {"generator's head": detected_share(all_before, structures.points[1:1 + frames]),
+                "photo's face": detected_share(all_after, structures.points[1:1 + frames])}
     picked = np.linspace(0, frames - 1, columns).round().astype(int)
-    after = mesh_frames(net, ref, structures, video, picked)
-    before = mesh_frames(net, ref, structures, replace(video, face=None), picked)
+    after, before = all_after[picked], all_before[picked]
     points = structures.points[1 + picked]
     rows = []
     for name, frames_ in (("generator's head", before), ("photo's face", after)):
@@ -65,8 +83,10 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
                                  head_close_up(f, p)], axis=1) for f, p in zip(frames_, points)]
         rows.append(label(np.concatenate(cells, axis=1), f"{photo.name}: {name}"))
     weights = None if video.head_weights is None else [round(float(w), 2) for w in video.head_weights[picked]]
-    return rows, {"photo": photo.name, "frames": picked.tolist(), "face_found": video.face is not None,
-                  "weights": weights}
+    mean = None if video.head_weights is None else round(float(video.head_weights[:frames].mean()), 3)
+    return rows, {"photo": photo.name, "size": size, "frames": picked.tolist(), "face_found": video.face is not None,
+                  "weights": weights, "mean_weight": mean,
+                  "face_detected_share": {k: round(v, 3) for k, v in detected.items()}}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,6 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=int, default=32, help="observed frames of the clip")
     parser.add_argument("--columns", type=int, default=6, help="frames picked, spread over them")
     parser.add_argument("--crop-person", action="store_true")
+    parser.add_argument("--json", type=Path, default=None, help="write each photo's numbers here")
     args = parser.parse_args(argv)
 
     from motion2video.generator.checkpoint import load_frame_model
@@ -89,12 +110,19 @@ def main(argv: list[str] | None = None) -> int:
     bundle = load_model(args.motion_model)
     net = load_frame_model(args.frame_model).model
     clip = load_clip(bundle, args.clip).data
-    rows = []
+    rows, infos = [], []
     for photo in args.photos:
         photo_sheet, info = photo_rows(net, photo, clip, bundle, size=args.size, frames=args.frames,
                                        columns=args.columns, crop_person=args.crop_person)
         rows += photo_sheet
+        infos.append(info)
         print(info)
+    if args.json is not None:
+        import json
+
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({"clip": str(args.clip), "frame_model": args.frame_model, "photos": infos},
+                                        indent=2) + "\n")
     sheet = np.concatenate(rows, axis=0)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     cv2.imwrite(str(args.output), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_PNG_COMPRESSION, 9])
