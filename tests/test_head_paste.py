@@ -214,3 +214,19 @@ def test_the_face_matte_is_the_hull_feathered(tracksuit):
     reach = int(np.ceil((MATTE_SHRINK + 3 * MATTE_FEATHER) * size))  # the shrink and three feather widths
     deep = cv2.erode(hull, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
     assert deep.sum() > 1000 and matte[deep].min() > 0.99  # deep inside it is 1
+
+
+def test_a_reframed_reference_keeps_its_face_on_its_eyes(tracksuit):
+    """--fit-view re-frames the reference (zoomed out to 1.5 times, panned): the face found in the photo still lands on
+    the eyes BlazePose found, moved with the picture."""
+    from motion2video.stages.pictured_face import landmarks_in_reference, reference_face
+    from motion2video.stages.reference import zoom_to_view
+
+    zoomed = zoom_to_view(tracksuit, (-64.0, -40.0, 384.0))
+    face = reference_face(zoomed)
+    assert face is not None
+    lm = landmarks_in_reference(face)
+    mesh_eyes = np.stack([lm[[362, 263]].mean(axis=0), lm[[33, 133]].mean(axis=0)])
+    width = np.ptp(lm[:, 0])
+    assert 5 < width < 14  # two thirds of the 14 px face
+    assert np.linalg.norm(zoomed.person.eyes - mesh_eyes, axis=1).max() < 0.1 * width
