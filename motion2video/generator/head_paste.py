@@ -111,7 +111,7 @@ def pixel_index_affine(affine: np.ndarray) -> np.ndarray:
 
 
 def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine: np.ndarray,
-               weight: float) -> np.ndarray:
+               weight: float, *, within: np.ndarray | None = None) -> np.ndarray:
     """The frame with the source face laid over it.
 
     The source is first shrunk by area averaging to the map's scale when the map shrinks it (a photo at several
@@ -123,6 +123,8 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
             (:func:`face_matte`).
         affine: (2, 3) source pixels -> frame pixels.
         weight: in [0, 1] (:func:`paste_weight`); 0 returns the frame unchanged.
+        within: (H, W) float in [0, 1] the generated person's matte in the frame, or None: the face is laid over
+            the person only (a face from a three-quarter view, spread over a frontal head, reaches past its outline).
     Returns:
         (H, W, 3) uint8, equal to ``frame`` wherever the warped matte times ``weight`` is 0.
     """
@@ -165,6 +167,8 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
     size = (int(x1 - x0), int(y1 - y0))
     face = cv2.warpAffine(source, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     alpha = cv2.warpAffine(matte, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    if within is not None:
+        alpha = alpha * np.asarray(within, np.float32)[y0:y1, x0:x1]
     alpha = np.clip(alpha * float(weight), 0.0, 1.0)[..., None]
     under = frame[y0:y1, x0:x1].astype(np.float32)
     mixed = alpha * face.astype(np.float32) + (1.0 - alpha) * under

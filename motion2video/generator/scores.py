@@ -355,8 +355,9 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
         matte = soft_matte(parts.alpha[:, 0].numpy())
         frames = np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)])
         if part.head_mattes is not None:  # the reference's own face over the generated heads, as synthesize does
-            frames = np.stack([paste_head(f, r, m, a, w) for f, r, m, a, w in
-                               zip(frames, part.ref_images, part.head_mattes, part.head_affines, part.head_weights)])
+            frames = np.stack([paste_head(f, r, m, a, w, within=p) for f, r, m, a, w, p in
+                               zip(frames, part.ref_images, part.head_mattes, part.head_affines, part.head_weights,
+                                   matte)])
         out.append(frames)
     return np.concatenate(out)
 

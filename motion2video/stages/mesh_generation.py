@@ -273,11 +273,14 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             # keeps the model's outline, whose stair of pixels grows with it
             matte = soft_matte(alpha, feather_px=MATTE_FEATHER_PX * side / size)
             out[start:start + n, y0:y0 + side, x0:x0 + side] = composite(behind, person, matte)
-    if video.face is not None:  # the photo's own face over the generated heads
-        face = video.face
-        for i, row in enumerate(rows):
-            out[i] = paste_head(out[i], face.image, face.matte,
-                                compose_affine(video.head_affines[row], face.to_reference), video.head_weights[row])
+            if video.face is not None:  # the photo's own face over the generated heads, inside the generated person
+                face = video.face
+                for i, row in enumerate(part):
+                    within = np.zeros(out.shape[1:3], np.float32)
+                    within[y0:y0 + side, x0:x0 + side] = matte[i]
+                    out[start + i] = paste_head(out[start + i], face.image, face.matte,
+                                                compose_affine(video.head_affines[row], face.to_reference),
+                                                video.head_weights[row], within=within)
     return out
 
 

@@ -84,8 +84,9 @@ def pictured_face(picture: np.ndarray, points: np.ndarray, *, to_reference: np.n
         points: (17, 2) the body's canonical joints in ``picture`` pixels.
         to_reference: (2, 3) affine map from ``picture`` pixels to the reference picture's (None: the same).
         person: (H_ref, W_ref) float in [0, 1] the person in the reference picture's pixels (a segmentation or the
-            picture's alpha), or None: the matte keeps only the person (the landmarks' hull of a face turned aside
-            reaches past the far cheek onto the background).
+            picture's alpha), or None: the matte keeps only the person, a reference pixel inside its outline (the
+            landmarks' hull of a face turned aside reaches past the far cheek onto the background, and the outline's
+            pixels at the reference's resolution are half background).
     """
     from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
 
@@ -105,9 +106,10 @@ def pictured_face(picture: np.ndarray, points: np.ndarray, *, to_reference: np.n
     crop_to_picture = np.array([[1.0, 0.0, x0], [0.0, 1.0, y0]])
     to_ref = np.vstack([to_ref, [0, 0, 1]]) @ np.vstack([crop_to_picture, [0, 0, 1]])
     matte = face_matte(found.xy, crop.shape[:2])
-    if person is not None:  # the person's mask, from the reference's pixels into the square's
+    if person is not None:  # the person's mask, a pixel inside its outline, from the reference's pixels into the square's
+        core = cv2.erode((np.asarray(person) > 0.5).astype(np.uint8), np.ones((3, 3), np.uint8)).astype(np.float32)
         back = cv2.invertAffineTransform(pixel_index_affine(to_ref[:2]))
-        matte = matte * cv2.warpAffine(np.asarray(person, np.float32), back, (side, side), flags=cv2.INTER_LINEAR,
+        matte = matte * cv2.warpAffine(core, back, (side, side), flags=cv2.INTER_LINEAR,
                                        borderMode=cv2.BORDER_REPLICATE)
     return PicturedFace(crop, matte.astype(np.float32), to_ref[:2], found.xy, found.score)
 
