@@ -213,7 +213,8 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     if face is None:
         return pairs
     # the face found in frame 0's square; frame 0 itself is the picture it is laid from
-    affines, weights = face_moves(face, track.uv[1:], track.visible[1:], rest=anny_model.anny_rest(phenotype))
+    affines, weights = face_moves(face, track.uv[0], track.uv[1:], track.visible[1:],
+                                  rest=anny_model.anny_rest(phenotype))
     mattes = cv2.warpAffine(face.matte, pixel_index_affine(face.to_reference), (size, size), flags=cv2.INTER_LINEAR)
     return replace(pairs, head_mattes=np.repeat(mattes[None], len(flows), axis=0), head_affines=affines,
                    head_weights=weights)

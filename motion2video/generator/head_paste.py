@@ -4,8 +4,9 @@ A body generator at 256 px draws a head about 20 px tall from a network working 
 photo shows does not survive it. So the face is taken from the photo itself and laid over each generated frame:
 
 1. **Where it goes.** The face's landmarks have points on the body mesh's head (the face mesh's correspondence
-   with Anny); where a target's posed mesh puts those points, the landmarks go, through a least-squares 2D affine
-   map (:func:`head_affine`: in-plane turn, scale, translation, and the foreshortening of a small nod or turn).
+   with Anny); the least-squares 2D affine map of those points from the reference mesh onto a target's posed mesh
+   (:func:`head_affine`: in-plane turn, scale, translation, and the foreshortening of a small nod or turn) moves
+   the face.
 2. **Whether it fits.** A face seen from another side is not an affine image of the pictured one. The head's turn
    out of the picture plane between the photo and the target (the angle between the directions the camera looks
    along in the head's own axes, :func:`view_direction`: in the photo from the face's landmarks, in the target from
@@ -177,20 +178,23 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
 
 
 def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.ndarray, face_weights: np.ndarray,
-               tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, head_points: np.ndarray,
+               ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, head_points: np.ndarray,
                head_vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Where the pictured face goes in every target, and how much of it to lay over.
 
     The face's landmarks have their points on the body mesh's head (the face mesh's correspondence with Anny,
-    :mod:`motion2video.pose.face_anny`): in each target they land where the posed mesh puts those points, and the
-    affine map of the landmarks onto them (:func:`head_affine`) moves the face. How far the target's head is turned
+    :mod:`motion2video.pose.face_anny`): the affine map of those points from the reference mesh onto each target mesh
+    (:func:`head_affine`) moves the face. The map is the head's move, not a fit of the pictured face onto the
+    mesh's: a fitted head is seldom the pictured one's size and place (on ``dancer.avi`` at 128 px, mapping her
+    landmarks onto the mesh's stretched her 10 px face to 15 and raised its brow 5 px). How far the target's head is turned
     from the pictured face (:func:`view_direction`, both against the same head at rest) and how many of the
     landmarks' surface points the target shows give the weight (:func:`paste_weight`).
 
     Args:
-        face_xy: (L, 2) the face's landmarks in the reference picture's pixels.
+        face_xy: (L, 2) the face's landmarks in the reference picture's pixels (the pictured view of the head).
         face_points: (L, 3) their points on the head at rest, metres; face_vertices: (L, 3) int the mesh vertices
             each point lies between; face_weights: (L, 3) its barycentric weights.
+        ref_uv: (V, 2) the body mesh's vertices in the reference, its pixels (where the reference samples them).
         tgt_uv: (N, V, 2) the body mesh's vertices in each target, pixels; tgt_visible: (N, V) bool shown there.
         head_points: (P, 3) the head's vertices at rest, metres; head_vertices: (P,) int their indices.
     Returns:
@@ -201,13 +205,14 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
     face_vertices = np.asarray(face_vertices, np.int64)
     face_weights = np.asarray(face_weights, np.float64)
     pictured = view_direction(face_points, face_xy)
+    on_ref = np.einsum("lkd,lk->ld", np.asarray(ref_uv, np.float64)[face_vertices], face_weights)  # (L, 2)
     n = len(tgt_uv)
     affines = np.repeat(np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]), n, axis=0)
     weights = np.zeros(n)
     for i in range(n):
         uv = np.asarray(tgt_uv[i], np.float64)
         landmarks = np.einsum("lkd,lk->ld", uv[face_vertices], face_weights)  # (L, 2)
-        affine = head_affine(face_xy, landmarks)
+        affine = head_affine(on_ref, landmarks)
         if affine is None:
             continue
         affines[i] = affine

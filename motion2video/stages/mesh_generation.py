@@ -143,7 +143,9 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     if face is not None:  # the fitted face's move, in output pixels
         corner = np.array([x0, y0], np.float64)
         video.face = face
-        video.head_affines, video.head_weights = face_moves(face, tgt.uv / k + corner, tgt.visible, rest=rest)
+        # the reference's vertices as its colours are sampled: the fitted face moved onto the pictured eyes
+        video.head_affines, video.head_weights = face_moves(face, ref_uv / k + corner, tgt.uv / k + corner,
+                                                            tgt.visible, rest=rest)
     if image is not None:
         video.background = reference_background(image, video, None if person is None else person.mask,
                                                  reference_points)

@@ -133,15 +133,16 @@ def landmarks_in_reference(face: PicturedFace) -> np.ndarray:
     return face.landmarks @ face.to_reference[:, :2].T + face.to_reference[:, 2]
 
 
-def face_moves(face: PicturedFace, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, rest
+def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, rest
                ) -> tuple[np.ndarray, np.ndarray]:
     """Where the pictured face goes in each target and how much of it to lay over
     (:func:`motion2video.generator.head_paste.head_moves`), through the face mesh's correspondence with Anny's head
     (:mod:`motion2video.pose.face_anny`).
 
     Args:
-        face: the pictured face; tgt_uv: (N, V, 2) the body mesh's vertices in each target, in the reference
-            picture's pixels; tgt_visible: (N, V) bool; rest: the body's :class:`renderers.anny_model.AnnyRest`.
+        face: the pictured face; ref_uv: (V, 2) the body mesh's vertices in the reference, where it samples them;
+            tgt_uv: (N, V, 2) the same vertices in each target, in the same pixels; tgt_visible: (N, V) bool;
+            rest: the body's :class:`renderers.anny_model.AnnyRest`.
     Returns:
         affines (N, 2, 3) reference pixels -> target pixels, weights (N,).
     """
@@ -153,4 +154,5 @@ def face_moves(face: PicturedFace, tgt_uv: np.ndarray, tgt_visible: np.ndarray, 
     mesh = slice(0, NUM_LANDMARKS)  # the table's last two rows are the irises, which the landmarks do not hold
     head = np.flatnonzero(anny_model.head_vertices())
     return head_moves(landmarks_in_reference(face), corr.points(rest.vertices)[mesh], corr.vertices[mesh],
-                      corr.weights[mesh], tgt_uv, tgt_visible, head_points=rest.vertices[head], head_vertices=head)
+                      corr.weights[mesh], ref_uv, tgt_uv, tgt_visible, head_points=rest.vertices[head],
+                      head_vertices=head)
