@@ -10,12 +10,12 @@ photo shows does not survive it. So the face is taken from the photo itself and 
 2. **Whether it fits.** A face seen from another side is not an affine image of the pictured one. The head's turn
    out of the picture plane between the photo and the target (the angle between the directions the camera looks
    along in the head's own axes, :func:`view_direction`: in the photo from the face's landmarks, in the target from
-   the posed head's vertices)
-   and the share of the reference's shown face the target still shows (an arm in front, a turn) fade the face out
-   (:func:`paste_weight`), leaving the generator's head: a wrong face is worse than no face.
+   the posed head's vertices) and the share of the landmarks' surface points the target still shows (an arm in
+   front, a turn) fade the face out (:func:`paste_weight`), leaving the generator's head: a wrong face is worse
+   than no face.
 3. **How it is laid over.** The face's matte (the convex hull of the face landmarks, feathered: :func:`face_matte`)
-   is warped with the face; ``weight * matte`` blends the warped photo over the frame (:func:`paste_head`). Outside
-   the warped matte the frame is untouched.
+   is warped with the face; ``weight * matte`` (times the generated person's matte) blends the warped photo over
+   the frame (:func:`paste_head`). Outside the warped matte the frame is untouched.
 
 Images are (H, W, 3) uint8; pixels x right, y down, the origin at the top-left corner of the top-left pixel (its
 centre at (0.5, 0.5)); affine maps are (2, 3) float64 acting on (x, y, 1) in those coordinates.
@@ -186,8 +186,8 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
     :mod:`motion2video.pose.face_anny`): the affine map of those points from the reference mesh onto each target mesh
     (:func:`head_affine`) moves the face. The map is the head's move, not a fit of the pictured face onto the
     mesh's: a fitted head is seldom the pictured one's size and place (on ``dancer.avi`` at 128 px, mapping her
-    landmarks onto the mesh's stretched her 10 px face to 15 and raised its brow 5 px). How far the target's head is turned
-    from the pictured face (:func:`view_direction`, both against the same head at rest) and how many of the
+    landmarks onto the mesh's stretched her 10 px face to 15 and raised its brow 5 px). How far the target's head is
+    turned from the pictured face (:func:`view_direction`, both against the same head at rest) and how many of the
     landmarks' surface points the target shows give the weight (:func:`paste_weight`).
 
     Args:

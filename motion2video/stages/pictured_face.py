@@ -106,7 +106,7 @@ def pictured_face(picture: np.ndarray, points: np.ndarray, *, to_reference: np.n
     crop_to_picture = np.array([[1.0, 0.0, x0], [0.0, 1.0, y0]])
     to_ref = np.vstack([to_ref, [0, 0, 1]]) @ np.vstack([crop_to_picture, [0, 0, 1]])
     matte = face_matte(found.xy, crop.shape[:2])
-    if person is not None:  # the person's mask, a pixel inside its outline, from the reference's pixels into the square's
+    if person is not None:  # the person's mask a pixel inside its outline, from the reference's pixels to the square's
         core = cv2.erode((np.asarray(person) > 0.5).astype(np.uint8), np.ones((3, 3), np.uint8)).astype(np.float32)
         back = cv2.invertAffineTransform(pixel_index_affine(to_ref[:2]))
         matte = matte * cv2.warpAffine(core, back, (side, side), flags=cv2.INTER_LINEAR,
