@@ -7,8 +7,9 @@ own) and each picked frame is drawn twice: the generator's own head, and with th
 neighbour, so the pixels are the frame's); ``--json`` records, per photo, how much of the face each frame took and
 in what share of all the frames a face detector finds a face on the head, either way.
 
-    python scripts/face_sheet.py ../shared/data/mocap/cmu/08_01.bvh ../shared/data/photos/fashion_woman_shorts.png \
-        ../shared/data/photos/woman_blue_tracksuit.jpg -o docs/images/face_sheet.png --columns 4
+    python scripts/face_sheet.py ../shared/data/mocap/cmu/08_01.bvh ../shared/data/photos/woman_blue_tracksuit.jpg \
+        ../shared/data/photos/fashion_man_red_jacket.png ../shared/data/photos/skier.jpg --size 512 --columns 3 \
+        -o docs/images/face_sheet.png --json out/face_sheet.json
 """
 
 from __future__ import annotations
