@@ -166,6 +166,18 @@ class FaceStyle:
         return np.array([colors[name] for name in anny_model.REGION_NAMES], dtype=np.uint8)
 
 
+def close_up_camera(rest: AnnyRest, style: FaceStyle, translation=(0.0, 0.0, 0.0)) -> PinholeCamera:
+    """The close-up camera of ``style`` (its size, field of view and head fraction) in front of a head of rest
+    model ``rest`` moved by ``translation`` (3,) metres: it looks along +y at the head's centre at eye height."""
+    target, view_height = _head_framing(rest, style.head_fraction)
+    target = target + np.asarray(translation, np.float64)
+    distance = 0.5 * view_height / np.tan(0.5 * np.radians(style.yfov_deg))
+    position = target + np.array([0.0, -distance, 0.0])
+    width, height = (int(v) for v in style.size)
+    return PinholeCamera(tuple(float(v) for v in position), tuple(float(v) for v in target),
+                         float(np.radians(style.yfov_deg)), width, height)
+
+
 @dataclass(frozen=True)
 class FaceFrames:
     """Rendered face frames.
@@ -261,13 +273,7 @@ class FaceRenderer(RendererBase):
 
     def camera_for(self, face: FaceMotion) -> PinholeCamera:
         """A fixed close-up camera in front of the face at the clip's mean head translation."""
-        rest = self._head_mesh(face).rest
-        target, view_height = _head_framing(rest, self.style.head_fraction)
-        target = target + face.head_translation.mean(axis=0)
-        distance = 0.5 * view_height / np.tan(0.5 * np.radians(self.style.yfov_deg))
-        position = target + np.array([0.0, -distance, 0.0])
-        return PinholeCamera(tuple(float(v) for v in position), tuple(float(v) for v in target),
-                             float(np.radians(self.style.yfov_deg)), self.width, self.height)
+        return close_up_camera(self._head_mesh(face).rest, self.style, face.head_translation.mean(axis=0))
 
     def vertices(self, face: FaceMotion):
         """Yield ``(start, vertices)`` chunks: (b, K, 3) float32 world positions of the drawn sub-mesh."""

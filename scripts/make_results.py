@@ -1,20 +1,19 @@
 """Regenerate the results tables of docs/ from real runs, one sub-command per table (each writes its section of
 the page between its markers and keeps the rest, and the raw numbers as JSON under out/).
 
-    python scripts/make_results.py forecasting        # motion models: held-out forecasting, known-answer, bad input
+    python scripts/make_results.py forecasting        # the three papers' models on the 5-minute set
     python scripts/make_results.py card --checkpoint motion2video/weights/mtvae-add.safetensors \\
         --eval out/mtvae-add.eval.json --command "..."    # one model card (scripts/train_shipped.sh calls this)
-    python scripts/make_results.py corpus             # the corpus-trained body models against the 5-minute ones
-    python scripts/make_results.py known-answer       # the known-answer multimodal benchmark of one latent model
+    python scripts/make_results.py corpus             # LCP-VAE's learned prior: the 5-minute model against the shipped one
+    python scripts/make_results.py known-answer       # the known-answer multimodal benchmark of the latent models
     python scripts/make_results.py per-action         # every body model per action (ADE / FDE to zero-velocity)
-    python scripts/make_results.py five-minute-models # retrain the 5-minute models that per-action compares
-    python scripts/make_results.py skeleton           # the body models before / after the canonical skeleton
+    python scripts/make_results.py five-minute-models # retrain the 5-minute models (per-action, corpus, forecasting)
     python scripts/make_results.py skeleton-figure    # docs/images/skeletons.png
-    python scripts/make_results.py frames             # the body frame generator on the person, with baselines
+    python scripts/make_results.py frames             # the keypoint warp body generator, with baselines
     python scripts/make_results.py frames-analysis    # where a warp body generator's error comes from
     python scripts/make_results.py frames-real        # the frame generator driven by held-out real mocap
     python scripts/make_results.py transfer           # behaviour transfer and analogy (docs/results_transfer.md)
-    python scripts/make_results.py transfer-benchmark # known-answer transfer on real motion, liveliness
+    python scripts/make_results.py transfer-benchmark # liveliness of the sampled futures and of transfers
     python scripts/make_results.py face-sheet CLIP PHOTO... -o SHEET.png  # the photo's face over the generated heads
 
 ``python scripts/make_results.py SUB-COMMAND --help`` gives each one's options, cost and outputs.
@@ -24,13 +23,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import datetime
 import json
 import platform
 import shlex
 import subprocess
 import sys
 import tempfile
+import textwrap
 import time
 from collections import Counter
 from pathlib import Path
@@ -39,15 +38,13 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from motion2video.core.atomic import write_json, write_section
+from motion2video.core.atomic import check_section, write_json, write_section, write_text
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import (H36M_17, H36M_BONES_MM, H36M_LEG_MM, L_ANKLE, L_HIP, PELVIS, R_ANKLE, R_HIP,
                                          leg_length, proportion_ratios)
-from motion2video.data.dataset import (DEFAULT_FACE, DEFAULT_MOCAP, MULTIMODAL_SOURCE, DatasetConfig, WindowSet,
+from motion2video.data.dataset import (DEFAULT_MOCAP, MULTIMODAL_SOURCE, DatasetConfig, WindowSet,
                                        build_dataset, decode_samples)
 from motion2video.data.multimodal import MultimodalBenchmark, score_futures
-from motion2video.data.windows import metric_vectors
-from motion2video.evaluation import metrics as M
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
 from motion2video.formats.io import load_motion
 from motion2video.generator.image_baselines import run_baseline
@@ -58,51 +55,60 @@ from motion2video.generator.model import images_to_tensor, tensor_to_images
 from motion2video.generator.specs import default_spec
 from motion2video.generator.warp import WarpGenerator, warp_image
 from motion2video.models.base import MODEL_REGISTRY
-from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model
 from motion2video.models.training import TrainConfig, train_model
 from motion2video.stages.sampling import sample_futures
+from motion2video.apps.transfer import TransferResult, render_transfer
+from motion2video.evaluation import signatures as S
+from motion2video.evaluation.transfer_benchmark import MIN_RELATIVE_AMPLITUDE
+from motion2video.formats.video import write_image
+from motion2video.stages.clips import load_clip
+from motion2video.stages.latents import (ADAPT_STEPS, adapt_to_source, behavior_latents, behavior_model,
+                                         behavior_root, decode_sequences, encode_sequences, reenact, reenact_source,
+                                         rigid_bones)
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _wrap(paragraph: str) -> list[str]:
+    """The lines of a generated paragraph, broken as the hand-written text of docs/ is (at most 115 characters)."""
+    return textwrap.wrap(paragraph, width=115, break_long_words=False, break_on_hyphens=False)
+
+
 
 # ----------------------------------------------------------------------------------------------------------------
-# forecasting: The motion models' held-out forecasting, known-answer and bad-input tables of docs/results.md, from a real run.
+# forecasting: The three papers' models compared on the 5-minute set: held-out and known-answer numbers.
 # ----------------------------------------------------------------------------------------------------------------
 
 
-FORECASTING_DOC = """The motion models' held-out forecasting, known-answer and bad-input tables of docs/results.md, from a real run.
+FORECASTING_DOC = """The three papers' models on the 5-minute set: held-out forecasting and the known-answer benchmark.
 
-    python scripts/make_results.py forecasting            # after scripts/train_shipped.sh
+    python scripts/make_results.py forecasting --mm-steps 2000 --mm-steps-for cvae=4000 --mm-steps-for behavior=4000
     python scripts/make_results.py card --checkpoint motion2video/weights/mtvae-add.safetensors \\
         --eval out/mtvae-add.eval.json --command "..."    # one model card (train_shipped.sh calls this)
 
-``results`` does, in order (checkpoints it trains go to --runs, default runs/results, and are reused):
+The reference models are mtvae-add, lcpvae and behavior of --weights (default out/five_minute: the 72-clip,
+4.7-minute recipe retrained on today's joints by ``scripts/make_results.py five-minute-models``); only the
+clips their recorded split names are used. ``forecasting`` does, in order (checkpoints it trains go to --runs,
+default runs/results, and are reused):
 
-1. trains the comparison models of MT-VAE's Table 1 that are not shipped (pred-lstm, cvae, mtvae-concat)
-   with the shipped mtvae-add's sizes, steps and seed;
-2. evaluates every body model and the three baselines on the held-out test subjects (best of 50; DLow
-   metrics, MT-VAE's S-MSE / R-MSE / Parzen CLL, the behaviour paper's ASD / FSD, LCP's diversity /
-   quality / context), and the 2D and face models on their own test windows;
-3. trains every stochastic model briefly on the known-answer multimodal benchmark and scores mode
-   coverage and precision at K = 10;
-4. times sampling (scripts/bench.py sampling);
-5. runs every command on bad input and records the exit code and the one-line message.
+1. trains the comparison models of MT-VAE's Table 1 that are not among them (pred-lstm, cvae, mtvae-concat)
+   with mtvae-add's sizes, data, split, steps and seed;
+2. evaluates the six models and zero-velocity on the held-out test windows of that split (best of 50, stride
+   16): ADE, FDE, APD, and MT-VAE's R-MSE / S-MSE;
+3. trains every stochastic model on the known-answer multimodal benchmark (``--mm-steps``, seed 0) and scores
+   coverage and precision at K = 10.
 
-It writes the section between ``<!-- motion-models:begin -->`` and ``<!-- motion-models:end -->`` of docs/results.md
-(the rest of the file is kept) and the raw numbers to out/results_forecasting.json.
+It writes the table between ``<!-- motion-models:begin -->`` and ``<!-- motion-models:end -->`` of
+docs/results.md ("The three papers' models on the first 4.7 minutes") and the raw numbers to
+out/results_forecasting.json.
 
-Cost: about 26,000 training steps (3 x 2,000 comparison + 5 x 4,000 benchmark), two processes at a time,
-0.15-0.6 s per step on the shared 2-core machine: roughly 35-70 minutes, then ~5 minutes of evaluation.
-Checkpoints already in --runs are reused, so an interrupted run continues where it stopped.
+Cost: about 25 minutes on 2 cores with the page's options, two processes at a time. Checkpoints already in
+--runs are reused, so an interrupted run continues where it stopped.
 """
 
 
 FORECASTING_BEGIN, FORECASTING_END = "<!-- motion-models:begin -->", "<!-- motion-models:end -->"
-
-
-_forecasting_SHIPPED = ("mtvae-add", "mtvae-add-2d", "mtvae-add-face", "lcpvae", "behavior")
 
 
 TABLE1 = ("pred-lstm", "cvae", "mtvae-concat", "mtvae-add")
@@ -111,17 +117,13 @@ TABLE1 = ("pred-lstm", "cvae", "mtvae-concat", "mtvae-add")
 STOCHASTIC = ("cvae", "mtvae-concat", "mtvae-add", "lcpvae", "behavior")
 
 
+BODY_MODELS = ("pred-lstm", *STOCHASTIC)  # the table's rows, then zero-velocity
+
+
 MM_CONFIG = DatasetConfig(speed=0.0)  # benchmark clips are exactly one window long
 
 
-SPLIT_NOTE = (
-    "Split: the shipped models use `split_seed` 1, which holds out CMU subjects 131 and 16 and five single "
-    "non-CMU clips. The default seed 0 holds out only CMU subject 13, two thirds of whose frames are two long "
-    "takes of actions that occur nowhere in training (jump-and-reach on tiptoe, laughing); in development runs "
-    "on that split (hidden 128, 1500 steps) cvae / mtvae-add / lcpvae / behavior reached best-of-50 ADE "
-    "0.765 / 0.807 / 0.857 / 0.789 m against zero-velocity's 0.684 m: the models carry the walking-heavy "
-    "training data's motion into those unseen actions."
-)
+NUMBER_WORDS = ("no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine")
 
 
 def _forecasting_fmt(v, digits: int = 3) -> str:
@@ -132,24 +134,20 @@ def _forecasting_fmt(v, digits: int = 3) -> str:
     return f"{v:.{digits}f}"
 
 
-def _relative(gain: float) -> str:
-    """1 - ours / baseline as words: "23.4% lower" or "12.0% higher"."""
-    return f"{100 * gain:.1f}% lower" if gain >= 0 else f"{-100 * gain:.1f}% higher"
-
-
 def _forecasting_md_table(header: list[str], rows: list[list]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     lines += ["| " + " | ".join(_forecasting_fmt(c) for c in row) + " |" for row in rows]
     return "\n".join(lines)
 
 
-SHIPPED_DIR = [WEIGHTS_DIR]  # --weights replaces it (e.g. for a smoke run on other checkpoints)
+SHIPPED_DIR = [ROOT / "out" / "five_minute"]  # --weights replaces it
 
 
 def shipped_path(name: str) -> Path:
     path = SHIPPED_DIR[0] / f"{name}.safetensors"
     if not path.is_file():
-        raise SystemExit(f"missing shipped checkpoint {path}: run scripts/train_shipped.sh first")
+        raise InputError("missing reference checkpoint: run `python scripts/make_results.py five-minute-models` "
+                         "(or give --weights)", path)
     return path
 
 
@@ -162,7 +160,8 @@ def comparison_config(reference, model_name: str) -> dict:
 
 @dataclasses.dataclass(frozen=True)
 class TrainTask:
-    """One model to train for the results (rebuilt from its data source in a worker process)."""
+    """One model to train for the results (rebuilt from its data source in a worker process); with a ``split``,
+    only the clips it names are loaded."""
 
     model: str
     out: Path
@@ -178,7 +177,7 @@ def _run_task(task: TrainTask) -> str:
 
     torch.set_num_threads(1)
     split = None if task.split is None else Split.from_dict(task.split)
-    dataset = build_dataset(task.data, task.data_config, split=split)
+    dataset = build_dataset(task.data, task.data_config, split=split, recorded_only=split is not None)
     t0 = time.perf_counter()
     train_model(model_name=task.model, model_config=task.model_config, dataset=dataset, config=task.train_config,
                 out=task.out, progress=False)
@@ -206,7 +205,7 @@ def run_tasks(tasks: list[TrainTask], *, jobs: int) -> None:
 
 
 def body_tasks(runs: Path, *, steps: int | None = None) -> list[TrainTask]:
-    """pred-lstm, cvae and mtvae-concat with the shipped mtvae-add's sizes, data, split, steps and seed
+    """pred-lstm, cvae and mtvae-concat with the reference mtvae-add's sizes, data, split, steps and seed
     (``steps`` overrides the step count, for smoke runs)."""
     ref = load_model(shipped_path("mtvae-add"))
     train_cfg = TrainConfig(**ref.meta.training["config"])
@@ -219,7 +218,7 @@ def body_tasks(runs: Path, *, steps: int | None = None) -> list[TrainTask]:
 
 
 def multimodal_tasks(runs: Path, *, steps: int, steps_for: dict[str, int] | None = None) -> list[TrainTask]:
-    """Every stochastic model on the known-answer benchmark, shipped sizes, ``steps`` steps (``steps_for``
+    """Every stochastic model on the known-answer benchmark, reference sizes, ``steps`` steps (``steps_for``
     overrides it per model; such a checkpoint is named ``mm-NAME-STEPSsteps``), seed 0."""
     ref = load_model(shipped_path("mtvae-add"))
     tasks = []
@@ -235,273 +234,101 @@ def multimodal_tasks(runs: Path, *, steps: int, steps_for: dict[str, int] | None
     return tasks
 
 
-def body_section(runs: Path, record: dict, *, samples: int) -> str:
+def evaluate_body(runs: Path, record: dict, *, samples: int) -> tuple[dict, dict, dict]:
+    """The six models and zero-velocity on the held-out test windows of the reference split (recorded clips
+    only). Returns (results: name -> metrics, evaluate's protocol, the dataset summary)."""
     ref = load_model(shipped_path("mtvae-add"))
     cfg = ref.data_config
-    dataset = build_dataset(DEFAULT_MOCAP, cfg, split=ref.meta.split, stats=ref.stats)
-    paths = {"mtvae-add": shipped_path("mtvae-add"), "lcpvae": shipped_path("lcpvae"),
-             "behavior": shipped_path("behavior")}
+    dataset = build_dataset(DEFAULT_MOCAP, cfg, split=ref.meta.split, stats=ref.stats, recorded_only=True)
+    paths = {name: shipped_path(name) for name in ("mtvae-add", "lcpvae", "behavior")}
     paths.update({t.model: t.out for t in body_tasks(runs)})
     bundles = []
-    for name in ("pred-lstm", "cvae", "mtvae-concat", "mtvae-add", "lcpvae", "behavior"):
+    for name in BODY_MODELS:
         b = load_model(paths[name])
         if b.data_config != cfg or not np.allclose(b.stats.mean, ref.stats.mean):
-            raise SystemExit(f"{paths[name]} was trained on other data settings than the shipped mtvae-add")
+            raise InputError("trained on other data settings than the reference mtvae-add", paths[name])
         bundles.append(b)
-    bundles += [baseline_bundle(n, cfg, stats=ref.stats) for n in BASELINES]
+    bundles.append(baseline_bundle("zero-velocity", cfg, stats=ref.stats))
     test = dataset.windows("test", stride=16)
-    val = dataset.windows("val", stride=16)
     protocol = EvalProtocol(samples=samples, stride=16, split="test", seed=0)
     t0 = time.perf_counter()
-    result = evaluate_bundles(bundles, test, protocol=protocol, extended=True, val_windows=val)
-    extra = sample_metrics(bundles, dataset, test, samples=samples)
-    for name, row in extra.items():
-        result.results[name].update(row)
-    record["body3d"] = {**result.to_json(), "eval_seconds": time.perf_counter() - t0,
-                        "seeds": {b.name: b.meta.training.get("seed") for b in bundles if b.meta.training}}
-    res = result.results
-    learned = [b.name for b in bundles if b.kind != "baseline"]
-    best_ade = min(learned, key=lambda n: res[n]["ade"])
-    best_fde = min(learned, key=lambda n: res[n]["fde"])
-    zv = res["zero-velocity"]
-    checks = {
-        "best_ade_gain": 1.0 - res[best_ade]["ade"] / zv["ade"],
-        "best_fde_gain": 1.0 - res[best_fde]["fde"] / zv["fde"],
-        "best_ade_model": best_ade, "best_fde_model": best_fde,
-        "pred_lstm_apd": res["pred-lstm"]["apd"],
-        "stochastic_apd": {n: res[n]["apd"] for n in STOCHASTIC},
-        "r_mse_order": sorted(("mtvae-add", "mtvae-concat", "cvae"), key=lambda n: res[n]["r_mse"]),
-    }
-    record["body3d"]["checks"] = checks
-    p = result.protocol
-    lines = [
-        "### Body motion on held-out subjects (3D, DLow protocol)",
-        "",
-        f"Test clips (whole CMU subjects / clips never trained on): {', '.join(p['clips'])}; "
-        f"{p['windows']} windows of {p['observed']} observed + {p['future']} future frames at 25 fps, "
-        f"{p['stride']} frames apart; best of K = {samples}. Units: {p['units']}. MMADE/MMFDE: other test "
-        f"windows whose last observed pose is within {p['mm_threshold']} m (on average "
-        f"{p['mean_multimodal_futures']:.1f} futures per window). Seed 0 for sampling; training seeds "
-        f"{sorted(set(v for v in record['body3d']['seeds'].values() if v is not None))}.",
-        "",
-        _forecasting_md_table(["method", "ADE", "FDE", "MMADE", "MMFDE", "APD"],
-                 [[n, res[n]["ade"], res[n]["fde"], res[n]["mmade"], res[n]["mmfde"], res[n]["apd"]] for n in res]),
-        "",
-        SPLIT_NOTE if cfg.split_seed == 1 else "",
-        "",
-        f"- Best learned model by ADE: **{best_ade}**, {_relative(checks['best_ade_gain'])} than zero-velocity "
-        f"(target: at least 15% lower); by FDE: **{best_fde}**, {_relative(checks['best_fde_gain'])}.",
-        f"- APD: pred-lstm {checks['pred_lstm_apd']:.3f} (deterministic); stochastic models "
-        + ", ".join(f"{n} {v:.3f}" for n, v in checks["stochastic_apd"].items()) + ".",
-        "",
-        "MT-VAE metrics (mean squared error per coordinate, m^2, best of K; R-MSE decodes latents from the "
-        "recognition model q(z | observed, future), S-MSE from the prior; CLL: Parzen-window log-likelihood "
-        "of the test futures in nats per window, bandwidth chosen on the validation windows):",
-        "",
-        _forecasting_md_table(["method", "R-MSE", "S-MSE", "CLL", "bandwidth"],
-                 [[n, res[n].get("r_mse"), res[n]["s_mse"], res[n].get("cll"), res[n].get("parzen_bandwidth")]
-                  for n in res]),
-        "",
-        f"- R-MSE order found: {' < '.join(checks['r_mse_order'])} (MT-VAE Table 1: mtvae-add < mtvae-concat < cvae).",
-        "",
-        "Sample metrics (behaviour paper: ASD / FSD, nearest-other-sample distances, m; LCP-VAE: diversity = mean "
-        "pairwise per-frame distance, m; quality = accuracy of a real/fake ridge classifier on one sample per "
-        "window, 0.5 is best; context = mean class accuracy of an action classifier trained on ground-truth "
-        "training futures, over every sample of the test windows whose action occurs in training):",
-        "",
-        _forecasting_md_table(["method", "ASD", "FSD", "diversity", "quality", "context"],
-                 [[n, res[n].get("asd"), res[n].get("fsd"), res[n].get("diversity"), res[n].get("quality"),
-                   res[n].get("context")] for n in res]),
-    ]
-    return "\n".join(lines)
+    result = evaluate_bundles(bundles, test, protocol=protocol, extended=True)
+    record["body3d"] = {**result.to_json(), "eval_seconds": time.perf_counter() - t0, "data": dataset.summary}
+    return result.results, result.protocol, dataset.summary
 
 
-def sample_metrics(bundles, dataset, test, *, samples: int) -> dict[str, dict[str, float]]:
-    """ASD, FSD, diversity, quality and context per bundle (metric space of the layout)."""
-    layout = dataset.layout
-    obs_len = test.observed
-    horizon = test.features.shape[1] - obs_len
-    gt = metric_vectors(test.raw[:, obs_len:], layout)
-    train = dataset.windows("train")
-    train_gt = metric_vectors(train.raw[:, obs_len:], layout)
-    train_labels = np.array([lb or "none" for lb in train.labels])
-    test_labels = np.array([lb or "none" for lb in test.labels])
-    keep = np.isin(test_labels, train_labels)
+def score_multimodal(runs: Path, record: dict, *, steps: int, steps_for: dict[str, int] | None = None
+                     ) -> dict[str, tuple[dict, int]]:
+    """Known-answer coverage / precision / TV at K = 10 of every stochastic model: name -> (scores, steps)."""
+    test = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG).windows("test")
     out = {}
-    for b in bundles:
-        s = sample_futures(b.model, test.obs, num_samples=samples, horizon=horizon, seed=0)
-        pred = metric_vectors(b.stats.denormalize(s), layout)
-        row = {"diversity": M.diversity(pred), "quality": M.quality(gt, pred[:, 0])}
-        if samples >= 2:
-            row["asd"], row["fsd"] = M.asd(pred), M.fsd(pred)
-        if keep.any():
-            row["context"] = M.context(train_gt, train_labels, pred[keep], test_labels[keep])
-        out[b.name] = row
+    for task in multimodal_tasks(runs, steps=steps, steps_for=steps_for):
+        sc = score(task.out, test)
+        record.setdefault("multimodal", {})[task.model] = {**sc, "steps": task.train_config.steps}
+        out[task.model] = (sc, task.train_config.steps)
     return out
 
 
-def other_layout_section(record: dict, *, samples: int) -> str:
-    lines = []
-    for name, data, title in (("mtvae-add-2d", DEFAULT_MOCAP, "2D keypoints (virtual camera)"),
-                              ("mtvae-add-face", DEFAULT_FACE, "Face (ARKit coefficients + head pose)")):
-        b = load_model(shipped_path(name))
-        cfg = b.data_config
-        ds = build_dataset(data, cfg, split=b.meta.split, stats=b.stats)
-        test = ds.windows("test", stride=16)
-        bundles = [b] + [baseline_bundle(n, cfg, stats=b.stats) for n in BASELINES]
-        protocol = EvalProtocol(samples=samples, stride=16, split="test", seed=0)
-        result = evaluate_bundles(bundles, test, protocol=protocol, extended=True,
-                                  val_windows=ds.windows("val", stride=16))
-        record[name] = result.to_json()
-        res = result.results
-        p = result.protocol
-        label = {"mtvae-add": name}
-        lines += [
-            f"### {title}: `{name}`",
-            "",
-            f"{p['windows']} test windows from {', '.join(p['clips'])}; best of {samples}; units: {p['units']}; "
-            f"MM threshold {p['mm_threshold']}.",
-            "",
-            _forecasting_md_table(["method", "ADE", "FDE", "MMADE", "MMFDE", "APD", "R-MSE", "S-MSE"],
-                     [[label.get(n, n), r["ade"], r["fde"], r["mmade"], r["mmfde"], r["apd"], r.get("r_mse"),
-                       r["s_mse"]] for n, r in res.items()]),
-            "",
-        ]
-    return "\n".join(lines)
+def _held_out_clips(clips: list[str]) -> str:
+    """"CMU subjects 131 and 16 and two single clips" for the test clips ``clips`` (``source/NAME.bvh``)."""
+    subjects = list(dict.fromkeys(c.split("/")[1].split("_")[0] for c in clips if c.startswith("cmu/")))
+    others = sum(not c.startswith("cmu/") for c in clips)
+    parts = []
+    if subjects:
+        named = subjects[0] if len(subjects) == 1 else ", ".join(subjects[:-1]) + f" and {subjects[-1]}"
+        parts.append(f"CMU subject{'s' if len(subjects) > 1 else ''} {named}")
+    if others:
+        word = NUMBER_WORDS[others] if others < len(NUMBER_WORDS) else str(others)
+        parts.append(f"{word} single clip{'s' if others > 1 else ''}")
+    return " and ".join(parts)
 
 
-def multimodal_section(runs: Path, record: dict, *, steps: int, steps_for: dict[str, int] | None = None,
-                       samples: int = 10) -> str:
-    from motion2video.data.multimodal import MultimodalBenchmark, score_futures
-
-    cfg = MM_CONFIG
-    ds = build_dataset(MULTIMODAL_SOURCE, cfg)
-    test = ds.windows("test")
-    contexts = list(test.labels)
-    bench = MultimodalBenchmark(observed_frames=cfg.observed, future_frames=cfg.future, fps=cfg.fps)
-    rows, raw = [], {}
-    for task in multimodal_tasks(runs, steps=steps, steps_for=steps_for):
-        n = task.train_config.steps
-        raw[task.model if n == steps else f"{task.model} ({n} steps)"] = load_model(task.out)
-    for name in BASELINES[:1]:
-        raw[name] = baseline_bundle(name, cfg, stats=ds.stats)
-    for name, b in raw.items():
-        s = sample_futures(b.model, test.obs, num_samples=samples, horizon=cfg.future, seed=0)
-        world = decode_samples(s, config=cfg, stats=b.stats, frame=test.frames)  # (N, K, Tf, 17, 3)
-        sc = score_futures(world, contexts, benchmark=bench)
-        record.setdefault("multimodal", {})[name] = {"coverage": sc.coverage, "precision": sc.precision,
-                                                     "distribution_tv": sc.distribution_tv}
-        rows.append([name, sc.coverage, sc.precision, sc.distribution_tv])
-    best = max((r for r in rows if r[0].split(" (")[0] in STOCHASTIC), key=lambda r: min(r[1], r[2]))
-    lines = [
-        "### Known-answer multimodal benchmark",
-        "",
-        f"Procedural clips (motion2video/data/multimodal.py): the observed 16 frames show one mode (walk, stand, "
-        f"run), the 48 future frames one of its possible next modes with known probabilities. "
-        f"{len(ds.split.train)} training / {len(test)} test sequences; every model trained {steps} steps (unless the table says otherwise) on "
-        f"`--data {MULTIMODAL_SOURCE}` (seed 0), K = {samples} samples per test sequence, classified by the "
-        "nearest-template mode classifier. Coverage: share of the valid modes hit by at least one sample; "
-        "precision: share of samples in a valid mode; TV: total variation between sampled and true mode "
-        "frequencies.",
-        "",
-        _forecasting_md_table(["method", "coverage", "precision", "TV"], rows),
-        "",
-        f"- Best stochastic model: **{best[0]}** (coverage {best[1]:.3f}, precision {best[2]:.3f}; target: "
-        f">= 0.9 on both).",
-    ]
-    return "\n".join(lines)
-
-
-def speed_section(record: dict) -> str:
-    from bench import run_benchmark  # scripts/bench.py, beside this script
-
-    r = run_benchmark()
-    record["bench_sampling"] = r
-    return "\n".join([
-        "### Sampling speed",
-        "",
-        f"`python scripts/bench.py sampling --json OUT.json`: {r['samples']} futures of {r['horizon']} frames "
-        f"from mtvae-add ({r['weights']}), {r['threads']} thread: batched **{r['batched_ms']:.1f} ms**, one at a "
-        f"time {r['loop_ms']:.1f} ms, batched_vs_loop = **{r['batched_vs_loop']:.1f}** (target >= 10).",
-    ])
-
-
-def bad_input_section(record: dict, tmp: Path) -> str:
-    """Run every command on bad input; record exit codes and the one-line messages."""
-    clip = str(DEFAULT_MOCAP / "cmu" / "131_02.bvh")
-    short = str(DEFAULT_MOCAP / "mass" / "mass_run.bvh")
-    frames_ckpt = tmp / "frames_kind.safetensors"
-    from safetensors.torch import save_file
-
-    save_file({"w": torch.zeros(1)}, str(frames_ckpt), metadata={"format": "motion2video-frames"})
-    missing = str(tmp / "missing.safetensors")
-    ok = str(shipped_path("mtvae-add"))
-    cases = [
-        ("sample", "no such checkpoint", ["sample", "--model", missing, clip, "--samples", "3", "-o", str(tmp / "a.mp4")]),
-        ("sample", "wrong kind", ["sample", "--model", str(frames_ckpt), clip, "--samples", "3", "-o", str(tmp / "a.mp4")]),
-        ("sample", "clip too short", ["sample", "--model", ok, short, "--samples", "3", "-o", str(tmp / "a.mp4")]),
-        ("sample", "K < 1", ["sample", "--model", ok, clip, "--samples", "0", "-o", str(tmp / "a.mp4")]),
-        ("evaluate", "no such checkpoint", ["evaluate", "--model", missing, "--data", clip]),
-        ("evaluate", "wrong kind", ["evaluate", "--model", str(frames_ckpt), "--data", clip]),
-        ("evaluate", "clip too short", ["evaluate", "--model", ok, "--data", short]),
-        ("evaluate", "K < 1", ["evaluate", "--model", ok, "--data", clip, "--samples", "0"]),
-        ("train", "unknown model", ["train", "--model", "nope", "--data", str(DEFAULT_MOCAP), "-o", str(tmp / "t.safetensors")]),
-        ("train", "a baseline", ["train", "--model", "zero-velocity", "--data", str(DEFAULT_MOCAP), "-o", str(tmp / "t.safetensors")]),
-        ("train", "clip too short", ["train", "--model", "cvae", "--data", short, "-o", str(tmp / "t.safetensors")]),
-        ("train", "resume without a run", ["train", "--model", "cvae", "--data", clip, "-o", str(tmp / "t.safetensors"), "--resume"]),
-    ]
+def forecasting_section(results: dict, protocol: dict, summary: dict, multimodal: dict[str, tuple[dict, int]], *,
+                        command: str, samples: int, split_seed: int, mm_steps: int) -> str:
+    """The block between the motion-models markers of docs/results.md (no heading: the page's stands above it)."""
     rows = []
-    for command, case, argv in cases:
-        proc = subprocess.run([sys.executable, "-m", "motion2video.cli", *argv], capture_output=True, text=True,
-                              cwd=ROOT)
-        message = proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else ""
-        one_line = len(proc.stderr.strip().splitlines()) == 1
-        rows.append([command, case, str(proc.returncode), "yes" if one_line else "NO", f"`{message}`"])
-        record.setdefault("bad_input", []).append({"command": command, "case": case, "exit": proc.returncode,
-                                                   "one_line": one_line, "message": message})
-    leftovers = [p.name for p in tmp.iterdir() if p.name not in ("frames_kind.safetensors",)]
-    return "\n".join([
-        "### Bad input",
-        "",
-        _forecasting_md_table(["command", "case", "exit code", "one line", "message"], rows),
-        "",
-        f"Output files left behind by the failed commands: {', '.join(leftovers) if leftovers else 'none'}.",
-    ])
+    for name in (*BODY_MODELS, "zero-velocity"):
+        r = results[name]
+        known = "-"
+        if name in multimodal:
+            sc, n = multimodal[name]
+            known = f"{sc['coverage']:.3f} / {sc['precision']:.3f}" + (f" ({n} steps)" if n != mm_steps else "")
+        rows.append(f"| {name} | {r['ade']:.3f} | {r['fde']:.3f} | {r['apd']:.3f} | {_forecasting_fmt(r.get('r_mse'))} "
+                    f"| {_forecasting_fmt(r.get('s_mse'))} | {known} |")
+    minutes = summary["frames"] / summary["fps"] / 60
+    text = (f"The paper reproductions (pred-lstm, cVAE, MT-VAE concat / add, LCP-VAE, the behaviour model) compared "
+            f"on the first {summary['clips']} clips ({minutes:.1f} minutes, `split_seed` {split_seed}: "
+            f"{protocol['windows']} windows of {_held_out_clips(protocol['clips'])}; best of {samples}, metres). "
+            f"`{command}` trains them all (about 25 minutes on 2 cores):")
+    return "\n".join([*_wrap(text), "",
+                      "| method | ADE | FDE | APD | R-MSE | S-MSE | known-answer coverage / precision |",
+                      "|---|---:|---:|---:|---:|---:|---|", *rows])
 
 
 def cmd_results(args: argparse.Namespace) -> int:
+    check_section(args.doc, FORECASTING_BEGIN, FORECASTING_END)
     torch.set_num_threads(1)
     SHIPPED_DIR[0] = Path(args.weights)
     runs = Path(args.runs)
     runs.mkdir(parents=True, exist_ok=True)
     record: dict = {"started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t0 = time.perf_counter()
-    sections = ["## Stochastic motion generators\n\n"
-                f"Regenerate with `python scripts/make_results.py {' '.join(sys.argv[1:]) or 'forecasting'}` after "
-                "`scripts/train_shipped.sh` (numbers below are from one real CPU run; checkpoints in "
-                f"motion2video/weights, comparison models in {args.runs}/, trained by the first run of this "
-                "command and reused by later ones: training them all takes about 25 minutes on 2 cores)."]
-    t_train = time.perf_counter()
     steps_for = dict((name, int(n)) for name, n in (item.split("=") for item in args.mm_steps_for))
     run_tasks(body_tasks(runs, steps=args.body_steps)
               + multimodal_tasks(runs, steps=args.mm_steps, steps_for=steps_for), jobs=args.jobs)
-    record["training_seconds"] = time.perf_counter() - t_train
-    sections.append(body_section(runs, record, samples=args.samples))
-    sections.append(other_layout_section(record, samples=args.samples))
-    sections.append(multimodal_section(runs, record, steps=args.mm_steps, steps_for=steps_for))
-    sections.append(speed_section(record))
-    tmp = runs / "bad_input"
-    tmp.mkdir(exist_ok=True)
-    for p in tmp.iterdir():
-        p.unlink()
-    sections.append(bad_input_section(record, tmp))
+    record["training_seconds"] = time.perf_counter() - t0
+    results, protocol, summary = evaluate_body(runs, record, samples=args.samples)
+    multimodal = score_multimodal(runs, record, steps=args.mm_steps, steps_for=steps_for)
+    command = "python scripts/make_results.py forecasting" + "".join(
+        f" --{k.replace('_', '-')} {getattr(args, k)}" for k in ("weights", "samples", "mm_steps", "body_steps")
+        if getattr(args, k) != args.default_of(k)) + "".join(f" --mm-steps-for {v}" for v in args.mm_steps_for)
+    split_seed = load_model(shipped_path("mtvae-add")).data_config.split_seed
+    write_section(args.doc, FORECASTING_BEGIN, FORECASTING_END, forecasting_section(
+        results, protocol, summary, multimodal, command=command, samples=args.samples, split_seed=split_seed,
+        mm_steps=args.mm_steps))
     record["wall_time_s"] = time.perf_counter() - t0
-    sections.append(f"\n_Generated {record['started']} in {record['wall_time_s'] / 60:.1f} min._")
-    write_section(args.doc, FORECASTING_BEGIN, FORECASTING_END, "\n\n".join(part.strip() for part in sections))
-    out = Path(args.json)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(record, indent=2, default=str) + "\n")
-    print(f"wrote {args.doc} and {out}")
+    write_json(args.json, json.loads(json.dumps(record, default=str)))
+    print(f"wrote {args.doc} and {args.json}")
     return 0
 
 
@@ -557,7 +384,14 @@ def cmd_card(args: argparse.Namespace) -> int:
         "",
     ]
     out = WEIGHTS_DIR / f"{path.stem}.md" if args.out is None else Path(args.out)
-    out.write_text("\n".join(lines))
+    # The data licence block is scripts/shipped_licences.py's (write_section needs its markers): an existing
+    # card's is kept, a new card gets the empty marker pair for it to fill.
+    from motion2video.data.licences import CARD_BEGIN, CARD_END
+
+    licence = f"{CARD_BEGIN}\n{CARD_END}"
+    if out.is_file() and CARD_BEGIN in (old := out.read_text()) and CARD_END in old.split(CARD_BEGIN, 1)[1]:
+        licence = CARD_BEGIN + old.split(CARD_BEGIN, 1)[1].split(CARD_END, 1)[0] + CARD_END
+    write_text(out, "\n".join(lines) + "\n" + licence + "\n")
     print(f"wrote {out}")
     return 0
 
@@ -565,7 +399,7 @@ def cmd_card(args: argparse.Namespace) -> int:
 def forecasting_main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=FORECASTING_DOC.splitlines()[0])
     sub = p.add_subparsers(dest="what", required=True)
-    r = sub.add_parser("forecasting", help="regenerate the motion-model section of docs/results.md")
+    r = sub.add_parser("forecasting", help="regenerate the three papers' models table of docs/results.md")
     r.add_argument("--runs", default="runs/results", help="where comparison models are trained / reused")
     r.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     r.add_argument("--json", default=str(ROOT / "out" / "results_forecasting.json"))
@@ -576,10 +410,12 @@ def forecasting_main(argv: list[str] | None = None) -> int:
     r.add_argument("--mm-steps-for", action="append", default=[], metavar="MODEL=STEPS",
                    help="train one model longer (or shorter) on the benchmark, e.g. cvae=4000 (repeatable)")
     r.add_argument("--body-steps", type=int, default=None,
-                   help="steps of the comparison models (default: the shipped mtvae-add's; lower only for smoke runs)")
+                   help="steps of the comparison models (default: the reference mtvae-add's; lower only for smoke runs)")
     r.add_argument("--jobs", type=int, default=2, help="models trained in parallel (one torch thread each)")
-    r.add_argument("--weights", default=str(WEIGHTS_DIR), help="folder of the shipped checkpoints")
-    r.set_defaults(run=cmd_results)
+    r.add_argument("--weights", default=str(SHIPPED_DIR[0]),
+                   help="folder of the reference mtvae-add, lcpvae and behavior (default: the 5-minute models that "
+                   "`make_results.py five-minute-models` writes)")
+    r.set_defaults(run=cmd_results, default_of=r.get_default)
     c = sub.add_parser("card", help="write a model card for a trained checkpoint")
     c.add_argument("--checkpoint", required=True)
     c.add_argument("--eval", required=True, help="the JSON of `motion2video evaluate --json`")
@@ -595,41 +431,26 @@ def forecasting_main(argv: list[str] | None = None) -> int:
 # ----------------------------------------------------------------------------------------------------------------
 
 
-CORPUS_DOC = """The body models trained on the whole corpus, against the 5-minute models they replace.
+CORPUS_DOC = """LCP-VAE's learned prior: the 5-minute model against the corpus model that ships.
 
-    python scripts/make_results.py corpus                 # after scripts/train_shipped.sh
-    python scripts/make_results.py corpus --skip-known-answer   # only the held-out evaluation and pictures
+    python scripts/make_results.py corpus     # after scripts/train_shipped.sh and make_results.py five-minute-models
 
-Writes the section between ``<!-- corpus-models:begin -->`` and ``<!-- corpus-models:end -->`` of
-docs/results.md, docs/images/ade_per_frame_corpus.png, docs/images/futures_heldout_sheet.png and the raw
-numbers to out/results_corpus.json. In order:
-
-1. every shipped 3D body model trained on the corpus (mtvae-add, mtvae-add-dlow, lcpvae, behavior) and the
-   three baselines on the held-out test subjects (best of 50, DLow protocol, 16 + 48 frames at 25 fps),
-   with ratios to zero-velocity, per action, and the ADE-per-frame plot;
-2. the 5-minute (72-clip) models, read from git (``--old-rev``), against the new ones on the same windows:
-   the held-out clips that neither ever trained on;
-3. the known-answer multimodal benchmark (K = 10) for mtvae-add and lcpvae with the shipped configs, and a
-   DLow sampler on the benchmark's mtvae-add (trained into --runs and reused);
-4. a contact sheet of K sampled futures for three held-out clips of different actions.
+For the 5-minute lcpvae (the 72-clip recipe of git 805c753 with the paper's weights, retrained on today's joints
+by ``scripts/make_results.py five-minute-models``; --five-minute) and the shipped corpus lcpvae (--weights), each
+on its held-out test windows of the corpus's pinned test subjects (the 5-minute model's test split keeps out
+CMU subjects 5, 6 and 7, which it trained on): the mean width sigma_c of q(z_c | obs), its KL to N(0, I), and
+APD of 50 futures with z from the learned prior and from N(0, I). Writes the table between
+``<!-- corpus-models:begin -->`` and ``<!-- corpus-models:end -->`` of docs/results.md ("LCP-VAE's learned
+prior") and the raw numbers to out/results_corpus.json. A few minutes on one thread.
 """
 
 CORPUS_BEGIN, CORPUS_END = "<!-- corpus-models:begin -->", "<!-- corpus-models:end -->"
-
-
-NEW = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior")
 
 
 OLD = ("mtvae-add", "lcpvae", "behavior")
 
 
 OLD_REV = "805c753"  # the last commit whose motion2video/weights held the 72-clip (5-minute) models
-
-
-SHEET_CLIPS = (("cmu/07_01.bvh", "walk", 20), ("cmu/131_03.bvh", "hop", 40), ("acrnn/indian_04.bvh", "Indian dance", 600))
-
-
-_corpus_TARGETS = "best ADE <= 0.62x, best FDE <= 0.50x, every stochastic ADE <= 0.75x zero-velocity, APD > 1.5 m"
 
 
 def _corpus_fmt(v, digits: int = 3) -> str:
@@ -654,167 +475,24 @@ def _corpus_subset(windows: WindowSet, keep: np.ndarray) -> WindowSet:
                                labels=tuple(windows.labels[i] for i in idx))
 
 
-def old_checkpoints(rev: str, out: Path) -> dict[str, Path]:
-    """The 5-minute models of git revision ``rev``, written to ``out`` (reused when present)."""
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {}
-    for name in OLD:
-        path = out / f"{name}-5min.safetensors"
-        if not path.is_file():
-            blob = subprocess.run(["git", "show", f"{rev}:motion2video/weights/{name}.safetensors"], cwd=ROOT,
-                                  capture_output=True, check=True).stdout
-            path.write_bytes(blob)
-        paths[name] = path
-    return paths
-
-
-def ratio_rows(res: dict, names: list[str]) -> list[list]:
-    zv = res["zero-velocity"]
-    return [[n, res[n]["ade"], res[n]["fde"], res[n]["ade"] / zv["ade"], res[n]["fde"] / zv["fde"],
-             res[n]["mmade"], res[n]["mmfde"], res[n]["apd"]] for n in names]
-
-
-RATIO_HEADER = ["method", "ADE", "FDE", "ADE / ZV", "FDE / ZV", "MMADE", "MMFDE", "APD"]
-
-
-def heldout_section(weights: Path, record: dict, *, samples: int, images: Path) -> tuple[str, dict, WindowSet]:
-    from motion2video.evaluation.plots import plot_ade_per_frame
-
-    new = {n: load_model(weights / f"{n}.safetensors") for n in NEW if (weights / f"{n}.safetensors").is_file()}
-    ref = new["mtvae-add"]
-    same = [b for b in new.values() if b.data_config == ref.data_config and b.meta.split == ref.meta.split]
-    others = [n for n, b in new.items() if b not in same]
-    dataset = build_dataset(DEFAULT_MOCAP, ref.data_config, split=ref.meta.split, stats=ref.stats)
-    test = dataset.windows("test", stride=16)
-    protocol = EvalProtocol(samples=samples, stride=16, split="test", seed=0)
-    bundles = same + [baseline_bundle(n, ref.data_config, stats=ref.stats) for n in BASELINES]
-    t0 = time.perf_counter()
-    result = evaluate_bundles(bundles, test, protocol=protocol)
-    record["heldout"] = {**result.to_json(), "seconds": time.perf_counter() - t0}
-    res = result.results
-    learned = [b.label for b in same]
-    stochastic = [b.label for b in same if b.kind == "stochastic"]
-    zv = res["zero-velocity"]
-    best_ade = min(learned, key=lambda n: res[n]["ade"])
-    best_fde = min(learned, key=lambda n: res[n]["fde"])
-    plot = plot_ade_per_frame(result.ade_per_frame, images / "ade_per_frame_corpus.png", fps=ref.data_config.fps,
-                              units="m", best_of=samples,
-                              title=f"held-out subjects: {len(test)} windows from {len(set(test.clip_names))} clips")
-    # per action
-    labels = np.array([str(lab) for lab in test.labels])
-    per_action = {}
-    action_rows = []
-    for action in sorted(set(labels), key=lambda a: -int((labels == a).sum())):
-        part = _corpus_subset(test, labels == action)
-        r = evaluate_bundles(bundles[:len(same)] + bundles[len(same):len(same) + 1], part, protocol=protocol).results
-        per_action[action] = {**r, "windows": {"count": float(len(part))}}
-        action_rows.append([action, int(len(part))] + [r[n]["ade"] / r["zero-velocity"]["ade"] for n in learned])
-    record["per_action"] = per_action
-    checks = {
-        "best_ade_ratio": res[best_ade]["ade"] / zv["ade"],
-        "best_fde_ratio": res[best_fde]["fde"] / zv["fde"],
-        "worst_stochastic_ade_ratio": max(res[n]["ade"] / zv["ade"] for n in stochastic),
-        "min_stochastic_apd": min(res[n]["apd"] for n in stochastic),
-    }
-    record["checks"] = checks
-    met = lambda ok: "met" if ok else "**missed**"  # noqa: E731
-    lines = [
-        "### Held-out subjects, models trained on the corpus",
-        "",
-        f"{len(test)} windows (16 observed + 48 future frames at 25 fps, 16 frames apart) from "
-        f"{len(set(test.clip_names))} clips of the pinned test subjects (CMU 2/5/6/7 and the benchmark's walking, "
-        "131, 140, 94 Indian dance: an action no training clip shows); best of "
-        f"{samples}; metres, root-relative joints (L2 over 16 joints x 3 as one vector); seed 0. "
-        f"Reproduce one row: `motion2video evaluate --model {' --model '.join(learned)} --data ../shared/data/mocap "
-        f"--plot out/ade.png`.",
-        "",
-        _corpus_md_table(RATIO_HEADER, ratio_rows(res, learned + list(BASELINES))),
-        "",
-        f"- Best ADE: **{best_ade}**, {checks['best_ade_ratio']:.3f}x zero-velocity (target <= 0.62: "
-        f"{met(checks['best_ade_ratio'] <= 0.62)}); best FDE: **{best_fde}**, {checks['best_fde_ratio']:.3f}x "
-        f"(target <= 0.50: {met(checks['best_fde_ratio'] <= 0.50)}).",
-        f"- Every stochastic model's ADE <= 0.75x: worst {checks['worst_stochastic_ade_ratio']:.3f}x "
-        f"({met(checks['worst_stochastic_ade_ratio'] <= 0.75)}); APD > 1.5 m: lowest "
-        f"{checks['min_stochastic_apd']:.2f} m ({met(checks['min_stochastic_apd'] > 1.5)}).",
-    ]
-    if others:
-        lines.append(f"- Not in this table (trained on other data settings): {', '.join(others)}; see its model card.")
-    lines += [
-        "",
-        f"![ADE per future frame](images/{plot.name})",
-        "",
-        "ADE / zero-velocity per action of the held-out windows (lower is better; 1.0 = standing still):",
-        "",
-        _corpus_md_table(["action", "windows"] + learned, action_rows),
-    ]
-    return "\n".join(lines), new, test
-
-
-def old_vs_new_section(weights: Path, runs: Path, rev: str, test: WindowSet, new: dict, record: dict, *,
-                       samples: int) -> str:
-    """The 5-minute models against the corpus models on the held-out windows neither trained on."""
-    old_paths = old_checkpoints(rev, runs / "old")
-    old = {n: load_model(p) for n, p in old_paths.items()}
-    ref_old = old["mtvae-add"]
-    old_ds = build_dataset(DEFAULT_MOCAP, ref_old.data_config, split=ref_old.meta.split, stats=ref_old.stats)
-    old_test = old_ds.windows("test", stride=16)
-    shared = sorted(set(old_test.clip_names) & set(test.clip_names))
-    old_sub = _corpus_subset(old_test, np.isin(old_test.clip_names, shared))
-    new_sub = _corpus_subset(test, np.isin(test.clip_names, shared))
-    if len(old_sub) != len(new_sub) or not np.allclose(old_sub.raw, new_sub.raw, atol=1e-6):
-        raise SystemExit("the old and new windows of the shared clips differ: the comparison would not be fair")
-    protocol = EvalProtocol(samples=samples, stride=16, split="test", seed=0)
-    old_b = [b for b in old.values() if b.data_config == ref_old.data_config and b.meta.split == ref_old.meta.split]
-    r_old = evaluate_bundles(old_b + [baseline_bundle("zero-velocity", ref_old.data_config, stats=ref_old.stats)],
-                             old_sub, protocol=protocol).results
-    ref_new = new["mtvae-add"]
-    new_b = [b for b in new.values() if b.data_config == ref_new.data_config and b.meta.split == ref_new.meta.split]
-    r_new = evaluate_bundles(new_b + [baseline_bundle("zero-velocity", ref_new.data_config, stats=ref_new.stats)],
-                             new_sub, protocol=protocol).results
-    record["old_vs_new"] = {"clips": shared, "windows": len(new_sub), "old": r_old, "new": r_new}
-    rows = []
-    for name in [b.label for b in old_b]:
-        key = name.replace("-5min", "")
-        row = [key, r_old[name]["ade"] / r_old["zero-velocity"]["ade"], r_old[name]["fde"] / r_old["zero-velocity"]["fde"],
-               r_old[name]["apd"]]
-        if key in r_new:
-            row += [r_new[key]["ade"] / r_new["zero-velocity"]["ade"], r_new[key]["fde"] / r_new["zero-velocity"]["fde"],
-                    r_new[key]["apd"]]
-        else:
-            row += ["-", "-", "-"]
-        rows.append(row)
-    for name in [b.label for b in new_b if b.label not in {r[0] for r in rows}]:
-        rows.append([name, "-", "-", "-", r_new[name]["ade"] / r_new["zero-velocity"]["ade"],
-                     r_new[name]["fde"] / r_new["zero-velocity"]["fde"], r_new[name]["apd"]])
-    return "\n".join([
-        "### The effect of the data: 5-minute models against corpus models",
-        "",
-        f"The 72-clip models (4.7 minutes; git revision {rev}) and the corpus models on the same {len(new_sub)} "
-        f"windows: the held-out clips that neither set ever trained on ({len(shared)} clips: "
-        f"{', '.join(shared[:6])}{', ...' if len(shared) > 6 else ''}). Ratios to zero-velocity on those windows "
-        f"(zero-velocity ADE {r_new['zero-velocity']['ade']:.3f} m, FDE {r_new['zero-velocity']['fde']:.3f} m); best of "
-        f"{samples}. The 5-minute models' own table (their held-out clips) is kept in the motion-models section above.",
-        "",
-        _corpus_md_table(["model", "5 min: ADE / ZV", "5 min: FDE / ZV", "5 min: APD", "corpus: ADE / ZV", "corpus: FDE / ZV",
-                  "corpus: APD"], rows),
-    ])
-
-
-def lcp_diagnosis(old: Path, new: Path, windows: WindowSet, record: dict, *, samples: int = 50) -> str:
-    """Why the 5-minute LCP-VAE collapsed: the width of its learned prior q(z_c | obs), and APD when the same
-    decoder samples z from the learned prior or from N(0, I)."""
+def lcp_diagnosis(old: Path, new: Path, clips: set[str], record: dict, *, samples: int = 50) -> str:
+    """The width of the learned prior q(z_c | obs) of the 5-minute LCP-VAE (``old``) and the shipped one
+    (``new``), its KL to N(0, I), and APD when the same decoder samples z from the learned prior or from
+    N(0, I); each model on its own held-out test windows (stride 16) of ``clips``. Returns the page's block."""
     from motion2video.evaluation import metrics as M
     from motion2video.data.windows import metric_vectors
     from motion2video.models.blocks import repeat_batch
 
+    defaults = {f.name: f.default for f in dataclasses.fields(MODEL_REGISTRY["lcpvae"].config_cls)}
     rows = []
-    for label, path in (("5 min (cs_kl_weight 1, teacher forcing 1000 steps)", old),
-                        ("corpus (cs_kl_weight 4, teacher forcing 300 steps)", new)):
+    for path, shipped in ((old, False), (new, True)):
         b = load_model(path)
+        config = {**defaults, **b.meta.config}
+        label = (f"`cs_kl_weight` {config['cs_kl_weight']:g}, teacher forcing {config['teacher_forcing_steps']} steps"
+                 + (" (shipped)" if shipped else ""))
         ds = build_dataset(DEFAULT_MOCAP, b.data_config, split=b.meta.split, stats=b.stats)
         ws = ds.windows("test", stride=16)
-        keep = np.isin(ws.clip_names, sorted(set(windows.clip_names)))
-        ws = _corpus_subset(ws, keep)
+        ws = _corpus_subset(ws, np.isin(ws.clip_names, sorted(clips)))
         obs = torch.from_numpy(ws.obs.astype(np.float32))
         gen = torch.Generator().manual_seed(0)
         with torch.no_grad():
@@ -835,210 +513,36 @@ def lcp_diagnosis(old: Path, new: Path, windows: WindowSet, record: dict, *, sam
         record.setdefault("lcp_diagnosis", {})[label] = row
         rows.append([label, row["sigma_c_mean"], row["kl_cs_nats"], row["apd_learned_prior"], row["apd_standard_normal"]])
     return "\n".join([
-        "### Why LCP-VAE collapsed, and the fix",
+        "On the held-out test windows each model did not train on (`python scripts/make_results.py corpus`; APD of",
+        f"{samples} futures):",
         "",
-        "At inference LCP-VAE samples z from its learned conditional prior q(z_c | obs) (Algorithm 2). In the "
-        "5-minute model that prior is narrow: the CS-VAE must also reconstruct the 16 observed frames from z_c "
-        "(a summed MSE over 16 x 51 features), which pays far more than the KL to N(0, I) that keeps z_c wide, "
-        "so sigma_c shrinks and every sample decodes nearly the same future. The decoder itself is not "
-        "collapsed: fed z ~ N(0, I) it produces diverse futures. The corpus model weights that KL by "
-        "`cs_kl_weight` = 4 and ends teacher forcing after 300 steps (sampling decodes free-running). Same "
-        "held-out windows as the table above:",
-        "",
-        _corpus_md_table(["model", "mean sigma_c", "KL of q(z_c given obs) to N(0, I), nats", "APD, learned prior (m)",
-                  "APD, z ~ N(0, I) (m)"], rows),
+        _corpus_md_table(["prior", "mean sigma_c", "KL of q(z_c given obs) to N(0, I), nats", "APD, learned prior (m)",
+                          "APD, z ~ N(0, I) (m)"], rows),
     ])
-
-
-def known_answer_section(weights: Path, runs: Path, record: dict, *, steps: int, dlow_steps: int,
-                         samples: int = 10) -> str:
-    """mtvae-add and lcpvae (shipped configs) and DLow on the benchmark's mtvae-add: coverage / precision."""
-
-    ds = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG)
-    test = ds.windows("test")
-    trained = {}
-    for name in ("mtvae-add", "lcpvae"):
-        base, dlow = train_with_dlow(name, load_model(weights / f"{name}.safetensors").meta.config, runs,
-                                     steps=steps, dlow_steps=dlow_steps, samples=samples)
-        trained[name], trained[f"{name} + dlow"] = base, dlow
-    rows = []
-    for name in ("mtvae-add", "lcpvae", "mtvae-add + dlow", "lcpvae + dlow"):
-        sc = score(trained[name], test, samples)
-        record.setdefault("known_answer", {})[name] = sc
-        rows.append([name, sc["coverage"], sc["precision"], sc["distribution_tv"]])
-    return "\n".join([
-        "### Known-answer multimodal benchmark (shipped configs)",
-        "",
-        f"`--data {MULTIMODAL_SOURCE}`: {len(ds.split.train)} training / {len(test)} test sequences whose future "
-        f"is one of the observed mode's known next modes; mtvae-add and lcpvae with the shipped checkpoints' "
-        f"configs, {steps} steps, seed 0; DLow ({dlow_steps} steps, K = {samples} maps) on each; K = {samples}. "
-        "Coverage: share of valid modes hit by a sample; precision: share of samples in a valid mode; TV: total "
-        "variation between sampled and true mode frequencies. Target: coverage and precision >= 0.9 for "
-        "mtvae-add and lcpvae.",
-        "",
-        _corpus_md_table(["model", "coverage", "precision", "TV"], rows),
-    ])
-
-
-def sheet_section(new: dict, images: Path, *, samples: int = 5) -> str:
-    """Observed, recorded and K sampled futures of three held-out clips (skeletons, one camera per clip)."""
-    from motion2video.core.atomic import atomic_output
-    from motion2video.stages.sampling import forecast
-    from motion2video.apps.sample import load_clip_for
-    from motion2video.formats.video import GREEN, RED, add_border, grid
-    from motion2video.core.camera import fit_camera
-    from renderers.skeleton import SkeletonRenderer, SkeletonStyle
-
-    bundle = new.get("mtvae-add-dlow") or new["mtvae-add"]
-    size, columns = 160, 6
-    cells, labels = [], []
-    blank = np.zeros((size, size, 3), np.uint8)
-    for rel, action, start in SHEET_CLIPS:
-        clip = load_clip_for(bundle, DEFAULT_MOCAP / rel)
-        start = max(0, min(start, len(clip) - bundle.data_config.length))
-        fc = forecast(bundle, clip, num_samples=samples, start=start, seed=0)
-        obs_n, fut_n = fc.observed.shape[0], fc.futures.shape[1]
-        truth = clip[start + obs_n:start + obs_n + fut_n].astype(np.float32)
-        camera = fit_camera(np.concatenate([fc.observed.reshape(-1, 3), fc.futures.reshape(-1, 3),
-                                            truth.reshape(-1, 3)]), size, size, margin=0.1)
-        pick = np.linspace(0, fut_n - 1, columns).round().astype(int)
-        with SkeletonRenderer(style=SkeletonStyle(size=(size, size))) as r:
-            obs = r.render(fc.observed, camera=camera)
-            rows = [("recorded", r.render(truth, camera=camera))] + [
-                (f"sample {k + 1}", r.render(f, camera=camera)) for k, f in enumerate(fc.futures)]
-        for i, t in enumerate(np.linspace(0, obs_n - 1, columns - 1).round().astype(int)):
-            cells.append(add_border(obs[t], GREEN, 3))
-            labels.append(f"{action}: obs {t}" if i == 0 else f"obs {t}")
-        cells.append(blank)
-        labels.append(rel)
-        for name, frames in rows:
-            for j, t in enumerate(pick):
-                cells.append(add_border(frames[t], RED if name != "recorded" else (255, 255, 255), 3))
-                labels.append(f"{name} +{t + 1}" if j == 0 else f"+{t + 1}")
-    sheet = grid([c[None] for c in cells], labels, columns)[0]
-    out = images / "futures_heldout_sheet.png"
-    import imageio.v3 as iio
-
-    with atomic_output(out) as tmp:
-        iio.imwrite(tmp, sheet, extension=".png")
-    return "\n".join([
-        "### K futures of three held-out clips",
-        "",
-        f"`{bundle.label}`, {samples} samples each (seed 0) for a walk, a hop and an Indian dance of the test "
-        "subjects: green = observed frames, white = the recorded future, red = samples (frames +1..+48 at 25 fps).",
-        "",
-        f"![held-out futures](images/{out.name})",
-    ])
-
-
-def tried_section(record: dict) -> str:
-    """What was changed, what each change measured, and where the remaining error is (from ``record``)."""
-    ov = record["old_vs_new"]
-    zv_old, zv_new = ov["old"]["zero-velocity"], ov["new"]["zero-velocity"]
-    old_add = ov["old"]["mtvae-add-5min"]["ade"] / zv_old["ade"]
-    new_add = ov["new"]["mtvae-add"]["ade"] / zv_new["ade"]
-    res = record["heldout"]["results"]
-    zv = res["zero-velocity"]
-    pa = record["per_action"]
-    ka = record.get("known_answer", {})
-    lines = [
-        "### What was tried, measured",
-        "",
-        f"- **More data** (72 clips -> the corpus), same model: mtvae-add best-of-50 ADE {old_add:.3f}x -> {new_add:.3f}x "
-        f"zero-velocity on the windows neither model saw, APD {ov['old']['mtvae-add-5min']['apd']:.2f} -> "
-        f"{ov['new']['mtvae-add']['apd']:.2f} m.",
-        "- **Longer training** (2000 -> 4000 steps): mtvae-add's validation loss was still falling slowly at the end "
-        "(2307 at step 500, 2130 at 4000), so the step count is not what limits it.",
-        "- **A larger model** (hidden 256): stopped after 500 steps (validation loss 2204 against 2307 for hidden 128 "
-        "at the same step) because at 0.9 s per step on the shared 2-core machine 5000 steps did not fit the budget; "
-        "not shipped.",
-        f"- **LCP-VAE's prior** (`cs_kl_weight` 4, teacher forcing 300 steps): APD 0.65 -> {res['lcpvae']['apd']:.2f} m "
-        "(section above).",
-        f"- **A DLow sampler** on the trained mtvae-add: held-out ADE {res['mtvae-add']['ade'] / zv['ade']:.3f}x -> "
-        f"{res['mtvae-add-dlow']['ade'] / zv['ade']:.3f}x, APD {res['mtvae-add']['apd']:.2f} -> "
-        f"{res['mtvae-add-dlow']['apd']:.2f} m"
-        + (f"; known-answer coverage {ka['mtvae-add']['coverage']:.2f} -> {ka['mtvae-add + dlow']['coverage']:.2f} at "
-           f"precision {ka['mtvae-add + dlow']['precision']:.2f}." if "mtvae-add + dlow" in ka else ".")
-        + " Trained 1500 instead of 600 steps (`motion2video evaluate --split val` on the validation subjects, best "
-        "of 50): ADE 0.976 -> 0.962 m, FDE 0.997 -> 1.006 m; a doubled diversity weight (`lambda_div` 400): ADE "
-        "0.977 m; neither shipped.",
-        "- **A liveliness term** (`motion_stats_weight`: the generated vs the true mean absolute velocity "
-        "and acceleration per feature, on the reconstruction): the models without it drew futures at 0.36-0.57x the "
-        "speed of the held-out motion (docs/results_transfer.md). Measured on these windows against the checkpoints "
-        "shipped before it (git 96e5d78), best of 50: mtvae-add ADE 0.649 -> 0.655 m, FDE 0.662 -> 0.677 m, APD "
-        "4.10 -> 3.58 m; lcpvae ADE 0.680 -> 0.689 m, FDE 0.698 -> 0.698 m, APD 2.84 -> 3.17 m. A slightly "
-        "higher best-of-50 error buys futures that move like people (velocity 0.45x -> 0.84x of the ground truth "
-        "for mtvae-add); best of 10 it is lower (mtvae-add 0.704 -> 0.692 m; `motion2video evaluate --samples 10` on "
-        "the checkpoint of git 96e5d78 and the shipped one, whose `velocity_ratio` is 0.45 -> 0.84). On the "
-        "known-answer benchmark "
-        "(shipped configs, so with the term): mtvae-add coverage / precision 0.82 / 0.97 -> 0.82 / 0.96, lcpvae "
-        "0.66 / 0.70 -> 0.55 / 0.64, mtvae-add + DLow 1.00 / 0.97 -> 1.00 / 0.92.",
-        "- **Rigid bones** (`sample` / `synthesize --rigid-bones`): the decoders predict joint positions, and their "
-        "futures change a bone's length by up to 64% (the bone lengths of `futures` against the last `observed` "
-        "frame in `motion2video sample --model mtvae-add ../shared/data/mocap/cmu/02_01.bvh --samples 4 --npz`, a "
-        "held-out walk; they shrink limbs where unsure, which lowers the L2 error). Projecting every future frame onto the last observed frame's bone lengths, measured on these "
-        "windows (`motion2video evaluate --model mtvae-add --model lcpvae --data ../shared/data/mocap --rigid-bones`): "
-        "mtvae-add best-of-50 ADE 0.655 -> 0.675 m, FDE 0.677 -> 0.687 m, APD 3.58 -> 4.03 m; lcpvae ADE "
-        "0.689 -> 0.705 m. An option for renders, off by default, so that `sample --npz` gives what `evaluate` scores.",
-        "",
-        "Where the remaining error is:",
-        "",
-        f"- Most held-out windows are Indian dance ({pa.get('indian dance', {}).get('windows', {}).get('count', 0):.0f} "
-        f"of {record['heldout']['protocol']['windows']}), an action no training clip shows. On it the best sampler reaches "
-        + (f"{pa['indian dance']['mtvae-add-dlow']['ade'] / pa['indian dance']['zero-velocity']['ade']:.2f}x "
-           if "indian dance" in pa else "")
-        + "zero-velocity; on walking "
-        + (f"{pa['walk']['mtvae-add-dlow']['ade'] / pa['walk']['zero-velocity']['ade']:.2f}x" if "walk" in pa else "-")
-        + ". The field's published ratios were measured on Human3.6M, whose test actions all occur in training.",
-        "- In the first 0.2 s the models' error is zero-velocity's, above last-step's (plot): the decoders do not "
-        "carry the observed velocity into the first frames. Feeding the decoder the last step's velocity, starting "
-        "from the observed one (`velocity_input`), did not change that: 800-step pilots with and without it (the "
-        "shipped mtvae-add command with `--steps 800` and `\"velocity_input\": true` / false in the model config), "
-        "scored by `motion2video evaluate --split val --samples 10` (ADE and the first frame of `ade_per_frame`): ADE 0.935x against 0.931x zero-velocity, first-frame error 0.179 against "
-        "0.167 m (zero-velocity 0.150 m); not shipped.",
-        "- LCP-VAE's future decoder sees the observation only through z. A prior wide enough for diversity carries "
-        "less of the context, so about a third of its samples leave the modes the context allows (known-answer "
-        "precision); DLow in the learned prior's coordinates lifts coverage, not precision. Its targets stay missed.",
-    ]
-    return "\n".join(lines)
 
 
 def corpus_main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=CORPUS_DOC.splitlines()[0])
-    p.add_argument("--weights", default=str(WEIGHTS_DIR), help="folder of the corpus-trained checkpoints")
-    p.add_argument("--runs", default="runs/corpus", help="old checkpoints and benchmark models (reused)")
+    p.add_argument("--weights", default=str(WEIGHTS_DIR), help="folder of the shipped lcpvae")
+    p.add_argument("--five-minute", default=str(ROOT / "out" / "five_minute"),
+                   help="folder of the retrained 5-minute lcpvae (scripts/make_results.py five-minute-models --out)")
     p.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
-    p.add_argument("--images", default=str(ROOT / "docs" / "images"))
     p.add_argument("--json", default=str(ROOT / "out" / "results_corpus.json"))
     p.add_argument("--samples", type=int, default=50)
-    p.add_argument("--old-rev", default=OLD_REV, help="git revision holding the 5-minute models")
-    p.add_argument("--mm-steps", type=int, default=4000)
-    p.add_argument("--mm-dlow-steps", type=int, default=600)
-    p.add_argument("--skip-known-answer", action="store_true")
     args = p.parse_args(argv)
+    check_section(args.doc, CORPUS_BEGIN, CORPUS_END)
+    old = Path(args.five_minute) / "lcpvae.safetensors"
+    if not old.is_file():
+        raise InputError("no 5-minute lcpvae here: run `python scripts/make_results.py five-minute-models` first", old)
     torch.set_num_threads(1)
-    weights, runs, images = Path(args.weights), Path(args.runs), Path(args.images)
-    images.mkdir(parents=True, exist_ok=True)
+    new = Path(args.weights) / "lcpvae.safetensors"
+    ref = load_model(new)
+    test = build_dataset(DEFAULT_MOCAP, ref.data_config, split=ref.meta.split, stats=ref.stats).windows("test", stride=16)
     record: dict = {"started": time.strftime("%Y-%m-%d %H:%M:%S")}
-    t0 = time.perf_counter()
-    heldout, new, test = heldout_section(weights, record, samples=args.samples, images=images)
-    sections = ["## Body models trained on the corpus\n\n"
-                f"Regenerate with `python scripts/make_results.py corpus` after `scripts/train_shipped.sh`. "
-                f"Targets: {_corpus_TARGETS}; known-answer coverage and precision >= 0.9.", heldout,
-                old_vs_new_section(weights, runs, args.old_rev, test, new, record, samples=args.samples)]
-    sections.append(lcp_diagnosis(old_checkpoints(args.old_rev, runs / "old")["lcpvae"], weights / "lcpvae.safetensors",
-                                  test, record))
-    if not args.skip_known_answer:
-        sections.append(known_answer_section(weights, runs, record, steps=args.mm_steps, dlow_steps=args.mm_dlow_steps))
-    sections.append(sheet_section(new, images))
-    sections.append(tried_section(record))
-    record["wall_time_s"] = time.perf_counter() - t0
-    sections.append(f"_Generated {record['started']} in {record['wall_time_s'] / 60:.1f} min._")
-    write_section(args.doc, CORPUS_BEGIN, CORPUS_END, "\n\n".join(s.strip() for s in sections))
-    out = Path(args.json)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(record, indent=2, default=str) + "\n")
-    print(f"wrote {args.doc}, {out} and the pictures in {images}")
+    section = lcp_diagnosis(old, new, set(test.clip_names), record, samples=args.samples)
+    write_section(args.doc, CORPUS_BEGIN, CORPUS_END, section)
+    write_json(args.json, record)
+    print(f"wrote {args.doc} and {args.json}")
     return 0
 
 
@@ -1047,22 +551,27 @@ def corpus_main(argv: list[str] | None = None) -> int:
 # ----------------------------------------------------------------------------------------------------------------
 
 
-KNOWN_ANSWER_DOC = """The known-answer multimodal benchmark for any shipped latent model and DLow on it (target: coverage and
-precision >= 0.9 at K = 10).
+KNOWN_ANSWER_DOC = """The known-answer multimodal benchmark for the shipped latent models and DLow on each (target: coverage
+and precision >= 0.9 at K = 10).
 
-    python scripts/make_results.py known-answer [--model mixer-cvae] [--steps 4000] [--dlow-steps 600]
-        [--runs out/known_answer] [--json out/known_answer.json]
+    python scripts/make_results.py known-answer [--model mtvae-add --model lcpvae --model mixer-cvae]
+        [--steps 4000] [--dlow-steps 600] [--runs out/known_answer] [--json out/known_answer.json]
 
-The model is retrained from scratch on ``procedural:multimodal`` (sequences whose future is one of the observed
-mode's known next modes) with the shipped checkpoint's config and ``--steps`` steps (seed 0, batch 64), then DLow
+Each model is retrained from scratch on ``procedural:multimodal`` (sequences whose future is one of the observed
+mode's known next modes) with its shipped checkpoint's config and ``--steps`` steps (seed 0, batch 64), then DLow
 with the shipped ``mtvae-add-dlow`` config and K = 10 maps (``--dlow-steps``, batch 16); both are scored with K = 10
 samples per test sequence: coverage (share of valid modes hit by a sample), precision (share of samples in a valid
-mode) and TV (total variation between sampled and true mode frequencies). ``scripts/make_results.py corpus``'s
-table for mtvae-add and lcpvae is made with the same two functions (:func:`train_with_dlow`, :func:`score`). A
-model whose loss is in metres (``feature_scale``, mixer-cvae) gets this dataset's scales, as ``motion2video train``
-gives them.
-About 14 minutes on one thread for mixer-cvae (2026-11-27).
+mode) and TV (total variation between sampled and true mode frequencies). A model whose loss is in metres
+(``feature_scale``, mixer-cvae) gets this dataset's scales, as ``motion2video train`` gives them. Checkpoints
+already in --runs are reused. Writes the table between ``<!-- known-answer:begin -->`` and
+``<!-- known-answer:end -->`` of docs/results.md ("Known-answer multimodal benchmark") and the raw numbers to --json.
+About 14 minutes on one thread per model (2026-11-27).
 """
+
+KNOWN_ANSWER_BEGIN, KNOWN_ANSWER_END = "<!-- known-answer:begin -->", "<!-- known-answer:end -->"
+
+
+KNOWN_ANSWER_MODELS = ("mtvae-add", "lcpvae", "mixer-cvae")
 
 SAMPLES = 10
 
@@ -1105,30 +614,62 @@ def score(path: Path, test: WindowSet, samples: int = SAMPLES) -> dict[str, floa
     return {"coverage": sc.coverage, "precision": sc.precision, "distribution_tv": sc.distribution_tv}
 
 
+def _known_answer_section(report: dict[str, dict], *, command: str, train_sequences: int, test_sequences: int,
+                          steps: int, dlow_steps: int) -> str:
+    """The block between the known-answer markers of docs/results.md; ``report``: label -> :func:`score`'s dict.
+    Coverage and precision are bold where both reach the 0.9 target."""
+    rows = []
+    for label, r in report.items():
+        met = r["coverage"] >= 0.9 and r["precision"] >= 0.9
+        cov, prec = (f"**{r[k]:.3f}**" if met else f"{r[k]:.3f}" for k in ("coverage", "precision"))
+        rows.append(f"| {label} | {cov} | {prec} | {r['distribution_tv']:.3f} |")
+    return f"""Procedural clips (`motion2video/data/multimodal.py`, `--data {MULTIMODAL_SOURCE}`): the {MM_CONFIG.observed} observed frames show
+one mode (walk, stand, run), the {MM_CONFIG.future} future frames one of its possible next modes with known probabilities; {train_sequences}
+training / {test_sequences} test sequences; the shipped configs trained {steps} steps, DLow {dlow_steps} steps with K = {SAMPLES} maps; K = {SAMPLES}
+samples per test sequence. Coverage: share of the valid modes hit by a sample; precision: share of samples in a
+valid mode; TV: total variation between sampled and true mode frequencies. Target: >= 0.9 on coverage and
+precision. `{command}` (about 14 min on one thread per model):
+
+| model | coverage | precision | TV |
+|---|---|---|---|
+""" + "\n".join(rows)
+
+
 def known_answer_main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=KNOWN_ANSWER_DOC.splitlines()[0])
-    parser.add_argument("--model", default="mixer-cvae", help="a shipped latent model (its config is retrained)")
+    parser.add_argument("--model", action="append", default=None,
+                        help="a shipped latent model whose config is retrained (repeatable; default: "
+                        + ", ".join(KNOWN_ANSWER_MODELS) + ")")
     parser.add_argument("--steps", type=int, default=4000)
     parser.add_argument("--dlow-steps", type=int, default=600)
     parser.add_argument("--runs", default=str(ROOT / "out" / "known_answer"))
+    parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--json", default=str(ROOT / "out" / "known_answer.json"))
     args = parser.parse_args(argv)
+    check_section(args.doc, KNOWN_ANSWER_BEGIN, KNOWN_ANSWER_END)
+    models = args.model or list(KNOWN_ANSWER_MODELS)
     torch.set_num_threads(1)
     start = time.time()
-
-    shipped = load_model(WEIGHTS_DIR / f"{args.model}.safetensors")
-    base_out, dlow_out = train_with_dlow(shipped.name, shipped.meta.config, Path(args.runs), steps=args.steps,
-                                         dlow_steps=args.dlow_steps)
-    test = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG).windows("test")
+    dataset = build_dataset(MULTIMODAL_SOURCE, MM_CONFIG)
+    test = dataset.windows("test")
     report = {}
-    print("| model | coverage | precision | TV |\n|---|---|---|---|")
-    for label, path in ((args.model, base_out), (f"{args.model} + dlow", dlow_out)):
-        report[label] = r = score(path, test)
-        print(f"| {label} | {r['coverage']:.3f} | {r['precision']:.3f} | {r['distribution_tv']:.3f} |")
+    for name in models:
+        shipped = load_model(WEIGHTS_DIR / f"{name}.safetensors")
+        base_out, dlow_out = train_with_dlow(shipped.name, shipped.meta.config, Path(args.runs), steps=args.steps,
+                                             dlow_steps=args.dlow_steps)
+        for label, path in ((name, base_out), (f"{name} + dlow", dlow_out)):
+            report[label] = r = score(path, test)
+            print(f"{label}: coverage {r['coverage']:.3f}, precision {r['precision']:.3f}, "
+                  f"TV {r['distribution_tv']:.3f}", flush=True)
+    command = "python scripts/make_results.py known-answer" + "".join(
+        f" --{k.replace('_', '-')} {v}" for k, v in (("steps", args.steps), ("dlow_steps", args.dlow_steps))
+        if v != parser.get_default(k)) + ("".join(f" --model {m}" for m in models) if args.model else "")
+    write_section(args.doc, KNOWN_ANSWER_BEGIN, KNOWN_ANSWER_END, _known_answer_section(
+        report, command=command, train_sequences=len(dataset.split.train), test_sequences=len(test),
+        steps=args.steps, dlow_steps=args.dlow_steps))
     write_json(args.json, {"samples": SAMPLES, "steps": args.steps, "dlow_steps": args.dlow_steps,
-                           "test_sequences": len(test),
-                           "models": report})
-    print(f"wrote {args.json} in {time.time() - start:.0f} s")
+                           "test_sequences": len(test), "models": report})
+    print(f"wrote {args.doc} and {args.json} in {time.time() - start:.0f} s")
     return 0
 
 
@@ -1252,8 +793,6 @@ def _per_action_render(result: dict, labels: list[str], *, command: str, seconds
                  f"({', '.join(flagged)}: CMU subjects the corpus split holds out, but the 72-clip split trained "
                  f"on); their {dropped} windows are left out, so every window here is held out for every model.")
     text = [
-        "## Per action and macro over actions, the 5-minute models against the corpus models",
-        "",
         f"Generated by `{command}` ({seconds / 60:.1f} min, 1 thread). {n} held-out test windows (16 observed + 48 "
         f"future frames at 25 fps, {stride} frames apart) from {len(result['protocol']['clips'])} clips of the "
         "corpus's pinned test subjects (CMU 2, 131, 140, 94 Indian dance and the clips linked to them), the same "
@@ -1298,6 +837,8 @@ def per_action_main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", default=str(ROOT / "out" / "results_per_action.json"))
     p.add_argument("--dry-run", action="store_true", help="print the section instead of writing the doc")
     args = p.parse_args(argv)
+    if not args.dry_run:
+        check_section(args.doc, PER_ACTION_BEGIN, PER_ACTION_END)
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     models = ([] if args.no_defaults else default_models(args.old_rev)) + [parse_model(v) for v in args.model]
@@ -1370,11 +911,11 @@ def per_action_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# five_minute: Retrain the 5-minute models on today's joints: the per-action comparison needs them.
+# five_minute: Retrain the 5-minute models on today's joints: per-action, corpus and forecasting compare them.
 # ----------------------------------------------------------------------------------------------------------------
 
 
-FIVE_MINUTE_DOC = """Retrain the 5-minute models on today's joints: the per-action comparison needs them.
+FIVE_MINUTE_DOC = """Retrain the 5-minute models on today's joints: per-action, corpus and forecasting compare them.
 
     python scripts/make_results.py five-minute-models [--out out/five_minute] [--models mtvae-add,lcpvae,behavior]
         [--mocap ../shared/data/mocap] [--rev 805c753]
@@ -1385,7 +926,7 @@ Each is retrained here with what its checkpoint records: the model name and conf
 72-clip split (train / val / test clip names; only those clips are loaded) and the training config (2000 steps,
 batch 64, seed 0). The joints are version 2 and the code is today's: config fields added since take their defaults
 (each is off unless a card says otherwise), and the normalisation statistics are computed on the training windows.
-Writes ``OUT/NAME.safetensors`` (with a ``.json`` of the run), for ``scripts/make_results.py per-action --model``.
+Writes ``OUT/NAME.safetensors`` (with a ``.json`` of the run), which ``per-action``, ``corpus`` and ``forecasting`` read.
 About 3-5 minutes per model on one thread (2026-11-26).
 """
 
@@ -1426,100 +967,6 @@ def five_minute_main(argv: list[str] | None = None) -> int:
         (out / f"{name}.json").write_text(json.dumps(record, indent=1))
         print(f"{name}: {result.steps} steps in {record['wall_time_s']:.0f} s, clips {record['clips']}, "
               f"wrote {result.path}", flush=True)
-    return 0
-
-
-# ----------------------------------------------------------------------------------------------------------------
-# skeleton: The shipped body models before and after the canonical skeleton change, in docs/results.md.
-# ----------------------------------------------------------------------------------------------------------------
-
-
-SKELETON_DOC = """The shipped body models before and after the canonical skeleton change, in docs/results.md.
-
-    python scripts/make_results.py skeleton --evals out/train_shipped     # after scripts/train_shipped.sh
-
-Reads the ``<name>.eval.json`` that ``scripts/train_shipped.sh`` writes for every retrained model (``motion2video
-evaluate --samples 50`` on the pinned held-out test subjects) and the per-source proportions of every reader,
-and writes the section between ``<!-- skeleton:begin -->`` and ``<!-- skeleton:end -->`` of docs/results.md. The
-version-1 numbers are the ones the same command gave for the models trained on the old joints (the corpus-models
-table of docs/results.md, git e22f63c), kept beside the new ones.
-"""
-
-SKELETON_BEGIN, SKELETON_END = "<!-- skeleton:begin -->", "<!-- skeleton:end -->"
-
-
-VERSION1 = {
-    "mtvae-add": (0.825, 0.696, 3.579),
-    "mtvae-add-dlow": (0.797, 0.681, 5.236),
-    "lcpvae": (0.867, 0.717, 3.171),
-    "behavior": (0.878, 0.714, 5.019),
-}
-
-
-MODELS = ("mtvae-add", "mtvae-add-dlow", "lcpvae", "behavior")
-
-
-def model_row(results: dict, name: str) -> dict | None:
-    """The pooled result of ``name`` in an evaluate JSON (its ``results`` list or mapping), or None."""
-    rows = results.get("results", results)
-    if isinstance(rows, dict):
-        return rows.get(name)
-    for row in rows:
-        if row.get("model") == name or row.get("label") == name:
-            return row
-    return None
-
-
-def _skeleton_render(evals: Path) -> str:
-    lines = [
-        "## One canonical skeleton (version 2)",
-        "",
-        "Every reader now lands on Human3.6M's body points (docs/data.md, \"The canonical body points\"; the per-source "
-        "proportions before and after are tabled there, and `docs/images/skeletons.png` draws them). The corpus "
-        "statistics (clips, minutes, splits, actions) do not depend on where the joints sit and are unchanged. "
-        "Every shipped body model was retrained on the new joints with the same command as before "
-        "(`scripts/train_shipped.sh`, their cards); the frame generators were fine-tuned on renders posed with the "
-        "new joints (their cards).",
-        "",
-        "Held-out test subjects, best of 50, ratio to zero-velocity on the same clips (`motion2video evaluate "
-        "--model NAME --data ../shared/data/mocap --samples 50`; the windows are the same, the joints moved, so "
-        "zero-velocity's own error changed too):",
-        "",
-        "| model | v1 ADE / ZV | v1 FDE / ZV | v1 APD | v2 ADE / ZV | v2 FDE / ZV | v2 APD |",
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
-    ]
-    for name in MODELS:
-        path = evals / f"{name}.eval.json"
-        old = VERSION1[name]
-        if not path.is_file():
-            lines.append(f"| {name} | {old[0]:.3f} | {old[1]:.3f} | {old[2]:.2f} | (not retrained here) | | |")
-            continue
-        data = json.loads(path.read_text())
-        row = model_row(data, name) or {}
-        zv = model_row(data, "zero-velocity") or {}
-
-        def ratio(a: dict, b: dict, key: str) -> str:
-            return f"{a[key] / b[key]:.3f}" if key in a and key in b and b[key] else "-"
-
-        apd = f"{row['apd']:.2f}" if "apd" in row else "-"
-        lines.append(f"| {name} | {old[0]:.3f} | {old[1]:.3f} | {old[2]:.2f} | {ratio(row, zv, 'ade')} | "
-                     f"{ratio(row, zv, 'fde')} | {apd} |")
-    lines.append("")
-    lines.append("The retrained models score within 1-2% of their version-1 selves: the change is in what the joints "
-                 "mean, not in how well the models forecast them. Per action and macro over actions: the per-action "
-                 "section (`scripts/make_results.py per-action`, re-run with the retrained models). "
-                 "Regenerate this table: `python scripts/make_results.py skeleton --evals out/train_shipped`.")
-    return "\n".join(lines)
-
-
-def skeleton_main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=SKELETON_DOC.split("\n\n")[0])
-    parser.add_argument("--evals", type=Path, default=ROOT / "out" / "train_shipped",
-                        help="folder with <model>.eval.json from scripts/train_shipped.sh")
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results.md")
-    args = parser.parse_args(argv)
-    write_section(args.out, SKELETON_BEGIN, SKELETON_END, _skeleton_render(args.evals))
-    print(f"wrote the skeleton section of {args.out}")
     return 0
 
 
@@ -1642,22 +1089,16 @@ def skeleton_figure_main(argv: list[str] | None = None) -> int:
 # ----------------------------------------------------------------------------------------------------------------
 
 
-FRAMES_DOC = """The body frame generator measured on the person, next to its baselines, in one run.
+FRAMES_DOC = """The body frame generator on the held-out pairs, next to the previous generator and the baselines.
 
-    python scripts/make_results.py frames [--model frames-body-128] [--cache DIR] [--bench out/bench_pipeline.json]
+    python scripts/make_results.py frames [--model frames-body-128] [--cache DIR]
 
 Runs ``motion2video evaluate-frames --model MODEL`` once on the held-out body pairs (held-out identities and
-clips; the previous generator ``frames-body-128-v1``, copy-reference and limb-warp scored on the same pairs),
-and writes:
-
-- the section between ``<!-- body-frames:begin -->`` and ``<!-- body-frames:end -->`` of
-  docs/results.md: whole-frame PSNR / SSIM, person PSNR / SSIM / sharpness inside the target's silhouette,
-  PSNR / sharpness where the person moved, and the targets met or missed;
-- docs/images/frames_body_person_sheet.png: reference | target | new | old | copy-reference | limb-warp;
-- out/results_frames.json: the evaluation as evaluate-frames writes it.
-
-With ``--bench``, the speed of the new and the previous body generator side by side, from a JSON written by
-``scripts/bench.py pipeline`` (``generators_side_by_side``), is added to the section.
+clips; the previous generator ``frames-body-128-v1``, copy-reference and limb-warp scored on the same pairs) and
+writes the table between ``<!-- body-frames:begin -->`` and ``<!-- body-frames:end -->`` of docs/results.md
+("Frame generation on renders"): whole-frame PSNR / SSIM, person PSNR / SSIM / sharpness inside the target's
+silhouette and PSNR where the person moved; and out/results_frames.json, the evaluation as evaluate-frames
+writes it.
 
 About a minute on 2 cores when the held-out shards are cached (``--cache``), plus a few minutes to render
 them the first time.
@@ -1669,139 +1110,31 @@ FRAMES_BEGIN, FRAMES_END = "<!-- body-frames:begin -->", "<!-- body-frames:end -
 ORDER = ("generator", "frames-body-128-v1", "copy-reference", "limb-warp")
 
 
-NAMES = {"generator": "**new** (`{model}`)", "frames-body-128-v1": "old (`frames-body-128-v1`)",
+NAMES = {"generator": "**`{model}`**", "frames-body-128-v1": "`frames-body-128-v1` (feature analogy)",
          "copy-reference": "copy-reference", "limb-warp": "limb-warp"}
 
 
-_frames_TARGETS = {
-    "person_psnr_vs_limb_warp_3db": "person PSNR >= limb-warp + 3 dB",
-    "person_psnr_vs_copy_reference_5db": "person PSNR >= copy-reference + 5 dB",
-    "person_psnr_vs_frames-body-128-v1_2db": "person PSNR >= old generator + 2 dB",
-    "person_sharpness_0.9": "person sharpness ratio >= 0.9",
-    "psnr_29db": "whole-frame PSNR >= 29 dB",
-    "ssim_above_every_baseline": "SSIM above every baseline",
-}
+KIND_WORDS = {"warp": "The keypoint warp", "mesh": "The mesh generator"}  # evaluate-frames' model_kind
 
 
 def _frames_table(results: dict, model: str) -> str:
-    head = ("| method | whole PSNR | whole SSIM | person PSNR | person SSIM | person sharpness | moving PSNR "
-            "| moving sharpness |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    head = ("| method | whole PSNR | whole SSIM | person PSNR | person SSIM | person sharpness | moving PSNR |\n"
+            "| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     rows = []
     for key in ORDER:
         r = results.get(key)
         if r is None:
             continue
         rows.append(f"| {NAMES[key].format(model=model)} | {r['psnr']:.2f} | {r['ssim']:.3f} | {r['person_psnr']:.2f} "
-                     f"| {r['person_ssim']:.3f} | {r['person_sharpness']:.2f} | {r['moving_psnr']:.2f} "
-                     f"| {r['moving_sharpness']:.2f} |")
+                    f"| {r['person_ssim']:.3f} | {r['person_sharpness']:.2f} | {r['moving_psnr']:.2f} |")
     return head + "\n" + "\n".join(rows)
 
 
-STAGE3_NOTE = (" `frames-body-128-stage3` is the third-stage (bilinear) checkpoint, measured with "
-               "`--compare-frame-model` on `git show 7587fa5:motion2video/weights/frames-body-128.safetensors`.")
-
-
-def stage3_note(side: dict) -> str:
-    """:data:`STAGE3_NOTE` and the speed bicubic sampling costs, when the bench measured the third stage."""
-    stage3 = [fps for name, fps in side.items() if name.endswith("stage3")]
-    if not stage3 or "frames-body-128" not in side:
-        return ""
-    return f"{STAGE3_NOTE} Bicubic sampling costs {100 * (1 - side['frames-body-128'] / stage3[0]):.0f}% of the speed."
-
-
-def speed_line(bench: dict | None) -> str:
-    if not bench or not bench.get("generators_side_by_side"):
-        return ""
-    side = bench["generators_side_by_side"]
-    machine = bench.get("machine", {})
-    shown = ", ".join(f"`{name}` {fps:.1f}" for name, fps in side.items())
-    return (f"Speed at 128x128 (`python scripts/bench.py pipeline`, same run, load average "
-            f"{machine.get('load_average_1min', float('nan')):.1f}): {shown} frames/s. The warp generator pays for "
-            f"the person crop and its paste back into the full-size reference.{stage3_note(side)}\n")
-
-
-def analysis_text(a: dict | None) -> str:
-    """The error analysis of ``scripts/make_results.py frames-analysis`` (its JSON) as a markdown subsection."""
-    if not a:
-        return ""
-    gap_rows = "\n".join(f"| {g} ({0.15 * int(g):.2f} s) | {v['mean_joint_motion_px']:.1f} | {v['generator']:.2f} "
-                         f"| {v['limb-warp']:.2f} | {v['copy-reference']:.2f} |"
-                         for g, v in a["person_psnr_by_gap"].items())
-    sh = a["person_psnr_of_the_flow_shifted"]
-    worst = min(v for k, v in sh.items() if k != "none")
-    share = a["whole_frame_error_share"]
-    whole = a["whole_psnr"]
-    oracle = a["oracle_residual_flow"]
-    fits = "; ".join(f"a {k.split('_')[-1]} field: {v['person_psnr']:.2f} dB, mean length {v['mean_residual_px']:.2f} px"
-                     for k, v in oracle.items() if k.startswith("fitted"))
-    return f"""### Where the person's error is
-
-`python scripts/make_results.py frames-analysis --model {a['model']}` (same pairs; the generator on whole frames):
-
-| time from the reference | mean joint motion (px) | person PSNR, generator | limb-warp | copy-reference |
-| --- | ---: | ---: | ---: | ---: |
-{gap_rows}
-
-- **Sub-pixel alignment decides the person PSNR.** The reference sampled by the generator's own person flow
-  scores {sh['none']:.2f} dB; the same flow shifted by half a pixel scores {worst:.2f} to
-  {max(v for k, v in sh.items() if k != 'none'):.2f} dB. The people are {a['person_height_px']:.0f} pixels tall on average ({a['person_pixels']} pixels), with stripes and
-  checks a few pixels wide, so where a limb twists about its bone or a garment slides (neither is in 2D keypoints)
-  the texture lands out of phase. Even one frame after the reference (0.15 s, about 4 pixels of joint motion) the
-  person PSNR is {a['person_psnr_by_gap']['1']['generator']:.2f} dB.
-- **The flow is close, not right.** A smooth residual flow fitted to the truth on {oracle['pairs']} pairs (an
-  oracle, from {oracle['its_flow']:.2f} dB): {fits}.
-- **The whole frame.** Of its squared error, {100 * share['target_person']:.0f}% is on the target person,
-  {100 * share['uncovered_background']:.0f}% on the background the reference person uncovered (never seen:
-  filled by OpenCV's Telea inpainting) and {100 * share['rest']:.0f}% elsewhere (the soft masks and the plate's
-  margin). With the true silhouette and the true background, this flow would give {whole['its_flow_true_silhouette_true_background']:.2f} dB
-  ({whole['generator']:.2f} dB as generated).
-"""
-
-
-def _frames_section(evaluation: dict, model: str, command: str, minutes: float, bench: dict | None = None,
-            analysis: dict | None = None) -> str:
-    res = evaluation["results"]
-    gen = res["generator"]
-    margins = ", ".join(f"{gen['person_psnr'] - res[k]['person_psnr']:+.2f} dB over {k}"
-                        for k in ORDER[1:] if k in res)
-    met = evaluation.get("targets_met", {})
-    target_rows = "\n".join(f"| {_frames_TARGETS.get(k, k)} | {'met' if v else '**missed**'} |" for k, v in met.items())
-    return f"""## Body frames measured on the person
-
-`{command}`: {evaluation['num_pairs']} held-out pairs (held-out identities and clips, data v2: 200 training
-identities with patterned clothing, 26 backgrounds), every method on the same pairs in one run. Person metrics are
-computed inside the target's rendered silhouette; "moving" is where the reference and the target differ (the
-union of both silhouettes where the pixels changed); sharpness is the generated image's gradient energy inside the
-silhouette over the truth's (1.0: as sharp as the truth).
-
-{_frames_table(res, model)}
-
-The new generator's person PSNR: {margins}.
-
-| target | |
-| --- | --- |
-{target_rows}
-
-What was tried, in order (each stage starts from the previous weights; the model card has the commands): the
-warp design with its network at 1/4 resolution, 1800 steps: person PSNR 17.15 dB, sharpness 0.77 (the untrained
-model, which warps by the part transforms alone, is at limb-warp's level); its network at 1/2 resolution
-(`--net-scale 2`), 3000 more steps: 17.35 dB, sharpness 0.78; a third stage at a lower learning rate with the
-edge loss doubled: 17.45 dB, sharpness 0.78 (the model shipped until 2026-11-25). Bilinear sampling at
-sub-pixel offsets low-passes the texture it moves, so a fourth stage samples the reference bicubically
-(`--sample-mode bicubic`, 6500 steps, 36 min): the shipped model above, at about 0.2 dB of person PSNR for the
-sharpness (sharp texture a fraction of a pixel off costs more than a blur). Beside it, the same stage with a
-learned dense residual of the person's flow (`--flow-correction`), scored by the same command on its
-checkpoint: person PSNR 17.49 dB, sharpness 0.86, whole frame 26.80 dB (the residual learns to smear where it
-is unsure); 2200 more steps of it with the edge loss at 4: 17.49 dB, sharpness 0.81. The missed targets need more than training time: see below.
-
-{analysis_text(analysis)}
-{speed_line(bench)}
-Reference | target | new | old | copy-reference | limb-warp, on held-out pairs:
-
-![body person sheet](images/frames_body_person_sheet.png)
-
-_Generated {time.strftime('%Y-%m-%d %H:%M:%S')} in {minutes:.1f} min._
-"""
+def _frames_section(evaluation: dict, model: str) -> str:
+    """The block between the body-frames markers of docs/results.md, from evaluate-frames' JSON ``evaluation``."""
+    words = KIND_WORDS.get(evaluation.get("model_kind"), "The generator")
+    return (f"{words} `{model}` (`motion2video evaluate-frames --model {model}`, {evaluation['num_pairs']} pairs;\n"
+            "`python scripts/make_results.py frames` writes this table):\n\n" + _frames_table(evaluation["results"], model))
 
 
 def frames_main(argv: list[str] | None = None) -> int:
@@ -1810,31 +1143,17 @@ def frames_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cache", default=None, help="frame-data cache folder (evaluate-frames --cache)")
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames.json"))
-    parser.add_argument("--bench", default=None, help="a `bench.py pipeline` JSON: adds the generators' speed")
-    parser.add_argument("--no-analysis", action="store_true",
-                        help="leave out scripts/make_results.py frames-analysis (a few minutes: it fits oracle flows)")
     args = parser.parse_args(argv)
+    check_section(args.doc, FRAMES_BEGIN, FRAMES_END)
 
-    start = time.perf_counter()
-    sheet = ROOT / "docs" / "images" / "frames_body_person_sheet.png"
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    cmd = ["motion2video", "evaluate-frames", "--model", args.model, "--json", args.json,
-           "--contact-sheet", str(sheet), "--no-progress"]
+    cmd = ["evaluate-frames", "--model", args.model, "--json", args.json, "--no-progress"]
     if args.cache:
         cmd += ["--cache", args.cache]
-    subprocess.run([sys.executable, "-m", "motion2video.cli", *cmd[1:]], check=True, cwd=ROOT)
+    subprocess.run([sys.executable, "-m", "motion2video.cli", *cmd], check=True, cwd=ROOT)
     evaluation = json.loads(Path(args.json).read_text())
-    shown = f"motion2video evaluate-frames --model {args.model} --json out/results_frames.json"
-    bench = json.loads(Path(args.bench).read_text()) if args.bench else None
-    analysis = None
-    if not args.no_analysis:
-        analysis_json = Path(args.json).with_name("frames_error_analysis.json")
-        frames_analysis_main(["--model", args.model, "--json", str(analysis_json),
-                              *(["--cache", args.cache] if args.cache else [])])
-        analysis = json.loads(analysis_json.read_text())
-    write_section(args.doc, FRAMES_BEGIN, FRAMES_END, _frames_section(evaluation, args.model, shown, (time.perf_counter() - start) / 60,
-                                                bench, analysis))
-    print(f"wrote {args.doc}, {sheet} and {args.json}")
+    write_section(args.doc, FRAMES_BEGIN, FRAMES_END, _frames_section(evaluation, args.model))
+    print(f"wrote {args.doc} and {args.json}")
     return 0
 
 
@@ -1993,17 +1312,14 @@ For each clip of :data:`CLIPS` (real CMU captures held out of the frame training
 CLIP`` runs (the same functions, once per clip: the held-out identities posed by 4 windows of the clip, the truth
 the Anny render of each pose) and writes:
 
-- the section between ``<!-- frames-real-motion:begin -->`` and ``<!-- frames-real-motion:end -->`` of
-  docs/results.md: whole-frame, person and head PSNR / SSIM and the person sharpness ratio per clip and method,
-  and the targets per clip;
-- docs/images/frames_real_motion.png: reference | truth | generator | (previous generator, when it loads) |
-  limb-warp, two pairs per clip, each frame at twice its size with the head region enlarged beside it;
+- the block between ``<!-- frames-real-motion:begin -->`` and ``<!-- frames-real-motion:end -->`` of
+  docs/results.md (under "Body frames driven by real motion"): the commands, person / head PSNR and SSIM, person
+  sharpness and whole-frame PSNR per clip and method, and the targets per clip;
+- docs/images/frames_real_motion.png: reference | truth | generator | previous generator | limb-warp, two pairs
+  per clip, each frame at twice its size with the head region enlarged beside it;
 - out/results_frames_real.json: the evaluate-frames JSON of each clip.
 
-With ``--held-out``, also runs ``motion2video evaluate-frames --model MODEL --head`` (the project's held-out pairs,
-rendered again with head masks) and adds its person and head metrics to the section, for comparison.
-
-About 2 minutes on 2 cores, plus about 3 with ``--held-out``.
+About 2 minutes on 2 cores.
 """
 
 FRAMES_REAL_BEGIN, FRAMES_REAL_END = "<!-- frames-real-motion:begin -->", "<!-- frames-real-motion:end -->"
@@ -2047,16 +1363,14 @@ HEAD_BOX = 24  # pixels (frame scale) of the enlarged head crop beside each cell
 def evaluate_clip(model_name: str, clip: Path):
     """The evaluation of ``evaluate-frames --model model_name --poses clip --windows WINDOWS``, its JSON payload
     (the same functions the command runs) and (N, 2, H, W) bool head masks of each pair's target and reference."""
-    from motion2video.generator.data import evaluation_pair_index
-    from motion2video.commands.evaluate_frames import evaluate_posed, load_baselines
-    from motion2video.generator.checkpoint import load_frame_model
-    from motion2video.generator.scores import json_payload
+    from motion2video.evaluation.frame_generators import evaluate_posed, load_baselines
     from motion2video.generator.poses import load_body_clips
+    from motion2video.generator.scores import json_payload
 
     loaded = load_frame_model(model_name)
     baselines, left_out = load_baselines(None, loaded)
-    args = argparse.Namespace(poses=str(clip), windows=WINDOWS, pairs=None, no_progress=True)
-    posed = evaluate_posed(loaded.model, load_body_clips(clip), args, baselines)
+    posed = evaluate_posed(loaded.model, load_body_clips(clip), poses_path=clip, windows=WINDOWS,
+                           baselines=baselines, progress=False)
     evaluation, rendered = posed.evaluation, posed.rendered
     index = evaluation_pair_index(rendered.sequences)  # (N, 3) sequence, reference, target: the evaluated pairs
     heads = np.stack([rendered.head_masks[index[:, 0], index[:, 2]], rendered.head_masks[index[:, 0], index[:, 1]]],
@@ -2118,18 +1432,6 @@ def _frames_real_table(payloads: dict[str, dict], model: str) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def margins(payloads: dict[str, dict]) -> str:
-    lines = []
-    for clip, payload in payloads.items():
-        res = payload["results"]
-        g, w, c = res["generator"], res["limb-warp"], res["copy-reference"]
-        lines.append(f"- `{clip}` ({payload['num_pairs']} pairs): person PSNR {g['person_psnr'] - w['person_psnr']:+.2f} dB "
-                     f"over limb-warp, {g['person_psnr'] - c['person_psnr']:+.2f} dB over copy-reference; head PSNR "
-                     f"{g['head_psnr'] - w['head_psnr']:+.2f} dB over limb-warp, "
-                     f"{g['head_psnr'] - c['head_psnr']:+.2f} dB over copy-reference.")
-    return "\n".join(lines)
-
-
 def targets(payloads: dict[str, dict]) -> str:
     head = "| target | " + " | ".join(f"`{c}`" for c in payloads) + " |\n| --- |" + " --- |" * len(payloads)
     rows = [f"| {text} | " + " | ".join("met" if p["targets_met"].get(key) else "**missed**"
@@ -2137,57 +1439,34 @@ def targets(payloads: dict[str, dict]) -> str:
     return head + "\n" + "\n".join(rows)
 
 
-def held_out_text(payload: dict | None, model: str) -> str:
-    """The held-out pairs' person and head metrics (``evaluate-frames --head``), or nothing."""
-    if payload is None:
-        return ""
-    return f"""For comparison, the project's held-out pairs (poses of held-out clips drawn like the training data's, the same
-identities), `motion2video evaluate-frames --model {model} --head` ({payload['num_pairs']} pairs):
-
-{_frames_real_table({'held-out pairs': payload}, model)}
-"""
-
-
-def _frames_real_section(payloads: dict[str, dict], model: str, minutes: float, note: str = "",
-            held_out: dict | None = None) -> str:
+def _frames_real_section(payloads: dict[str, dict], model: str) -> str:
+    """The block between the frames-real markers of docs/results.md (no heading: the page's own stands above it)."""
     left_out = {k: v for p in payloads.values() for k, v in p.get("baselines_left_out", {}).items()}
     old = ("" if not left_out else
-           f" The previous generator (`{', '.join(left_out)}`) is left out: it was trained on the previous canonical "
-           "skeleton (version 1), and the loader refuses it on the new joints until it is fine-tuned on them.")
+           f"\nThe previous generator (`{', '.join(left_out)}`) is left out: the loader refuses it ({'; '.join(left_out.values())}).")
     clips = "\n".join(f"motion2video evaluate-frames --model {model} --poses ../shared/data/mocap/{c}" for c in payloads)
-    return f"""## Body frames driven by real motion
-
-One run per clip (`python scripts/make_results.py frames-real` runs the same functions and writes this section):
+    return f"""One run per clip (`python scripts/make_results.py frames-real` runs the same functions and writes this section):
 
 ```
 {clips}
 ```
 
-The frame test split's 8 held-out identities, posed by {WINDOWS} windows spread evenly
-over each real CMU capture (9 frames over 1.2 s each; frame 0 of a window is the reference, the 8 later frames
-the targets), rendered by the Anny body renderer exactly as the training data is (background, camera yaw and
-elevation, light); the truth is the render of each pose. None of these clips is in the frame training data
-(`motion2video.generator.specs.is_test_clip`; `cmu/02_01.bvh` is a training clip, so a held-out
-walk is used instead). The head is the target's visible head: the pixels where Anny's head vertices (dominant
-bone `head` or below it) are the front surface, by a depth test, so a hand in front of the face is not head.{old}
-
-{note}
+The frame test split's 8 held-out identities, posed by {WINDOWS} windows spread evenly over each real CMU capture (9
+frames over 1.2 s each; frame 0 of a window is the reference, the 8 later frames the targets), rendered by the Anny
+body renderer exactly as the training data is; the truth is the render of each pose. None of these clips is in the
+frame training data (`motion2video.generator.specs.is_test_clip`). The head is the target's visible head: the pixels
+where Anny's head vertices are the front surface, by a depth test, so a hand in front of the face is not head.{old}
 
 {_frames_real_table(payloads, model)}
 
-{margins(payloads)}
-
-{held_out_text(held_out, model)}
-The targets, driven by real motion:
+The targets driven by real motion:
 
 {targets(payloads)}
 
-Reference | truth | new | old | limb-warp (old: the previous generator, when it loads), two pairs per clip ({', '.join(f'`{c}`' for c in payloads)}, top to
-bottom), at twice the frame size, each with the head region enlarged beside it (top right):
+Reference | truth | new | old | limb-warp, two pairs per clip ({', '.join(f'`{c}`' for c in payloads)},
+top to bottom), at twice the frame size, each with the head region enlarged beside it (top right):
 
 ![real motion sheet](images/frames_real_motion.png)
-
-_Generated {time.strftime('%Y-%m-%d %H:%M:%S')} in {minutes:.1f} min by `python scripts/make_results.py frames-real`._
 """
 
 
@@ -2204,14 +1483,11 @@ def frames_real_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--doc", default=str(ROOT / "docs" / "results.md"))
     parser.add_argument("--sheet", default=str(ROOT / "docs" / "images" / "frames_real_motion.png"))
     parser.add_argument("--json", default=str(ROOT / "out" / "results_frames_real.json"))
-    parser.add_argument("--held-out", action="store_true",
-                        help="also run evaluate-frames --head on the held-out pairs and add it to the section")
-    parser.add_argument("--note", default="", help="a paragraph added to the section (e.g. which checkpoint --model is)")
     args = parser.parse_args(argv)
+    check_section(args.doc, FRAMES_REAL_BEGIN, FRAMES_REAL_END)
 
     from motion2video.generator.specs import is_test_clip
 
-    start = time.perf_counter()
     payloads, columns = {}, []
     for clip in CLIPS:
         assert is_test_clip(clip), f"{clip} is a frame training clip"
@@ -2219,19 +1495,12 @@ def frames_real_main(argv: list[str] | None = None) -> int:
         payloads[clip] = payload
         columns.append(sheet_columns(evaluation, heads, list(SHEET_ROWS)))
         print(f"{clip}: {json.dumps({k: v['person_psnr'] for k, v in payload['results'].items()})}", flush=True)
-    held_out = None
-    if args.held_out:
-        held_json = Path(args.json).with_name("results_frames_head.json")
-        subprocess.run([sys.executable, "-m", "motion2video.cli", "evaluate-frames", "--model", args.model, "--head",
-                        "--json", str(held_json), "--no-progress"], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
-        held_out = json.loads(held_json.read_text())
     merged = {k: np.concatenate([c[k] for c in columns]) for k in columns[0]}
     sheet = Path(args.sheet)
     sheet.parent.mkdir(parents=True, exist_ok=True)
     iio.imwrite(sheet, contact_sheet(merged, label_height=22))
     write_json(args.json, payloads)
-    write_section(args.doc, FRAMES_REAL_BEGIN, FRAMES_REAL_END, _frames_real_section(payloads, args.model, (time.perf_counter() - start) / 60,
-                                                args.note, held_out))
+    write_section(args.doc, FRAMES_REAL_BEGIN, FRAMES_REAL_END, _frames_real_section(payloads, args.model))
     print(f"wrote {args.doc}, {sheet} and {args.json}")
     return 0
 
@@ -2243,13 +1512,14 @@ def frames_real_main(argv: list[str] | None = None) -> int:
 
 TRANSFER_DOC = """Behaviour transfer (Blattmann et al. 2021, Tables 1 and 3) and MT-VAE analogy.
 
-    .venv/bin/python scripts/make_results.py transfer                       # ~15 min on 2 CPU cores
-    .venv/bin/python scripts/make_results.py transfer --steps 20 --analogy-steps 20 --out /tmp/r.md  # smoke run
+    python scripts/make_results.py transfer --json out/results_transfer.json        # ~23 min on 2 CPU cores
+    python scripts/make_results.py transfer --steps 20 --analogy-steps 20 --out /tmp/r.md  # smoke run
 
 What it does (one torch thread; every number comes from this run):
 
-1. Loads the real mocap (default ``../shared/data/mocap``) with the shipped models' data settings
-   (25 fps, 16 observed + 48 future frames, ``split_seed`` 1: held-out test clips).
+1. Loads the real mocap (default ``../shared/data/mocap``) at 25 fps, 16 observed + 48 future frames, only the
+   clips of the recorded split of ``--split-of`` (default: the 72-clip, 4.7-minute mtvae-add of git 805c753) and
+   that split's held-out test clips.
 2. Trains five models the same way (same sizes, steps, batches, seed; the behaviour variants also get their
    normalizing flow fitted), differing only in the objective:
    ``behavior`` (gamma_C = 0.1, KL budget with dual ascent), ``behavior, gamma_C = 0`` (no
@@ -2258,18 +1528,28 @@ What it does (one torch thread; every number comes from this run):
    evaluation), a plain cVAE (the behaviour architecture with the Eq. 1 ELBO: gamma_KL fixed at 1, no budget,
    gamma_C = 0) and MT-VAE (add), whose transfer is the analogy z = E(obs_src, fut_src), x_R = D(obs_tgt, z).
 3. On every held-out window (stride 8), transfers the source's behaviour to the start posture of a window
-   of another held-out clip and reports TDE, RE and d_beta at T = 1, 10, 20, 30, 40
-   (:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer`), and the realism classifier's accuracy for
-   reconstructions, transfers, prior samples and flow samples.
+   of another held-out clip and scores TDE, RE and d_beta / d_random at T = 40
+   (:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer`), and checks the paper's statements.
 4. The known-answer analogy: a small mtvae-add trained on the procedural multimodal benchmark's
    transitions; for several X -> Y and 20 seeds each, the mode classifier's label of D, against a prior
    sample from C (what the model does without the A -> B latent).
 
-Writes ``docs/results_transfer.md`` (``--out``) and the raw numbers as JSON (``--json``).
+Writes two blocks of ``docs/results_transfer.md`` (``--out``), each between its markers: the known-answer
+analogy table ("Analogy") and the Table 1 / 3 numbers with the paper's statements checked ("The behaviour
+paper's claims, checked"); with ``--json``, the raw numbers.
 """
 
+TRANSFER_ANALOGY_BEGIN, TRANSFER_ANALOGY_END = "<!-- transfer-analogy:begin -->", "<!-- transfer-analogy:end -->"
+
+
+TRANSFER_CLAIMS_BEGIN, TRANSFER_CLAIMS_END = "<!-- transfer-claims:begin -->", "<!-- transfer-claims:end -->"
+
+
+ANALOGY_SEQUENCES = 600  # procedural transition sequences the analogy model trains on
+
+
 VARIANTS = (  # (label, registry name, model config on top of SIZES[name])
-    ("behavior", "behavior", {"gamma_c": 0.1}),
+    ("behavior (gamma_C = 0.1)", "behavior", {"gamma_c": 0.1}),
     ("behavior, gamma_C = 0", "behavior", {"gamma_c": 0.0}),
     ("cAE (no KL, gamma_C = 0)", "behavior", {"gamma_c": 0.0, "kl_multiplier_init": 0.0, "kl_multiplier_lr": 0.0}),
     ("cVAE (Eq. 1 ELBO)", "behavior", {"gamma_c": 0.0, "kl_multiplier_init": 1.0, "kl_multiplier_lr": 0.0,
@@ -2336,7 +1616,7 @@ def known_answer(*, steps: int, seeds: int, workdir: Path, seed: int) -> dict:
     from motion2video.data.multimodal import default_classifier
     from motion2video.models.training import TrainConfig, train_model
 
-    dataset = procedural_transition_dataset(600, seed=1)
+    dataset = procedural_transition_dataset(ANALOGY_SEQUENCES, seed=1)
     path = workdir / "procedural-mtvae-add.safetensors"
     model_config = {**ANALOGY_MODEL, "kl_anneal_steps": max(steps // 2, 1)}
     config = TrainConfig(steps=steps, batch_size=32, lr=3e-3, warmup_steps=20, checkpoint_every=10 ** 9,
@@ -2372,209 +1652,83 @@ def _fmt(v: float) -> str:
     return f"{v:.2f}" if abs(v) < 100 else f"{v:.0f}"
 
 
-def _order(scores: dict, key, *, higher_first: bool) -> str:
-    items = sorted(scores.items(), key=lambda kv: key(kv[1]), reverse=higher_first)
-    sign = " > " if higher_first else " < "
-    return sign.join(f"{label} {_fmt(key(s))}" for label, s in items)
+SHORT = {"behavior (gamma_C = 0.1)": "the behaviour model", "behavior, gamma_C = 0": "gamma_C = 0",
+         "cAE (no KL, gamma_C = 0)": "the cAE", "cVAE (Eq. 1 ELBO)": "the cVAE", "MT-VAE add (analogy)": "MT-VAE's analogy"}
 
 
-def claims(scores: dict) -> list[str]:
-    """The paper's Table 1 / 3 statements, checked on these numbers (yes / no, with the numbers)."""
-    b, b0 = scores["behavior"], scores["behavior, gamma_C = 0"]
-    cae, cvae = scores["cAE (no KL, gamma_C = 0)"], scores["cVAE (Eq. 1 ELBO)"]
+def claims(scores: dict) -> list[tuple[str, str]]:
+    """The paper's Table 1 / 3 statements, checked on these numbers: (statement, found) rows."""
+    b, b0 = scores["behavior (gamma_C = 0.1)"], scores["behavior, gamma_C = 0"]
+    cvae = scores["cVAE (Eq. 1 ELBO)"]
     rel = {k: s.d_beta.mean / max(s.d_random.mean, 1e-12) for k, s in scores.items()}
-    out = []
 
-    def check(text: str, ok: bool, numbers: str, *, diff: float | None = None, se: float | None = None) -> None:
-        noise = ""
-        if diff is not None and se is not None and abs(diff) < 2.0 * se:
-            noise = f"; the difference {abs(diff):.1f} is within 2 standard errors ({2.0 * se:.1f}): not significant"
-        out.append(f"- {text}: **{'yes' if ok else 'no'}** ({numbers}{noise})")
-
-    def se2(a, b, t: int, what: str) -> float:
-        return float(np.hypot(getattr(a, what)[t], getattr(b, what)[t]))
+    def yes(ok: bool) -> str:
+        return "yes" if ok else "no"
 
     lowest = min(scores, key=lambda k: scores[k].tde[40])
-    check("cAE copies the source (its TDE falls with T and is the lowest of all at T = 40)",
-          cae.tde[40] < cae.tde[1] and lowest == "cAE (no KL, gamma_C = 0)",
-          f"cAE TDE {_fmt(cae.tde[1])} at T = 1 -> {_fmt(cae.tde[40])} at T = 40; lowest at T = 40: {lowest} "
-          f"{_fmt(scores[lowest].tde[40])}")
-    check("the cVAE's latent collapses (d_beta and d_random near 0: z is ignored)",
-          cvae.d_random.mean < 0.1 * b.d_random.mean,
-          f"cVAE d_random {cvae.d_random.mean:.3f} vs behavior {b.d_random.mean:.3f}")
-    check("disentanglement (gamma_C = 0.1) raises TDE at T = 40 over gamma_C = 0", b.tde[40] > b0.tde[40],
-          f"{_fmt(b.tde[40])} vs {_fmt(b0.tde[40])} cm^2", diff=b.tde[40] - b0.tde[40], se=se2(b, b0, 40, "tde_se"))
-    check("disentanglement raises the posture-regression error RE (less posture in z) at T = 40",
-          b.re[40] > b0.re[40], f"{_fmt(b.re[40])} vs {_fmt(b0.re[40])} cm^2", diff=b.re[40] - b0.re[40],
-          se=se2(b, b0, 40, "re_se"))
-    check("disentanglement keeps the behaviour closer (smaller relative d_beta) than gamma_C = 0",
-          rel["behavior"] < rel["behavior, gamma_C = 0"],
-          f"d_beta / d_random {rel['behavior']:.2f} vs {rel['behavior, gamma_C = 0']:.2f}")
-    mt = scores["MT-VAE add (analogy)"]
-    check("the behaviour model keeps the behaviour closer than MT-VAE's analogy (relative d_beta)",
-          rel["behavior"] < rel["MT-VAE add (analogy)"],
-          f"{rel['behavior']:.2f} vs {rel['MT-VAE add (analogy)']:.2f}")
-    bp, mp = b.realism_poses, mt.realism_poses
-    check("flow samples are more realistic than prior samples (lower pose-classifier accuracy)",
-          bp.get("flow", 1.0) < bp["prior"], f"behavior: flow {bp.get('flow', float('nan')):.2f} vs prior "
-          f"{bp['prior']:.2f}; two-sample test {b.realism.get('flow', float('nan')):.2f} vs {b.realism['prior']:.2f}")
-    check("the behaviour model's transfers are more realistic than MT-VAE's (pose classifier)",
-          bp["transfer"] < mp["transfer"], f"{bp['transfer']:.2f} vs {mp['transfer']:.2f}; two-sample test "
-          f"{b.realism['transfer']:.2f} vs {mt.realism['transfer']:.2f}")
-    check("the behaviour model's transfers are more realistic than without disentanglement (pose classifier)",
-          bp["transfer"] < b0.realism_poses["transfer"],
-          f"{bp['transfer']:.2f} vs {b0.realism_poses['transfer']:.2f}")
-    return out
+    rows = [("cAE copies the source (lowest TDE at T = 40)",
+             "yes" if lowest == "cAE (no KL, gamma_C = 0)" else f"no ({SHORT.get(lowest, lowest)} is lowest)"),
+            ("the cVAE's latent collapses", f"{yes(cvae.d_random.mean < 0.1 * b.d_random.mean)} (d_random "
+             f"{cvae.d_random.mean:.2f} against {b.d_random.mean:.2f})")]
+    raised = {what: getattr(b, key)[40] > getattr(b0, key)[40] for what, key in (("TDE", "tde"), ("RE", "re"))}
+    noisy = [what for what, key in (("TDE", "tde"), ("RE", "re"))
+             if abs(getattr(b, key)[40] - getattr(b0, key)[40]) < 2.0 * float(np.hypot(getattr(b, f"{key}_se")[40],
+                                                                                    getattr(b0, f"{key}_se")[40]))]
+    found = ("yes" if all(raised.values()) else "no" if not any(raised.values())
+             else f"{next(w for w, up in raised.items() if up)} only")
+    if len(noisy) == 2:
+        found += ", both within 2 standard errors: not significant"
+    elif noisy:
+        found += f", {noisy[0]} within 2 standard errors: not significant"
+    else:
+        found += f" (TDE {_fmt(b.tde[40])} against {_fmt(b0.tde[40])}, RE {_fmt(b.re[40])} against {_fmt(b0.re[40])})"
+    rows += [("disentanglement raises TDE(40) and RE(40)", found),
+             ("disentanglement keeps the behaviour closer", f"{yes(rel['behavior (gamma_C = 0.1)'] < rel['behavior, gamma_C = 0'])} "
+              f"({rel['behavior (gamma_C = 0.1)']:.2f} against {rel['behavior, gamma_C = 0']:.2f})"),
+             ("the behaviour model keeps the behaviour closer than MT-VAE's analogy",
+              f"{yes(rel['behavior (gamma_C = 0.1)'] < rel['MT-VAE add (analogy)'])} "
+              f"({rel['behavior (gamma_C = 0.1)']:.2f} against {rel['MT-VAE add (analogy)']:.2f})")]
+    bp = b.realism_poses
+    flow = bp.get("flow", float("nan"))
+    rows.append(("flow samples are more realistic than prior samples (pose classifier)",
+                 f"{yes(flow < bp['prior'])} ({flow:.2f} against {bp['prior']:.2f})"))
+    return rows
 
 
-def write_markdown(path: Path, *, scores: dict, trained: dict, analogy: dict, info: dict) -> None:
-    from motion2video.evaluation.transfer_protocol import TABLE1_TIMESTEPS
+def _transfer_claims_block(scores: dict, info: dict) -> str:
+    """The block between the transfer-claims markers of docs/results_transfer.md (no heading)."""
+    text = (f"Blattmann et al. (CVPR 2021), Tables 1 and 3, on the first {info['clips']} clips ({info['minutes']:.1f} "
+            f"minutes) with five small models trained the same way ({info['steps']} steps, hidden "
+            f"{SIZES['behavior']['hidden_dim']}, latent {SIZES['behavior']['latent_dim']}): `{info['command']}` (about "
+            f"{info['total_min']:.0f} minutes on {info['cores']} cores). Held-out transfer pairs ({info['test_windows']} "
+            "windows, each behaviour re-enacted from another held-out clip's posture); TDE(40) = error between "
+            "re-enactment and source at generated frame 40 (cm^2; large = not copying), RE(40) = error of a ridge "
+            "regression from z to the posture (large = little posture in z), d_beta / d_random = distance of the "
+            "re-enactment's behaviour code to the source's over a random pair's (lower = behaviour kept):")
+    lines = [*_wrap(text), "",
+             "| model | TDE(40) | RE(40) | d_beta / d_random |", "| --- | ---: | ---: | ---: |"]
+    lines += [f"| {label} | {_fmt(s.tde[40])} | {_fmt(s.re[40])} | {s.d_beta.mean / max(s.d_random.mean, 1e-12):.2f} |"
+              for label, s in scores.items()]
+    lines += ["", "| the paper's statement | found |", "| --- | --- |"]
+    lines += [f"| {statement} | {found} |" for statement, found in claims(scores)]
+    return "\n".join(lines)
 
-    ts = TABLE1_TIMESTEPS
-    lines = [
-        "## Behaviour transfer and analogy",
-        "",
-        f"Generated by `{info['command']}` on {info['date']} ({info['machine']}; {info['total_min']:.1f} min for "
-        "this run, one torch thread; the per-model training times below are the checkpoints' own records). Every "
-        "number below comes from these checkpoints and this evaluation.",
-        "",
-        "### Setup",
-        "",
-        f"- Data: the real mocap in `{info['data']}` at 25 fps, windows of 16 observed + 48 future frames, "
-        f"`split_seed` 1. Held-out test clips ({len(info['test_clips'])}): {', '.join(info['test_clips'])}; "
-        f"{info['test_windows']} test windows (stride {info['stride']}), {info['train_windows']} training "
-        f"windows for the RE regressor.",
-        f"- Five models trained the same way: {info['steps']} steps, batch {info['batch_size']}, AdamW, seed "
-        f"{info['seed']}, hidden 128, latent 32; behaviour variants fit their flow afterwards "
-        f"({max(info['steps'] // 2, 10)} steps). Wall time per model: "
-        + ", ".join(f"{k} {v:.0f} s" for k, v in info["train_s"].items()) + ".",
-        "- cAE = the behaviour architecture with gamma_KL fixed at 0 and gamma_C = 0 (no KL term; the posterior "
-        "mean is used at evaluation, so its latent is deterministic there). cVAE = the same architecture with the "
-        "plain Eq. 1 ELBO (gamma_KL fixed at 1, no KL budget, gamma_C = 0). MT-VAE transfers by analogy: "
-        "z = E(obs_source, future_source), x_R = D(obs_target, z) (posterior means).",
-        "- Transfer pairs: each held-out window's behaviour (its last observed frame + 48 future frames) is "
-        "re-enacted from the last observed posture of a random window of ANOTHER held-out clip.",
-        "- TDE(T): mean squared error per coordinate between re-enactment and source at generated frame T "
-        "(root-relative joints, cm^2; large = not copying). RE(T): mean squared error per coordinate of a ridge "
-        "regression (closed form, l2 = 1, standardised z) from z(x_beta) to the posture x_beta[T], fitted on the "
-        "training windows and scored on the test windows (cm^2; large = little posture in z). d_beta: "
-        "||z(x_beta) - z(x_R)|| with x_R re-encoded from its own start; d_random: ||z(x_beta) - z(target's own "
-        "behaviour)||, the distance between unrelated behaviours, so d_beta / d_random is comparable across "
-        "models whose latent scales differ (< 1: the re-enactment kept the source's behaviour).",
-        "- Realism (Table 3): how well the held-out ground-truth futures (pose + root trajectory, 48 frames) are "
-        "told from the reconstructions (self), transfers, prior samples (z ~ N(0, I)) and flow samples "
-        "(z = T^-1(u)) of the same windows. 'two-sample' = the two-sample test of "
-        "`motion2video.evaluation.realism` (a logistic regression on per-window motion features: per joint mean "
-        "speed, mean acceleration, positional spread; 5-fold cross-validated over the windows, both futures of a "
-        "window in one fold; its control, real against real of two halves of the windows, is about 0.5); "
-        "'poses' = a closed-form ridge classifier on the poses every 4th frame (even windows train, odd test). "
-        "0.5 = indistinguishable, 1.0 = always told apart; lower is better (the paper reports a score where "
-        "higher is better, max 0.5). The two-sample test replaced a ridge classifier on the full sequence "
-        "descriptor, which told real motion of different people apart (0.99).",
-        "",
-        "### Table 1: behaviour transfer on held-out clips",
-        "",
-        "| model | " + " | ".join(f"RE T={t} | TDE T={t}" for t in ts) + " | d_beta | d_random | d_beta / d_random |",
-        "| --- | " + " | ".join("---: | ---:" for _ in ts) + " | ---: | ---: | ---: |",
-    ]
-    for label, s in scores.items():
-        cells = " | ".join(f"{_fmt(s.re[t])} | {_fmt(s.tde[t])}" for t in ts)
-        rel = s.d_beta.mean / max(s.d_random.mean, 1e-12)
-        lines.append(f"| {label} | {cells} | {s.d_beta.mean:.3f} ± {s.d_beta.std:.3f} | "
-                     f"{s.d_random.mean:.3f} | {rel:.2f} |")
-    se_t = max(ts)
-    lines += ["", f"Standard errors over the {info['test_windows']} windows at T = {se_t}: "
-              + "; ".join(f"{label} TDE ± {s.tde_se[se_t]:.0f}, RE ± {s.re_se[se_t]:.0f}"
-                          for label, s in scores.items())
-              + " (cm^2)."]
-    origins = ("self", "transfer", "prior", "flow")
-    lines += [
-        "",
-        "### Table 3: realism classifier accuracy (lower = more realistic, 0.5 = indistinguishable)",
-        "",
-        "| model | " + " | ".join(f"{o} (two-sample)" for o in origins) + " | " + " | ".join(f"{o} (poses)" for o in origins)
-        + " |",
-        "| --- |" + " ---: |" * (2 * len(origins)),
-    ]
-    for label, s in scores.items():
-        full = [f"{s.realism[o]:.2f}" if o in s.realism else "-" for o in origins]
-        poses = [f"{s.realism_poses[o]:.2f}" if o in s.realism_poses else "-" for o in origins]
-        lines.append(f"| {label} | " + " | ".join(full + poses) + " |")
-    real_v, real_a = next(iter(scores.values())).motion["real"]
-    lines += [
-        "",
-        "How lively the motion is: mean absolute velocity / acceleration of the features per frame (metres per "
-        f"frame, per frame^2). Held-out ground truth: {real_v:.4f} / {real_a:.4f}.",
-        "",
-        "| model | " + " | ".join(origins) + " |",
-        "| --- |" + " ---: |" * len(origins),
-    ]
-    for label, s in scores.items():
-        lines.append(f"| {label} | " + " | ".join(
-            f"{s.motion[o][0]:.4f} / {s.motion[o][1]:.4f}" if o in s.motion else "-" for o in origins) + " |")
-    lines += [
-        "",
-        "### What ordering we find",
-        "",
-        f"- TDE at T = 40 (higher = less copying): {_order(scores, lambda s: s.tde[40], higher_first=True)}.",
-        f"- RE at T = 40 (higher = less posture in z): {_order(scores, lambda s: s.re[40], higher_first=True)}.",
-        "- d_beta / d_random (lower = behaviour kept): "
-        + _order(scores, lambda s: s.d_beta.mean / max(s.d_random.mean, 1e-12), higher_first=False) + ".",
-        f"- Realism of transfers, pose classifier (lower = more realistic): "
-        f"{_order(scores, lambda s: s.realism_poses['transfer'], higher_first=False)}; the two-sample test: "
-        f"{_order(scores, lambda s: s.realism['transfer'], higher_first=False)}.",
-        "",
-        "The paper's statements, checked on these numbers:",
-        "",
-        *claims(scores),
-        "",
-        "The two-sample test's real-vs-real control on these windows: "
-        f"{next(iter(scores.values())).realism_control:.2f} (about 0.5 as it must be); an accuracy well above "
-        "it says the generated futures move differently from the real futures of the same windows (the "
-        "liveliness table says how: speed and acceleration).",
-        "",
-        "Caveats: the models are small and briefly trained (minutes on 2 CPU cores, a few thousand training "
-        "windows of real mocap) against the paper's 1024-unit LSTMs trained for 50 epochs on Human3.6M; the "
-        "held-out set is a handful of clips, and the realism classifier is linear with few hundred test "
-        "items, so differences of a few hundredths are noise.",
-        "",
-        "### Known-answer analogy (procedural transitions)",
-        "",
-        f"A small mtvae-add (hidden {analogy['model']['hidden_dim']}, latent {analogy['model']['latent_dim']}) "
-        f"trained {analogy['steps']} steps ({analogy['train_s']:.0f} s) on 600 sequences of the multimodal "
-        "benchmark (a context mode, then a future mode from the first future frame). For each X -> Y and "
-        f"{analogy['seeds']} seeds: A -> B is a clip where X turns into Y (speed 0.85-1.0, height 1.55-1.72 m), C "
-        "another instance of X (speed 1.0-1.15, height 1.72-1.9 m); D = decode(C, E(A, B)) is labelled by the "
-        "nearest-template mode classifier. 'prior' labels a sample from C with z ~ N(0, I) instead (no A -> B). "
-        "`tests/test_analogy.py::test_known_answer_analogy_walk_to_run` asserts the walk -> run row "
-        "(Y is the most frequent label of D).",
-        "",
-        "| X -> Y | D labelled Y | D labels | prior labelled Y | prior labels |",
-        "| --- | ---: | --- | ---: | --- |",
-    ]
+
+def _transfer_analogy_block(analogy: dict) -> str:
+    """The block between the transfer-analogy markers of docs/results_transfer.md (no heading)."""
+    m = analogy["model"]
+    text = (f"**Known answer, procedural transitions.** A small `mtvae-add` (hidden {m['hidden_dim']}, latent "
+            f"{m['latent_dim']}, {analogy['steps']} steps on {ANALOGY_SEQUENCES} sequences of the multimodal benchmark); "
+            f"for each X -> Y and {analogy['seeds']} seeds, A -> B is a clip where X turns into Y, C another instance "
+            "of X of another size and speed, D = decode(C, E(A, B)) labelled by the nearest-template classifier; the "
+            "prior's samples from C for comparison:")
+    lines = [*_wrap(text), "",
+             "| X -> Y | D labelled Y | D labels | prior labelled Y |", "| --- | ---: | --- | ---: |"]
     for r in analogy["rows"]:
-        fmt = lambda c: ", ".join(f"{k} {v}" for k, v in sorted(c.items(), key=lambda kv: -kv[1]))  # noqa: E731
-        lines.append(f"| {r['x']} -> {r['y']} | {r['analogy_hits']}/{analogy['seeds']} | {fmt(r['analogy'])} | "
-                     f"{r['prior_hits']}/{analogy['seeds']} | {fmt(r['prior'])} |")
-    lines += [
-        "",
-        "### Commands",
-        "",
-        "```",
-        "motion2video transfer --model behavior --behavior ../shared/data/mocap/cmu/131_03.bvh \\",
-        "    --target ../shared/data/mocap/cmu/01_01.bvh --target-frame 1200 -o out/transfer.mp4",
-        "motion2video transfer --model behavior --sample 6 --target ../shared/data/mocap/cmu/08_01.bvh -o out/flow.mp4",
-        "motion2video analogy --model mtvae-add ../shared/data/mocap/cmu/131_01.bvh \\",
-        "    ../shared/data/mocap/cmu/131_01.bvh ../shared/data/mocap/cmu/01_01.bvh --a-start 400 --c-start 1200 \\",
-        "    -o out/analogy.mp4",
-        "motion2video analogy --model mtvae-add-face ../shared/data/face/livelinkface/alex_rom_3.csv \\",
-        "    ../shared/data/face/livelinkface/alex_rom_3.csv ../shared/data/face/llv/dao.csv --a-start 2195 \\",
-        "    -o out/face_start_smiling.mp4   # A -> B: the capture starts smiling; C: another face and head pose",
-        "```",
-        "",
-    ]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines))
+        labels = ", ".join(f"{k} {v}" for k, v in sorted(r["analogy"].items(), key=lambda kv: -kv[1]))
+        lines.append(f"| {r['x']} -> {r['y']} | {r['analogy_hits']}/{analogy['seeds']} | {labels} | "
+                     f"{r['prior_hits']}/{analogy['seeds']} |")
+    return "\n".join(lines)
 
 
 def transfer_main(argv: list[str] | None = None) -> int:
@@ -2587,12 +1741,20 @@ def transfer_main(argv: list[str] | None = None) -> int:
     parser.add_argument("--stride", type=int, default=8, help="frames between held-out windows")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workdir", default=None, help="keep / reuse the checkpoints here (default: a temp dir)")
+    parser.add_argument("--split-of", default=f"git:{OLD_REV}:motion2video/weights/mtvae-add.safetensors",
+                        help="a checkpoint (path or git:REV:PATH) whose recorded split is used, its clips only "
+                        "(default: the 72-clip mtvae-add); '' = the whole folder split with split_seed 1")
+    parser.add_argument("--cache", default="/tmp/motion2video-git-weights", help="where git:REV:PATH files are written")
     parser.add_argument("--out", default=str(ROOT / "docs" / "results_transfer.md"))
     parser.add_argument("--json", default=None, help="also write the raw numbers here")
     args = parser.parse_args(argv)
+    out = Path(args.out)
+    for begin, end in ((TRANSFER_ANALOGY_BEGIN, TRANSFER_ANALOGY_END), (TRANSFER_CLAIMS_BEGIN, TRANSFER_CLAIMS_END)):
+        check_section(out, begin, end)
 
-    from motion2video.models.checkpoint import load_model
-    from motion2video.data.dataset import DatasetConfig, build_dataset
+    import os
+
+    from motion2video.models import checkpoint
     from motion2video.evaluation.transfer_protocol import evaluate_transfer, transfer_pairs
 
     torch.set_num_threads(1)
@@ -2601,7 +1763,8 @@ def transfer_main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="m2v-results-transfer-") as tmp:
         workdir = Path(args.workdir) if args.workdir else Path(tmp)
         workdir.mkdir(parents=True, exist_ok=True)
-        dataset = build_dataset(args.data, DatasetConfig(split_seed=1))
+        split = checkpoint.read_meta(resolve(args.split_of, Path(args.cache))).split if args.split_of else None
+        dataset = build_dataset(args.data, DatasetConfig(split_seed=1), split=split, recorded_only=split is not None)
         trained = train_variants(dataset, steps=args.steps, batch_size=args.batch_size, workdir=workdir,
                                  seed=args.seed)
         test = dataset.windows("test", stride=args.stride)
@@ -2617,13 +1780,17 @@ def transfer_main(argv: list[str] | None = None) -> int:
     info = {
         "command": command.strip(), "date": time.strftime("%Y-%m-%d"),
         "machine": f"{platform.machine()}, {platform.system()}, torch {torch.__version__}",
-        "total_min": (time.perf_counter() - t_all) / 60.0, "data": args.data,
+        "total_min": (time.perf_counter() - t_all) / 60.0, "data": args.data, "cores": os.cpu_count(),
+        "clips": dataset.summary["clips"], "minutes": dataset.summary["frames"] / dataset.summary["fps"] / 60,
         "test_clips": sorted(set(test.clip_names)), "test_windows": len(test), "train_windows": len(train),
         "stride": args.stride, "steps": args.steps, "batch_size": args.batch_size, "seed": args.seed,
         "train_s": {k: v[1] for k, v in trained.items()},
     }
-    out = Path(args.out)
-    write_markdown(out, scores=scores, trained=trained, analogy=analogy, info=info)
+    if not out.is_file():  # a new page (e.g. a smoke run's --out) starts with both marker pairs
+        write_text(out, f"# Results\n\n{TRANSFER_ANALOGY_BEGIN}\n{TRANSFER_ANALOGY_END}\n\n"
+                        f"{TRANSFER_CLAIMS_BEGIN}\n{TRANSFER_CLAIMS_END}\n")
+    write_section(out, TRANSFER_ANALOGY_BEGIN, TRANSFER_ANALOGY_END, _transfer_analogy_block(analogy))
+    write_section(out, TRANSFER_CLAIMS_BEGIN, TRANSFER_CLAIMS_END, _transfer_claims_block(scores, info))
     print(f"wrote {out} in {info['total_min']:.1f} min")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
@@ -2634,21 +1801,21 @@ def transfer_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# transfer_benchmark: Write the known-answer transfer benchmark and the liveliness / realism numbers into
+# transfer_benchmark: the liveliness of the shipped body models' futures and of the behaviour model's transfers.
 # ----------------------------------------------------------------------------------------------------------------
 
 
-TRANSFER_BENCHMARK_DOC = """Write the known-answer transfer benchmark and the liveliness / realism numbers into
-docs/results_transfer.md, between the markers of its "Known-answer transfer on real motion" section (the
-rest of the page is scripts/make_results.py transfer's).
+TRANSFER_BENCHMARK_DOC = """The liveliness of the shipped body models' sampled futures and of the behaviour model's transfers.
 
-    python scripts/make_results.py transfer-benchmark \
-        --behavior before=out/behavior_before.safetensors --behavior after=behavior --analogy mtvae-add
+    python scripts/make_results.py transfer-benchmark [--sampler LABEL=CHECKPOINT ...] [--behavior CHECKPOINT]
 
-Each ``--behavior LABEL=CHECKPOINT`` is a behaviour model to compare (a shipped name or a path); the
-benchmark itself is :mod:`motion2video.evaluation.transfer_benchmark`, the liveliness and realism numbers
-:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer` on the held-out windows of the corpus's pinned
-subject-disjoint split (the checkpoints' own split).
+On the held-out windows (stride 8) of the corpus's pinned subject-disjoint split (the checkpoints' own split):
+the mean absolute velocity / acceleration of the features per frame of --samples futures per window of each
+--sampler (default mtvae-add, lcpvae and behavior, whose futures are flow samples;
+:func:`motion2video.evaluation.transfer_protocol.sample_realism`) and of the --behavior model's transfers with
+the decoder as trained (:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer`), as ratios to the
+held-out ground truth's. Writes the table between the transfer-benchmark markers of docs/results_transfer.md
+("Liveliness") and, with --json, the raw numbers (the realism scores the same functions give included).
 """
 
 TRANSFER_BENCHMARK_BEGIN = "<!-- transfer-benchmark:begin (scripts/make_results.py transfer-benchmark) -->"
@@ -2657,29 +1824,17 @@ TRANSFER_BENCHMARK_BEGIN = "<!-- transfer-benchmark:begin (scripts/make_results.
 TRANSFER_BENCHMARK_END = "<!-- transfer-benchmark:end -->"
 
 
+LIVELINESS_SAMPLERS = ("mtvae-add", "lcpvae", "behavior")  # the default --sampler models (label = shipped name)
+
+
 def _pairs(values: list[str]) -> list[tuple[str, str]]:
     out = []
     for v in values:
         label, _, path = v.partition("=")
         if not path:
-            raise SystemExit(f"--behavior wants LABEL=CHECKPOINT, got {v!r}")
+            raise InputError(f"--sampler wants LABEL=CHECKPOINT, got {v!r}")
         out.append((label, path))
     return out
-
-
-def benchmark_rows(mocap: str, behaviors: list[tuple[str, str]], analogy: str | None, *, adapt_steps: int) -> dict:
-    from motion2video.models.checkpoint import load_model
-    from motion2video.evaluation import transfer_benchmark as B
-
-    rows: dict[str, list[dict]] = {}
-    for label, path in behaviors:
-        res = B.run_benchmark(mocap, transfer=load_model(path), adapt_steps=adapt_steps)
-        rows[f"transfer ({label})"] = [r for r in B.summarise(res) if r["method"] == "transfer"]
-        rows["copy the source"] = [r for r in B.summarise(res) if r["method"] == "copy"]
-    if analogy:
-        res = B.run_benchmark(mocap, analogy=load_model(analogy))
-        rows[f"analogy ({analogy})"] = [r for r in B.summarise(res) if r["method"] == "analogy"]
-    return rows
 
 
 _CLIPS: dict = {}  # data config -> the clips of the mocap folder, read once per config for every function below
@@ -2695,265 +1850,79 @@ def checkpoint_dataset(mocap: str, bundle):
     return build_dataset(mocap, cfg, split=bundle.meta.split, stats=bundle.stats, clips=_CLIPS[cfg])
 
 
-def liveliness(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, seed: int) -> dict:
-    from motion2video.models.checkpoint import load_model
+def transfer_liveliness(mocap: str, checkpoint: str, *, stride: int, seed: int) -> dict:
+    """:func:`motion2video.evaluation.transfer_protocol.evaluate_transfer` of one behaviour model on the held-out
+    windows: liveliness (``motion``: origin -> (velocity, acceleration), ``real`` the ground truth's), realism."""
     from motion2video.evaluation.transfer_protocol import evaluate_transfer, transfer_pairs
 
-    out = {}
-    dataset = stats = None
-    for label, path in checkpoints:
-        bundle = load_model(path)
-        if stats is None or not stats.same_as(bundle.stats):  # windows normalised with this checkpoint's statistics
-            stats = bundle.stats
-            dataset = checkpoint_dataset(mocap, bundle)
-            test = dataset.windows("test", stride=stride)
-            train = dataset.windows("train", stride=32)
-            pairs = transfer_pairs(test.clip_names, seed=seed)
-        s = evaluate_transfer(bundle, test, train, pairs=pairs, seed=seed)
-        out[label] = {"motion": s.motion, "realism": s.realism, "realism_control": s.realism_control,
-                      "realism_poses": s.realism_poses, "windows": s.windows}
-    return out
+    bundle = load_model(checkpoint)
+    dataset = checkpoint_dataset(mocap, bundle)
+    test = dataset.windows("test", stride=stride)
+    s = evaluate_transfer(bundle, test, dataset.windows("train", stride=32), pairs=transfer_pairs(test.clip_names,
+                                                                                                  seed=seed), seed=seed)
+    return {"model": bundle.name, "motion": s.motion, "realism": s.realism, "realism_control": s.realism_control,
+            "realism_poses": s.realism_poses, "windows": s.windows}
 
 
 def sampler_rows(mocap: str, checkpoints: list[tuple[str, str]], *, stride: int, samples: int, seed: int) -> dict:
     """Liveliness and realism of each model's sampled futures (what `sample` and `synthesize` draw) on the
-    held-out windows: :func:`motion2video.evaluation.transfer_protocol.sample_realism`."""
-    import dataclasses
-
-    from motion2video.models.checkpoint import load_model
+    held-out windows: :func:`motion2video.evaluation.transfer_protocol.sample_realism`, and the model's name."""
     from motion2video.evaluation.transfer_protocol import sample_realism
 
     out = {}
     for label, path in checkpoints:
         bundle = load_model(path)
         dataset = checkpoint_dataset(mocap, bundle)
-        out[label] = dataclasses.asdict(sample_realism(bundle, dataset.windows("test", stride=stride),
-                                                       samples=samples, seed=seed))
+        out[label] = {"model": bundle.name, **dataclasses.asdict(sample_realism(
+            bundle, dataset.windows("test", stride=stride), samples=samples, seed=seed))}
     return out
 
 
-def classifier_controls(mocap: str, checkpoint: str, *, stride: int, seed: int = 0) -> dict:
-    """The realism test's classifier (:mod:`motion2video.evaluation.realism`: logistic regression on per-window
-    motion features, 5-fold cross-validated) with REAL motion on both sides: the held-out futures against
-    (a) a random half of themselves (the test's own control), (b) the validation subjects' real futures (other
-    people: what the retired full-descriptor classifier told apart with 0.99)."""
-    import numpy as np
+def _transfer_benchmark_render(samplers: dict, transfers: dict, *, label: str, command: str) -> str:
+    """The block between the transfer-benchmark markers of docs/results_transfer.md (no heading)."""
+    first = next(iter(samplers.values()))
+    real_v, real_a = first["real"]
+    rows = []
+    for name, d in samplers.items():
+        (v, a), (rv, ra) = d["samples"], d["real"]  # each model's own ground truth
+        rows.append(f"| `{name}`{', flow samples' if d['model'] == 'behavior' else ''} | {v / rv:.2f} / {a / ra:.2f} |")
+    (v, a), (rv, ra) = transfers["motion"]["transfer"], transfers["motion"]["real"]
+    rows.append(f"| `{label}`, transfers (decoder as trained) | {v / rv:.2f} / {a / ra:.2f} |")
+    return f"""Mean absolute velocity / acceleration of the features per frame, as a ratio to the held-out ground truth's
+({real_v:.4f} m/frame / {real_a:.4f} m/frame^2), over {first['samples_per_window']} sampled futures per held-out window ({first['windows']} windows; target 0.8-1.2);
+`{command}`:
 
-    from motion2video.models.checkpoint import load_model
-    from motion2video.evaluation import realism as R
-
-    bundle = load_model(checkpoint)
-    dataset = checkpoint_dataset(mocap, bundle)
-    to = bundle.data_config.observed
-    dim = R.point_dim(bundle.layout.kind)
-    real = R.motion_features(dataset.windows("test", stride=stride).raw[:, to:], dim=dim)
-    other = R.motion_features(dataset.windows("val", stride=stride).raw[:, to:], dim=dim)
-    x = np.concatenate([real, other])
-    y = np.concatenate([np.ones(len(real), np.int64), np.zeros(len(other), np.int64)])
-    return {"two random halves of the held-out futures (the control)":
-            {"accuracy": R.real_vs_real_control(real, seed=seed), "items": [len(real) // 2, len(real) - len(real) // 2]},
-            "the held-out futures against the validation subjects' real futures (other people)":
-            {"accuracy": R.cross_validated_accuracy(x, y, np.arange(len(x)), seed=seed),
-             "items": [len(real), len(other)]}}
-
-
-def _table(rows: dict, split: str, key: str, fmt: str) -> list[str]:
-    methods = list(rows)
-    behaviours = [r["behaviour"] for r in next(iter(rows.values())) if r["split"] == split]
-    lines = ["| behaviour (signature) | pairs | " + " | ".join(methods) + " |",
-             "| --- | ---: | " + " | ".join("---:" for _ in methods) + " |"]
-    for b in behaviours:
-        cells = []
-        n = sig = None
-        for m in methods:
-            r = next(r for r in rows[m] if r["split"] == split and r["behaviour"] == b)
-            n, sig = r["pairs"], r["signature"]
-            cells.append(fmt.format(**r))
-        lines.append(f"| {b} ({sig}) | {n} | " + " | ".join(cells) + " |")
-    return lines
-
-
-def _relative_table(rows: dict, split: str) -> list[str]:
-    """Per behaviour and method: the root-path signature's median ratio, then each root-relative one's."""
-    from motion2video.evaluation import transfer_benchmark as B
-
-    def cell(v: float) -> str:
-        return "-" if v != v else f"{v:.2f}"
-
-    names = list(B.RELATIVE)
-    lines = ["| behaviour | method | root path (its signature) | " + " | ".join(n.replace("_", " ") for n in names)
-             + " |", "| --- | --- | ---: | " + " | ".join("---:" for _ in names) + " |"]
-    behaviours = [r["behaviour"] for r in next(iter(rows.values())) if r["split"] == split]
-    for b in behaviours:
-        for m, rs in rows.items():
-            r = next(r for r in rs if r["split"] == split and r["behaviour"] == b)
-            lines.append(f"| {b} | {m} | {r['median_ratio']:.2f} ({r['signature']}) | "
-                         + " | ".join(cell(r["relative"][n]) for n in names) + " |")
-    return lines
-
-
-def _transfer_benchmark_render(bench: dict, live: dict, samplers: dict, controls: dict, *, command: str, seconds: float,
-           adapt_steps: int) -> str:
-    from motion2video.evaluation import transfer_benchmark as B
-
-    import torch
-
-    L = ["", "## Known-answer transfer on real motion", "",
-         f"Generated by `{command}` on {datetime.date.today()} ({platform.machine()}, torch {torch.__version__}, "
-         f"{seconds / 60:.1f} min).", "",
-         "Behaviour windows with a measurable signature, cut from real clips "
-         "(`motion2video/evaluation/transfer_benchmark.py`, `CASES`: the clip, start frame at 25 fps and why), "
-         "each re-enacted from the start postures of clips of OTHER subjects (`TARGETS`). The number is the "
-         "median over the pairs of signature(re-enactment) / signature(source), with the inter-quartile range: "
-         "1.0 = the behaviour came across in full. Held-out = the pinned split's test subjects (CMU 2, 5, 7, "
-         "131, 94), re-enacted from postures of other test subjects; training = training clips and postures. "
-         "Signatures (`motion2video/evaluation/signatures.py`): jump = pelvis vertical range; kick = ankle "
-         "height above the knee, from the hanging-shin position; walk/run = mean horizontal root speed; turn = "
-         "net heading change; dance/martial arts = mean wrist/ankle speed relative to the pelvis.",
-         "- transfer: the behaviour model, z = E(source window), decoded from the target posture "
-         f"(as `motion2video transfer --adapt-steps {adapt_steps}`: "
-         + ("the decoder as trained);" if adapt_steps == 0 else
-            f"the decoder first fitted to each source for {adapt_steps} steps);"),
-         "- analogy: MT-VAE A : B :: C : D, A = 16 frames before the source start (the first frame repeated "
-         "where the clip starts there), C = 16 frames up to the target posture;",
-         "- copy the source: the source moved rigidly onto the target's position and heading (ratio 1 by "
-         "construction; it does not start from the target's posture).", "",
-         "Root-relative signatures (`signatures.ROOT_RELATIVE_SIGNATURES`), each the range over the "
-         "window of a distance measured on the body, so a re-enactment carried along the source's root path "
-         "gets no credit for the path itself: leg extension = pelvis height above the ankles' mean height; arm "
-         "swing = wrist height relative to the thorax (the larger of the two wrists); knee bend = hip-to-ankle "
-         "distance (the larger of the two legs); ankle lift = ankle height relative to the pelvis (the kick "
-         "measured from the body). Ratios as above; '-' where no source of the row moves that way by "
-         f"{B.MIN_RELATIVE_AMPLITUDE:.2f} m or more. Target for held-out jumps and kicks: every median between 0.6 "
-         "and 1.4.", ""]
-    for split in ("held-out", "train"):
-        L += [f"### Signature ratio, {split} clips (median [IQR])", ""]
-        L += _table(bench, split, "ratio", "{median_ratio:.2f} [{q25:.2f}, {q75:.2f}]")
-        L.append("")
-    for split in ("held-out", "train"):
-        L += [f"### Root-relative signatures beside the root-path one, {split} clips (median ratio)", ""]
-        L += _relative_table(bench, split)
-        L.append("")
-    L += ["### Start posture and rigid bones, held-out clips", "",
-          "Start error: mean per-joint distance (m) between the first generated frame and the target posture "
-          "(root-relative, heading-aligned; real motion moves about 0.01-0.03 m per frame). Bone spread: the "
-          "largest per-bone s.d. / mean length over the generated frames (real mocap < 0.01). Medians over "
-          "the pairs. Every behaviour-model row goes through what `motion2video transfer` does to its output: "
-          "bones rescaled to the start posture's lengths and ankles kept above the start's lower ankle by leg IK "
-          "(`motion2video.stages.latents.rigid_bones`); the analogy rows are the raw decoder output.", ""]
-    L += _table(bench, "held-out", "start", "{start_error:.3f} m / {bone_spread:.3f}")
-    L.append("")
-    if live:
-        first = next(iter(live.values()))
-        real_v, real_a = first["motion"]["real"]
-        L += ["### Liveliness and realism", "",
-              f"Held-out windows of the corpus's pinned split ({first['windows']} windows, 16 observed + 48 "
-              "future frames); `motion2video.evaluation.transfer_protocol.evaluate_transfer`: self = reconstruction, "
-              "transfer = re-enacted from another held-out clip's window, prior = z ~ N(0, I), flow = z = "
-              "T^-1(u). Mean absolute velocity / acceleration of the features per frame (m/frame, m/frame^2; "
-              f"held-out ground truth **{real_v:.4f} / {real_a:.4f}**), and their ratio to the ground truth "
-              "(target: within 0.8-1.2). Realism: the two-sample test "
-              "(`motion2video.evaluation.realism`): a logistic regression on per-window motion features (per "
-              "joint: mean speed, mean acceleration, positional spread), 5-fold cross-validated over the windows, "
-              "tells the real futures from the generated futures of the same windows; its held-out accuracy "
-              "(0.5 = indistinguishable; target <= 0.75) and its control, real against real of the same windows "
-              f"split in two halves (**{first['realism_control']:.2f}**, about 0.5 as it must be). Last column: "
-              "a ridge classifier on poses alone (even windows train, odd test).",
-              "", "| model | origin | velocity / acceleration | vs real | two-sample test | classifier (poses) |",
-              "| --- | --- | ---: | ---: | ---: | ---: |"]
-        for label, d in live.items():
-            for origin, (v, a) in d["motion"].items():
-                if origin == "real":
-                    continue
-                L.append(f"| {label} | {origin} | {v:.4f} / {a:.4f} | {v / real_v:.2f} / {a / real_a:.2f} | "
-                         f"{d['realism'][origin]:.2f} | {d['realism_poses'][origin]:.2f} |")
-        L.append("")
-    if samplers:
-        first = next(iter(samplers.values()))
-        real_v, real_a = first["real"]
-        L += ["### Sampled futures of the shipped body models: liveliness and realism", "",
-              f"What `sample` and `synthesize` draw: {first['samples_per_window']} futures per held-out window "
-              f"({first['windows']} windows; behavior: flow samples). Mean absolute velocity / acceleration of "
-              f"the features per frame over all samples (held-out ground truth **{real_v:.4f} / {real_a:.4f}**) "
-              "and their ratio to it (target 0.8-1.2; the 2D model's in virtual-camera image heights, against its "
-              "own ground truth); the two-sample realism test (above) and the pose classifier on one sample per window, "
-              "with the test's real-vs-real control. "
-              "'before' = the checkpoints shipped before the liveliness term (git 96e5d78), 'after' = shipped now.",
-              "Beside it, the test on one family of features alone (speeds / accelerations / positional spreads of "
-              "the 17 points), which says what kind of difference gives the generated futures away.",
-              "", "| model | velocity / acceleration | vs real | two-sample test | control | speed / accel. / spread alone "
-              "| classifier (poses) |",
-              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
-        for label, d in samplers.items():
-            v, a = d["samples"]
-            rv, ra = d["real"]  # each model's own ground truth (a 2D model's is in image units)
-            L.append(f"| {label} | {v:.4f} / {a:.4f} | {v / rv:.2f} / {a / ra:.2f} | "
-                     f"{d['realism']:.2f} | {d['realism_control']:.2f} | "
-                     + " / ".join(f"{v:.2f}" for v in d["realism_by_family"].values())
-                     + f" | {d['realism_poses']:.2f} |")
-        L.append("")
-    if controls:
-        L += ["### What the realism test's classifier says about real motion", "",
-              "The two-sample test's classifier and folds with real motion capture on both sides:", "",
-              "| the two classes (all real motion) | items | held-out accuracy |", "| --- | ---: | ---: |"]
-        for what, d in controls.items():
-            L.append(f"| {what} | {d['items'][0]} / {d['items'][1]} | {d['accuracy']:.2f} |")
-        L += ["", "The retired realism classifier (a ridge classifier on the full sequence descriptor: poses every "
-              "4th frame, mean absolute velocity and acceleration, standard deviations) told the held-out subjects' "
-              "real futures from the validation subjects' with accuracy 0.99: it measured who moves and what they "
-              "do, not whether the motion is real. The two-sample test compares the real and the generated futures "
-              "of the same observed windows, so who moves and what they do are the same in both classes; the "
-              "second row shows how much other people's real motion differs in the same features.", ""]
-    L += ["Cases:", ""]
-    L += [f"- {c.split}, {c.behaviour}: `{c.clip}` from frame {c.start} (25 fps), {c.horizon} frames: {c.why}"
-          for c in B.CASES]
-    return "\n".join(L) + "\n"
+| model | velocity / acceleration (x the truth's) |
+| --- | ---: |
+""" + "\n".join(rows)
 
 
 def transfer_benchmark_main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=TRANSFER_BENCHMARK_DOC.split("\n\n")[0])
     parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "mocap"))
-    parser.add_argument("--behavior", action="append", default=[], help="LABEL=CHECKPOINT (repeatable)")
-    parser.add_argument("--analogy", default="mtvae-add", help="MT-VAE checkpoint for the analogy ('' = none)")
-    parser.add_argument("--no-liveliness", action="store_true", help="skip the held-out liveliness numbers")
-    parser.add_argument("--stride", type=int, default=8, help="frames between held-out windows (liveliness)")
-    parser.add_argument("--sampler", action="append", default=[],
-                        help="LABEL=CHECKPOINT whose sampled futures are measured (repeatable)")
-    parser.add_argument("--samples", type=int, default=10, help="futures per window for --sampler")
+    parser.add_argument("--sampler", action="append", default=None,
+                        help="LABEL=CHECKPOINT whose sampled futures are measured (repeatable; default: "
+                        + ", ".join(LIVELINESS_SAMPLERS) + ")")
+    parser.add_argument("--behavior", default="behavior", help="the behaviour model whose transfers are measured")
+    parser.add_argument("--stride", type=int, default=8, help="frames between held-out windows")
+    parser.add_argument("--samples", type=int, default=10, help="futures per window")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--adapt-steps", type=int, default=None,
-                        help="decoder adaptation steps of the transfer rows (default: motion2video transfer's)")
     parser.add_argument("--out", default=str(ROOT / "docs" / "results_transfer.md"))
     parser.add_argument("--json", default=None, help="also write the raw numbers here")
     args = parser.parse_args(argv)
-    behaviors = _pairs(args.behavior) or [("shipped", "behavior")]
-    t0 = time.time()
-    from motion2video.stages.latents import ADAPT_STEPS
-
-    adapt_steps = ADAPT_STEPS if args.adapt_steps is None else args.adapt_steps
-    bench = benchmark_rows(args.data, behaviors, args.analogy or None, adapt_steps=adapt_steps)
-    live = {}
-    if not args.no_liveliness:
-        models = [(f"behavior ({label})", path) for label, path in behaviors]
-        if args.analogy:
-            models.append((args.analogy, args.analogy))
-        live = liveliness(args.data, models, stride=args.stride, seed=args.seed)
-    samplers = sampler_rows(args.data, _pairs(args.sampler), stride=args.stride, samples=args.samples,
-                            seed=args.seed)
-    controls = classifier_controls(args.data, behaviors[-1][1], stride=args.stride) if samplers else {}
-    command = "python scripts/make_results.py transfer-benchmark " + " ".join(
-        [f"--behavior {label}={path}" for label, path in behaviors]
-        + ([f"--analogy {args.analogy}"] if args.analogy != "mtvae-add" else [])
-        + [f"--sampler {shlex.quote(v)}" for v in args.sampler]
-        + ([f"--adapt-steps {args.adapt_steps}"] if args.adapt_steps is not None else []))
-    from motion2video.core.atomic import write_section
-
-    section = _transfer_benchmark_render(bench, live, samplers, controls, command=command, seconds=time.time() - t0,
-                     adapt_steps=adapt_steps)
-    write_section(Path(args.out), TRANSFER_BENCHMARK_BEGIN, TRANSFER_BENCHMARK_END, section)
+    check_section(args.out, TRANSFER_BENCHMARK_BEGIN, TRANSFER_BENCHMARK_END)
+    torch.set_num_threads(1)
+    samplers = sampler_rows(args.data, _pairs(args.sampler) if args.sampler else
+                            [(n, n) for n in LIVELINESS_SAMPLERS], stride=args.stride, samples=args.samples, seed=args.seed)
+    transfers = transfer_liveliness(args.data, args.behavior, stride=args.stride, seed=args.seed)
+    command = "python scripts/make_results.py transfer-benchmark" + "".join(
+        f" --{k} {getattr(args, k)}" for k in ("behavior", "stride", "samples", "seed")
+        if getattr(args, k) != parser.get_default(k)) + "".join(f" --sampler {shlex.quote(v)}" for v in args.sampler or [])
+    label = Path(args.behavior).name.removesuffix(".safetensors")
+    write_section(args.out, TRANSFER_BENCHMARK_BEGIN, TRANSFER_BENCHMARK_END,
+                  _transfer_benchmark_render(samplers, transfers, label=label, command=command))
     if args.json:
-        Path(args.json).write_text(json.dumps({"benchmark": bench, "liveliness": live, "samplers": samplers,
-                                               "controls": controls}, indent=1))
+        write_json(args.json, json.loads(json.dumps({"samplers": samplers, "transfers": transfers}, default=list)))
     print(f"wrote {args.out}")
     return 0
 
@@ -3096,6 +2065,182 @@ def face_sheet_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# transfer-unseen: behaviour transfer on clips the shipped behaviour model never saw
+
+TRANSFER_UNSEEN_DOC = """Behaviour transfer on clips the shipped ``behavior`` model never saw: CMU jumps and leg lifts of the corpus's
+test subjects and Bandai-Namco waves, a bow and a punch (a source no shipped model trained on), each re-enacted
+from walking postures of OTHER test subjects, scored by the root-relative signatures
+(``motion2video.evaluation.signatures``) as ratios of the source's.
+
+Two ways, the same source window, target posture, z and step count (300, ``--adapt-steps``' default):
+
+- ``before``: the decoder fitted to the source from the source's OWN start posture, then run from the target's
+  (what ``transfer`` did before), the root path shifted by the difference of the start heights;
+- ``after``: ``motion2video transfer`` now (``stages.latents.reenact_source``): the decoder fitted to the source
+  retargeted onto the target's posture and bones, run from the target's posture along the goal's root path.
+
+Writes a markdown table (per clip: the median over its targets), the macro over clips, the raw numbers as JSON,
+and a contact sheet PNG (source | before | after, every 8th frame) of chosen pairs drawn with the project's mesh
+renderer.
+
+    python scripts/make_results.py transfer-unseen --json out/transfer_unseen.json --sheet out/transfer_unseen.png
+
+About 25 minutes on a loaded 2-core machine (two fits per pair). ``--held-out-benchmark`` prints the known-answer
+transfer benchmark's held-out rows instead (``evaluation.transfer_benchmark``, one fit per case and target).
+"""
+
+UNSEEN_MOCAP = ROOT / ".." / "shared" / "data" / "mocap"
+UNSEEN_BANDAI = ROOT / ".." / "shared" / "data" / "bandai" / "bvh"
+UNSEEN_HORIZON = 48
+UNSEEN_FPS = 25.0
+UNSEEN_SIGNATURES = ("leg_extension", "arm_swing", "knee_bend", "ankle_lift")
+
+# (label, file, subject, start at 25 fps or None: the window with the largest summed root-relative signatures of
+# the SOURCE, stride 4). CMU: the corpus's test subjects (docs/data.md); Bandai: no shipped model trained on it.
+UNSEEN_SOURCES = (
+    ("jump", UNSEEN_MOCAP / "cmu/02_04.bvh", "cmu-02", 0),
+    ("hop", UNSEEN_MOCAP / "cmu/131_03.bvh", "cmu-131", 124),
+    ("leg lift (dance)", UNSEEN_MOCAP / "cmu/05_14.bvh", "cmu-05", 64),
+    ("leg lift (dance)", UNSEEN_MOCAP / "cmu/05_15.bvh", "cmu-05", None),
+    ("wave (Bandai 2C)", UNSEEN_BANDAI / "dataset-2_wave-both-hands_feminine_001.bvh.xz", "bandai-2C", None),
+    ("bow (Bandai 1B)", UNSEEN_BANDAI / "dataset-1_bow_active_001.bvh.xz", "bandai-1B", None),
+    ("punch (Bandai 1A)", UNSEEN_BANDAI / "dataset-1_punch_normal_001.bvh.xz", "bandai-1A", None),
+)
+# Walking postures (file, frame at 25 fps, subject); every source uses the first two of other subjects.
+UNSEEN_TARGETS = (
+    (UNSEEN_MOCAP / "cmu/07_03.bvh", 30, "cmu-07"),
+    (UNSEEN_MOCAP / "cmu/05_01.bvh", 42, "cmu-05"),
+    (UNSEEN_MOCAP / "cmu/02_02.bvh", 42, "cmu-02"),
+)
+UNSEEN_SHEET = (("jump", "cmu/07_03.bvh"), ("wave (Bandai 2C)", "cmu/07_03.bvh"), ("punch (Bandai 1A)", "cmu/05_01.bvh"))
+
+
+def _unseen_best_window(clip: np.ndarray) -> int:
+    """Start (25 fps) of the 1 + UNSEEN_HORIZON window with the largest summed root-relative signatures."""
+    starts = range(0, clip.shape[0] - UNSEEN_HORIZON - 1, 4)
+    return max(starts, key=lambda s: sum(S.signature(n, clip[s:s + 1 + UNSEEN_HORIZON], UNSEEN_FPS) for n in UNSEEN_SIGNATURES))
+
+
+def _unseen_fitted_to_own_start(bundle, source: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """The previous re-enactment: the decoder fitted to the source from its own start, run from ``start``."""
+    model = behavior_model(bundle)
+    src, _ = encode_sequences(bundle, source[None])
+    tgt, frame = encode_sequences(bundle, start[None, None])
+    z = behavior_latents(model, src)
+    fitted = adapt_to_source(model, src, z, steps=ADAPT_STEPS)
+    gen = reenact(fitted, z, tgt[:, 0], horizon=UNSEEN_HORIZON, root=behavior_root(fitted, src, tgt[:, 0]))
+    seq = np.concatenate([tgt, gen], axis=1)
+    return rigid_bones("body3d", decode_sequences(bundle, seq[:, None], frame)[0])[0]
+
+
+def _unseen_ratios(source: np.ndarray, made: np.ndarray) -> dict[str, float]:
+    out = {}
+    for name in UNSEEN_SIGNATURES:
+        src = S.signature(name, source, UNSEEN_FPS)
+        out[name] = S.signature(name, made, UNSEEN_FPS) / src if src >= MIN_RELATIVE_AMPLITUDE else float("nan")
+    return out
+
+
+def _unseen_fmt(x: float) -> str:
+    return "-" if not np.isfinite(x) else f"{x:.2f}"
+
+
+def transfer_unseen_main(argv: list[str]) -> None:
+    p = argparse.ArgumentParser(description=TRANSFER_UNSEEN_DOC.split("\n\n")[0])
+    p.add_argument("--json", type=Path, default=None)
+    p.add_argument("--sheet", type=Path, default=None, help="contact sheet PNG of the pairs in UNSEEN_SHEET")
+    p.add_argument("--held-out-benchmark", action="store_true",
+                   help="instead: the known-answer transfer benchmark's held-out cases (transfer rows, medians)")
+    args = p.parse_args(argv)
+    torch.set_num_threads(1)
+    bundle = load_model("behavior")
+    if args.held_out_benchmark:
+        _unseen_held_out_benchmark(bundle)
+        return
+    rows, pairs, sheet = [], [], []
+    for label, path, subject, start in UNSEEN_SOURCES:
+        clip = load_clip(bundle, path).data
+        start = _unseen_best_window(clip) if start is None else start
+        source = clip[start:start + 1 + UNSEEN_HORIZON]
+        targets = [t for t in UNSEEN_TARGETS if t[2] != subject][:2]
+        per = {"before": [], "after": []}
+        for tpath, tframe, _ in targets:
+            posture = load_clip(bundle, tpath).data[tframe]
+            t0 = time.time()
+            before = _unseen_fitted_to_own_start(bundle, source, posture)
+            _, after, shown = reenact_source(bundle, source, posture, adapt_steps=ADAPT_STEPS)
+            after = after[0]
+            r = {"before": _unseen_ratios(shown, before), "after": _unseen_ratios(shown, after)}
+            for k in per:
+                per[k].append(r[k])
+            pair = {"clip": path.name, "label": label, "start_25fps": int(start), "target": tpath.name,
+                    "target_frame_25fps": int(tframe), **r,
+                    "source_amplitude_m": {n: S.signature(n, shown, UNSEEN_FPS) for n in UNSEEN_SIGNATURES},
+                    "start_error_m": S.posture_error(after[1:2], posture),
+                    "bone_spread": S.bone_length_spread(after[1:]), "seconds": time.time() - t0}
+            pairs.append(pair)
+            print(json.dumps(pair), flush=True)
+            if (label, f"cmu/{tpath.name}") in UNSEEN_SHEET:
+                sheet.append((label, path, tpath, shown, before, after))
+        row = {"clip": path.name, "label": label, "start_25fps": int(start),
+               "targets": [t[0].name for t in targets]}
+        for k in per:
+            row[k] = {n: float(np.nanmedian([d[n] for d in per[k]])) if any(np.isfinite(d[n]) for d in per[k])
+                      else float("nan") for n in UNSEEN_SIGNATURES}
+        rows.append(row)
+    macro = {k: {n: float(np.nanmean([r[k][n] for r in rows])) for n in UNSEEN_SIGNATURES} for k in ("before", "after")}
+    head = "| clip | " + " | ".join(f"{n.replace('_', ' ')} before / after" for n in UNSEEN_SIGNATURES) + " |"
+    lines = [head, "| --- |" + " ---: |" * len(UNSEEN_SIGNATURES)]
+    for r in rows:
+        lines.append(f"| {r['label']}: `{r['clip']}` from {r['start_25fps']} | "
+                     + " | ".join(f"{_unseen_fmt(r['before'][n])} / **{_unseen_fmt(r['after'][n])}**" for n in UNSEEN_SIGNATURES) + " |")
+    lines.append("| macro (mean over clips) | " + " | ".join(f"{_unseen_fmt(macro['before'][n])} / **{_unseen_fmt(macro['after'][n])}**"
+                                                      for n in UNSEEN_SIGNATURES) + " |")
+    print("\n".join(lines))
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({"rows": rows, "macro": macro, "pairs": pairs}, indent=1, default=float))
+    if args.sheet and sheet:
+        write_image(args.sheet, _unseen_contact_sheet(sheet))
+        print(f"wrote {args.sheet}")
+
+
+def _unseen_held_out_benchmark(bundle) -> None:
+    """Print the held-out rows of :mod:`motion2video.evaluation.transfer_benchmark` for ``transfer`` as it is."""
+    from motion2video.evaluation import transfer_benchmark as B
+
+    cases = tuple(c for c in B.CASES if c.split == "held-out")
+    for row in B.summarise(B.run_benchmark(str(UNSEEN_MOCAP), transfer=bundle, cases=cases)):
+        if row["method"] == "transfer":
+            print(f"| {row['behaviour']} | {row['median_ratio']:.2f} | "
+                  + " | ".join(_unseen_fmt(row["relative"][n]) for n in UNSEEN_SIGNATURES)
+                  + f" | {row['start_error']:.3f} | {_unseen_fmt(row['posture_kept'])} |", flush=True)
+
+
+def _unseen_contact_sheet(items) -> np.ndarray:
+    """One row per pair: the source, then the re-enactment before and after, every 8th frame (mesh style)."""
+    from motion2video.formats.video import label as put_label
+
+    picks = np.arange(0, UNSEEN_HORIZON + 1, 8)
+    rows = []
+    for label, path, tpath, shown, before, after in items:
+        cells = []
+        for name, made in (("before", before), ("after", after)):
+            result = TransferResult(source=shown[picks].astype(np.float32),
+                                    reenacted=made[None, picks].astype(np.float32), z=np.zeros((1, 1)), fps=UNSEEN_FPS / 8, layout="body3d", source_name=str(path),
+                                    target_name=str(tpath), target_frame=0)
+            frames = render_transfer(result, style="mesh", size=160)  # (7, 160, 322, 3): source | re-enactment
+            if not cells:
+                cells.append(np.concatenate(list(frames[:, :, :160]), axis=1))
+            right = np.concatenate(list(frames[:, :, 162:]), axis=1)
+            cells.append(put_label(right[None], f"{name}: {label} from {tpath.stem}")[0])
+        cells[0] = put_label(cells[0][None], f"source: {path.name.split('.')[0]}")[0]
+        rows.append(np.concatenate(cells, axis=0))
+    gap = np.full((6, rows[0].shape[1], 3), 255, np.uint8)
+    return np.concatenate([x for r in rows for x in (r, gap)][:-1], axis=0)
+
+
+# ----------------------------------------------------------------------------------------------------------------
 
 COMMANDS = {
     "forecasting": (forecasting_main, FORECASTING_DOC),
@@ -3104,13 +2249,13 @@ COMMANDS = {
     "known-answer": (known_answer_main, KNOWN_ANSWER_DOC),
     "per-action": (per_action_main, PER_ACTION_DOC),
     "five-minute-models": (five_minute_main, FIVE_MINUTE_DOC),
-    "skeleton": (skeleton_main, SKELETON_DOC),
     "skeleton-figure": (skeleton_figure_main, SKELETON_FIGURE_DOC),
     "frames": (frames_main, FRAMES_DOC),
     "frames-analysis": (frames_analysis_main, FRAMES_ANALYSIS_DOC),
     "frames-real": (frames_real_main, FRAMES_REAL_DOC),
     "transfer": (transfer_main, TRANSFER_DOC),
     "transfer-benchmark": (transfer_benchmark_main, TRANSFER_BENCHMARK_DOC),
+    "transfer-unseen": (transfer_unseen_main, TRANSFER_UNSEEN_DOC),
     "face-sheet": (face_sheet_main, FACE_SHEET_DOC),
 }
 
@@ -3125,8 +2270,12 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stdout if asked else sys.stderr)
         return 0 if asked else 2
     run, _ = COMMANDS[argv[0]]
-    # forecasting and card share one parser (card writes what forecasting's evaluation measured)
-    return run(argv if run is forecasting_main else argv[1:]) or 0
+    try:
+        # forecasting and card share one parser (card writes what forecasting's evaluation measured)
+        return run(argv if run is forecasting_main else argv[1:]) or 0
+    except InputError as err:  # e.g. a page without the sub-command's markers: one line, nothing written
+        print(f"make_results.py {argv[0]}: error: {err}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@
 # Last, the mixtures are composed (nothing trained, seconds): mixture-dlow from the two DLow samplers, and
 # mixture-periodic (the best sampler) from them and the mirror-periodic rule; their cards,
 # motion2video/weights/mixture-*.md, are written by hand from the evaluations printed to their logs.
-# Afterwards: python scripts/make_results.py corpus (docs/results.md).
+# Afterwards: python scripts/make_results.py per-action, corpus and known-answer (their tables of docs/results.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -177,9 +177,13 @@ def test_transfer_of_a_real_jump_keeps_the_head_in_view(tmp_path, capsys):
     person = cell.sum(axis=3) < 3 * 215  # not the white background
     tops = np.array([np.nonzero(p.any(axis=1))[0].min() for p in person])
     assert tops.min() > 2  # the top of the head never touches the frame's edge
-    reenacted = np.load(npz)["reenacted"][0]
+    kept = np.load(npz)
+    reenacted = kept["reenacted"][0]
     rise = reenacted[:, 0, 2].max() - reenacted[0, 0, 2]
-    assert rise > 0.3  # it jumps
+    # it jumps: the source's pelvis rises 0.31 m above its start; the re-enactment reaches the source's height above
+    # the floor (scaled by the legs, 0.996) from a start that stands 2 cm taller than the source's, so 0.28 m
+    assert rise > 0.25
+    assert np.ptp(reenacted[:, 0, 2]) >= 0.9 * np.ptp(kept["source"][:, 0, 2])
     top = int(np.argmax(reenacted[1:, 0, 2])) + 1
     head = cell[top][tops[top]:tops[top] + 20]
     skin_or_hair = (head[..., 0] > head[..., 2] + 20)  # skin and brown hair are redder than the blue shirt

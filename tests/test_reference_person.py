@@ -108,12 +108,13 @@ def test_cut_edges_and_pose_margins_name_what_runs_past_which_edge():
     assert pose_margins(points, width=100, height=120) == (0, 0, 0, 0)
 
 
-def test_a_face_reference_without_a_pose_file_is_still_assumed(tmp_path):
-    """The refusal is for body references: a face picture without its pose file keeps the assumed pose."""
+def test_a_picture_of_nobody_is_refused_as_a_body_and_as_a_face_reference(tmp_path):
+    """Without a pose file the person is found in the picture: a body by BlazePose, a face by the face mesh."""
     wall = tmp_path / "face_wall.png"
     assert cv2.imwrite(str(wall), np.full((64, 64, 3), 128, np.uint8))
-    ref = load_reference(wall, size=64, domain="face")
-    assert ref.pose is None and any("assuming the reference image shows" in n for n in ref.notes)
+    with pytest.raises(InputError, match="no face found in the reference image") as err:
+        load_reference(wall, size=64, domain="face")
+    assert str(wall) in str(err.value)
     with pytest.raises(InputError, match="no person found") as err:
         load_reference(wall, size=64, domain="body")
     assert str(wall) in str(err.value)

@@ -388,11 +388,11 @@ def test_a_reference_without_a_person_is_refused(ckpts, clips, tmp_path, capsys)
 
 @pytest.mark.slow
 def test_shipped_behavior_carries_held_out_jumps_kicks_and_speeds(mocap_dir, tmp_path, capsys):
-    """The shipped checkpoint: on held-out subjects, re-enacted from other subjects'
-    postures as ``motion2video transfer`` does it (the decoder adapted to the source), the median signature
+    """The shipped checkpoint: on held-out subjects, re-enacted from other subjects' postures as ``motion2video
+    transfer`` does it (the decoder fitted to the source retargeted onto each posture), the median signature
     ratio of jumps (pelvis excursion), kicks (ankle above the knee) and walks / runs (root speed) is within
     0.6-1.4, and so are the jumps' and kicks' root-relative signatures (leg extension, arm swing, knee bend, ankle
-    lift: 0.61-1.10 when measured, docs/results_transfer.md; asserted from 0.55, which the decoder as trained
+    lift: 0.98-1.30 when measured, docs/results.md; asserted from 0.55, which the decoder as trained
     misses on the kick by far: 0.23-0.41); the re-enactment starts at the target's posture and keeps its bone
     lengths; and the same numbers come out of ``transfer --npz`` (a hidden jump re-enacted by a hidden walker)."""
     from motion2video.evaluation import signatures as S
@@ -413,6 +413,50 @@ def test_shipped_behavior_carries_held_out_jumps_kicks_and_speeds(mocap_dir, tmp
     kept = np.load(npz)
     ratio = S.pelvis_excursion(kept["reenacted"][0]) / S.pelvis_excursion(kept["source"])
     assert 0.6 <= ratio <= 1.4 and S.pelvis_excursion(kept["source"]) > 0.5
-    for name in S.ROOT_RELATIVE_SIGNATURES:  # 1.08 / 0.90 / 1.02 / 1.08 when measured
+    for name in S.ROOT_RELATIVE_SIGNATURES:  # 1.04 / 1.01 / 1.05 / 1.04 when measured
         made, real = S.signature(name, kept["reenacted"][0], 25.0), S.signature(name, kept["source"], 25.0)
         assert 0.6 <= made / real <= 1.4, name
+
+
+def test_the_decoder_is_fitted_to_the_source_retargeted_onto_the_target(ckpts, clips):
+    """reenact_source fits the decoder to the source moved onto the target's posture and bones
+    (core.retarget.retarget_motion), not to the source from its own start: with the steps of a fit the
+    re-enactment comes closer to that goal (root-relative joints) than the decoder as trained."""
+    from motion2video.core.retarget import retarget_motion
+    from motion2video.stages.latents import BLEND_SECONDS, reenact_source
+
+    bundle = load_model(ckpts["behavior"])
+    source = load_clip(bundle, clips["source"]).data[40:40 + 1 + HORIZON]
+    start = load_clip(bundle, clips["target"]).data[20]
+    goal = retarget_motion(source, start, blend_frames=int(round(BLEND_SECONDS * 25)))
+
+    def distance(steps):
+        _, made, _ = reenact_source(bundle, source, start, adapt_steps=steps)
+        np.testing.assert_allclose(made[0, 0], start, atol=1e-5)
+        rel = lambda x: x - x[:, :1]  # noqa: E731
+        return float(np.linalg.norm(rel(made[0, 1:]) - rel(goal[1:]), axis=-1).mean())
+
+    assert distance(100) < 0.6 * distance(0)
+
+
+@pytest.mark.slow
+def test_shipped_behavior_carries_unseen_jumps_and_waves_from_a_walker(mocap_dir, shared_dir):
+    """The shipped checkpoint, as ``transfer`` runs it (300 fitting steps), on sources no shipped model trained on:
+    a CMU jump of a test subject from another test subject's walking posture, and a Bandai-Namco wave from a CMU
+    walker. Every root-relative signature the source moves by 5 cm or more comes across at 0.6 or more of the
+    source's (1.00-1.02 for the jump and 0.96 for the wave's arm swing when measured, docs/results.md "Transfer
+    from any posture"; a decoder fitted to the source from the source's own start kept 0.29-0.39 of a jump's arm
+    swing from another start)."""
+    from motion2video.evaluation import signatures as S
+
+    bundle = load_model("behavior")
+    cases = ((mocap_dir / "cmu/02_04.bvh", 0, mocap_dir / "cmu/05_01.bvh", 200, S.ROOT_RELATIVE_SIGNATURES[:3]),
+             (shared_dir / "data/bandai/bvh/dataset-2_wave-both-hands_feminine_001.bvh.xz", 0,
+              mocap_dir / "cmu/07_03.bvh", 144, ("arm_swing",)))
+    for source, source_start, target, target_frame, names in cases:
+        result = transfer_behavior(bundle, load_clip(bundle, source), load_clip(bundle, target),
+                                   source_start=source_start, target_frame=target_frame)
+        for name in names:
+            real = S.signature(name, result.source, 25.0)
+            assert real >= 0.05, (source.name, name)
+            assert S.signature(name, result.reenacted[0], 25.0) / real >= 0.6, (source.name, name)

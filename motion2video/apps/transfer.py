@@ -10,7 +10,9 @@ Pipeline (``motion2video transfer``):
    checkpoint's normalisation. The behaviour encoder's posterior mean is z_beta (:func:`behavior_latents`).
 2. ``TARGET[F]`` is encoded the same way (a one-frame sequence, anchored at itself); the decoder enacts
    z_beta from it for H frames (:meth:`BehaviorModel.transfer`); a model with ``root_trajectory`` enacts it
-   along the source's root path (:func:`~motion2video.stages.latents.behavior_root`).
+   along the source's root path. Before that the decoder is fitted (``--adapt-steps``) to the source's motion
+   retargeted onto the target: the source's root-relative limb directions on the target's bones, starting at the
+   target's posture and blending into the source's over 0.4 s (:func:`~motion2video.stages.latents.reenact_source`).
 3. The H generated frames are decoded back with the TARGET's window frame; 3D bodies then get the bone
    lengths of the target's start posture in every frame (:func:`~motion2video.stages.latents.rigid_bones`).
 
@@ -54,13 +56,10 @@ from motion2video.stages.generation import generate_video_frames
 from motion2video.stages.reference import Reference, ReferencePose, load_reference
 from motion2video.stages.latents import (
     ADAPT_STEPS,
-    adapt_to_source,
-    behavior_latents,
     behavior_model,
-    behavior_root,
     decode_sequences,
     encode_sequences,
-    reenact,
+    reenact_source,
     rigid_bones,
 )
 from motion2video.stages.sampling import Forecast, as_model_input
@@ -132,28 +131,23 @@ def transfer_behavior(bundle: ModelBundle, source: LoadedClip, target: LoadedCli
                       target_frame: int = 0, horizon: int | None = None,
                       adapt_steps: int = ADAPT_STEPS) -> TransferResult:
     """Re-enact the behaviour of ``source`` (from its file frame ``source_start``, 1 + horizon frames) from
-    the posture of ``target`` at file frame ``target_frame``. The decoder is first adapted to the source for
-    ``adapt_steps`` steps (:func:`motion2video.stages.latents.adapt_to_source`; 0: the model as trained).
+    the posture of ``target`` at file frame ``target_frame``. The decoder is first fitted for ``adapt_steps``
+    steps to the source retargeted onto the target's posture and body
+    (:func:`motion2video.stages.latents.reenact_source`; 0: the model as trained).
 
     Raises:
         InputError: not a behaviour model, a frame outside a clip, or a source too short for the horizon.
     """
-    model = behavior_model(bundle)
+    behavior_model(bundle)  # the wrong kind of model fails before the frames are checked
     horizon = _check_horizon(bundle, horizon)
     s = model_frame(source, source_start, what="--behavior-start")
     if s + 1 + horizon > source.num_frames:
         raise InputError(f"the behaviour source needs {1 + horizon} frames from frame {source_start} at "
                          f"{source.fps:g} fps, but only {source.num_frames - s} remain (shorten --horizon or "
                          f"start earlier)", source.path)
-    src_feats, src_frame = encode_sequences(bundle, source.data[None, s:s + 1 + horizon])  # (1, 1+H, F)
-    tgt_feats, tgt_frame = _target_start(bundle, target, target_frame)  # (1, 1, F)
-    z = behavior_latents(model, src_feats)  # (1, Z)
-    model = adapt_to_source(model, src_feats, z, steps=adapt_steps)
-    root = behavior_root(model, src_feats, tgt_feats[:, 0])  # (1, H, R) or None
-    gen = reenact(model, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)
-    seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)
-    reenacted = rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])
-    shown_source = decode_sequences(bundle, src_feats[:, None], src_frame)[0, 0]  # (1+H, ...)
+    start = model_frame(target, target_frame, what="--target-frame")
+    z, reenacted, shown_source = reenact_source(bundle, source.data[s:s + 1 + horizon], target.data[start],
+                                                adapt_steps=adapt_steps)
     return TransferResult(source=shown_source.astype(np.float32), reenacted=reenacted.astype(np.float32),
                           z=z, fps=bundle.data_config.fps, layout=bundle.data_config.layout,
                           source_name=source.path, target_name=target.path, target_frame=int(target_frame),

@@ -50,8 +50,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frame-model", required=True,
                    help="frame-generator checkpoint path or shipped name (frames-body-128, frames-face-128)")
     p.add_argument("input", help="observed clip: .bvh / motion .npz / a video of a person (.mp4, .avi, .mov: its "
-                   "pose is estimated and cached) (body), FaceMotion .npz / .csv (face)")
-    p.add_argument("--reference", required=True, help="reference appearance image (PNG, JPEG, ...)")
+                   "pose is estimated and cached) (body), FaceMotion .npz / .csv or a video of a face (its face "
+                   "tracked and cached) (face)")
+    p.add_argument("--reference", required=True, help="reference appearance image (PNG, JPEG, ...); face models: "
+                   "any portrait, the head fitted to its face")
     add_reference_photo_arguments(p)
     p.add_argument("--samples", type=int, required=True, help="K futures to sample (>= 1)")
     p.add_argument("-o", "--output", required=True, help="output video OUT.mp4 (also OUT-structure.mp4, OUT-sheet.png)")

@@ -28,12 +28,13 @@ examples:
 
 The source's behaviour (--behavior-start, then 1 + horizon frames) is encoded by the behaviour model and
 re-enacted from the target's posture at --target-frame (frame numbers count the file's own frames), by
-the model's decoder first fitted to the source (--adapt-steps; 0 re-enacts with the decoder as trained). The
-video shows the source (left) and the target re-enacting it (right; start posture framed green, generated
-frames red) in another person's appearance: an Anny body with another phenotype and clothes (mesh), or the
-frame generator animating --reference (frames; without --reference the target's start posture is rendered
-as the reference). The re-enactment's root moves as the model generates it, relative to the target's start
-position and heading. Clips at other frame rates are resampled to the model's rate.
+the model's decoder first fitted to the source's limb motion retargeted onto the target's posture and bones
+(--adapt-steps; 0 re-enacts with the decoder as trained). The video shows the source (left) and the target
+re-enacting it (right; start posture framed green, generated frames red) in another person's appearance: an
+Anny body with another phenotype and clothes (mesh), or the frame generator animating --reference (frames;
+without --reference the target's start posture is rendered as the reference). The re-enactment's root moves
+as the model generates it, relative to the target's start position and heading. Clips at other frame rates are
+resampled to the model's rate.
 """
 
 
@@ -48,8 +49,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--behavior-start", type=int, default=0, help="first frame of the source's behaviour (default 0)")
     p.add_argument("--horizon", type=int, default=None, help="generated frames (default: the model's, 48)")
     p.add_argument("--adapt-steps", type=int, default=None, metavar="N",
-                   help="fit the decoder to the source for N steps before re-enacting it, so that large, rare limb "
-                   "motions (a kick) come across (default 300, about 6 s; 0: the model as trained)")
+                   help="fit the decoder for N steps to the source retargeted onto the target's posture and bones "
+                   "before re-enacting it, so that large, rare limb motions (a jump's arm swing, a kick) come "
+                   "across from any posture (default 300, about 6 s; 0: the model as trained)")
     p.add_argument("--style", choices=STYLES, default=None,
                    help="mesh: Anny bodies (default for 3D body and face models); frames: the frame generator "
                    "(default when --reference is given); skeleton: limb maps")

@@ -73,27 +73,50 @@ def write_json(path: str | Path, record: dict, *, indent: int = 2) -> Path:
     return write_text(path, json.dumps(record, indent=indent) + "\n")
 
 
-def write_section(path: str | Path, begin: str, end: str, body: str) -> Path:
-    """Replace the text between the marker lines ``begin`` and ``end`` of a document (or append the marked
-    block when the markers are missing; a missing file starts as ``# Results``), keeping everything else;
-    written atomically. Used by the ``scripts/make_results*.py`` generators of ``docs/``.
+def check_section(path: str | Path, begin: str, end: str) -> Path:
+    """Check that an existing document holds the marker lines ``begin`` and then ``end`` (a missing document is
+    fine: :func:`write_section` starts it); a generator calls this before its run, so that a long run does not
+    end without a place to write. Returns ``path``.
 
     Raises:
+        InputError: naming the document and the missing marker (or the pair in the wrong order).
+    """
+    from motion2video.core.errors import InputError
+
+    path = Path(path)
+    if not path.is_file():
+        return path
+    text = path.read_text()
+    for marker in (begin, end):
+        if marker not in text:
+            raise InputError(f"no marker line {marker}: put {begin} and {end} around the section that is "
+                             "regenerated", path)
+    if end not in text.split(begin, 1)[1]:
+        raise InputError(f"{end} comes before {begin}", path)
+    return path
+
+
+def write_section(path: str | Path, begin: str, end: str, body: str) -> Path:
+    """Replace the text between the marker lines ``begin`` and ``end`` of a document with ``body``, keeping
+    everything else; written atomically. A missing document starts as ``# Results`` followed by the marked
+    block; an existing one must hold both markers (:func:`check_section`). Used by the sub-commands of
+    ``scripts/make_results.py`` and by ``scripts/shipped_licences.py``.
+
+    Raises:
+        InputError: the document exists but lacks ``begin`` or ``end``. Nothing is written.
         ValueError: the marked block holds a heading that ``body`` does not: hand-written text placed between
             the markers would be lost (move it outside them). Nothing is written.
     """
     path = Path(path)
-    text = path.read_text() if path.is_file() else "# Results\n"
     block = f"{begin}\n{body.strip()}\n{end}"
-    if begin in text and end in text:
-        head, rest = text.split(begin, 1)
-        old, tail = rest.split(end, 1)
-        new_headings = {line.strip() for line in body.splitlines() if line.startswith("#")}
-        lost = [line.strip() for line in old.splitlines() if line.startswith("#") and line.strip() not in new_headings]
-        if lost:
-            raise ValueError(f"{path}: the block between {begin} and {end} holds {lost[0]!r}, which the new section "
-                             "does not: move hand-written text outside the markers")
-        text = head + block + tail
-    else:
-        text = text.rstrip() + "\n\n" + block + "\n"
-    return write_text(path, text)
+    if not path.is_file():
+        return write_text(path, f"# Results\n\n{block}\n")
+    check_section(path, begin, end)
+    head, rest = path.read_text().split(begin, 1)
+    old, tail = rest.split(end, 1)
+    new_headings = {line.strip() for line in body.splitlines() if line.startswith("#")}
+    lost = [line.strip() for line in old.splitlines() if line.startswith("#") and line.strip() not in new_headings]
+    if lost:
+        raise ValueError(f"{path}: the block between {begin} and {end} holds {lost[0]!r}, which the new section "
+                         "does not: move hand-written text outside the markers")
+    return write_text(path, head + block + tail)

@@ -48,11 +48,13 @@ from motion2video.data.corpus import (
     pinned_split,
     source_of,
 )
+from motion2video.data.clip_cache import cached_canonical
 from motion2video.data.corpus import clip_group as corpus_group
 from motion2video.data.face_data import face_files, load_face_clip, mirror_face
 from motion2video.data.licences import licence_record
 from motion2video.core.errors import InputError
 from motion2video.core.motion import FaceMotion, Motion
+from motion2video.formats.mocap import load_mocap
 from motion2video.core.skeletons import H36M_17
 
 DEFAULT_MOCAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "mocap"
@@ -557,9 +559,8 @@ def load_clips(data: str | Path | list, *, config: DatasetConfig, character: str
 
 def _corpus_clips(folders: list, *, config: DatasetConfig, character: str | Path | None) -> list[Clip]:
     """The clips of one or more mocap folders (:func:`motion2video.data.corpus.corpus_rows`) at ``config.fps``."""
-    from motion2video.formats.mocap import load_mocap
-
-    return [_body_clip_from_motion(load_mocap(path, manifest=row.entry or False, character=character),
+    return [_body_clip_from_motion(load_mocap(path, manifest=row.entry or False, character=character,
+                                              canonical=cached_canonical(path, entry=row.entry, character=character)),
                                    name=row.name, fps=config.fps, group=row.group,
                                    licence=row.entry.licence if row.entry is not None else None)
             for path, row in corpus_rows(folders, drop_duplicates=config.drop_duplicates)]

@@ -66,7 +66,7 @@ RELATIVE = S.ROOT_RELATIVE_SIGNATURES
 MIN_RELATIVE_AMPLITUDE = 0.05
 
 # Chosen by manifest label, then the window with the largest signature in the clip (sliding, 25 fps,
-# stride 4; scripts/make_results.py transfer --benchmark prints each source's signature).
+# stride 4; evaluation.signatures.signature scores a window).
 CASES = (
     # held-out: CMU subjects 2, 5, 7, 131 and 94 (Indian dance), the pinned split's test groups
     Case("jump", "cmu/02_04.bvh", 0, 48, "held-out", "jump, balance: pelvis rises and falls 0.75 m"),
@@ -272,38 +272,14 @@ def _window_before(clip: np.ndarray, frame: int, length: int) -> np.ndarray:
 def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray, *, adapt_steps: int | None = None
                           ) -> np.ndarray:
     """A behaviour model's re-enactments: sources (N, 1 + H, 17, 3), postures (N, 17, 3) -> (N, 1 + H, 17, 3)
-    (the target posture, then H generated frames), exactly as ``motion2video transfer`` makes them: the decoder
-    adapted to each source for ``adapt_steps`` steps (default ``ADAPT_STEPS``, as the command; 0: as trained),
-    once per distinct source."""
-    from motion2video.stages.latents import (
-        ADAPT_STEPS,
-        adapt_to_source,
-        behavior_latents,
-        behavior_model,
-        behavior_root,
-        decode_sequences,
-        encode_sequences,
-        reenact,
-        rigid_bones,
-    )
+    (the target posture, then H generated frames), exactly as ``motion2video transfer`` makes them
+    (:func:`motion2video.stages.latents.reenact_source`: the decoder fitted for ``adapt_steps`` steps, default
+    ``ADAPT_STEPS`` as the command, to each source retargeted onto each posture; 0: as trained)."""
+    from motion2video.stages.latents import ADAPT_STEPS, reenact_source
 
-    model = behavior_model(bundle)
     steps = ADAPT_STEPS if adapt_steps is None else adapt_steps
-    horizon = sources.shape[1] - 1
-    out = []
-    adapted: dict[bytes, object] = {}  # one adaptation per distinct source
-    for src, post in zip(sources, postures):
-        src_feats, _ = encode_sequences(bundle, src[None])  # (1, 1+H, F)
-        tgt_feats, tgt_frame = encode_sequences(bundle, post[None, None])  # (1, 1, F)
-        z = behavior_latents(model, src_feats)
-        key = np.ascontiguousarray(src).tobytes()
-        if key not in adapted:
-            adapted[key] = adapt_to_source(model, src_feats, z, steps=steps)
-        m = adapted[key]
-        gen = reenact(m, z, tgt_feats[:, 0], horizon=horizon, root=behavior_root(m, src_feats, tgt_feats[:, 0]))
-        seq = np.concatenate([tgt_feats, gen], axis=1)
-        out.append(rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])[0])
-    return np.stack(out)
+    return np.stack([reenact_source(bundle, src, post, adapt_steps=steps)[1][0]
+                     for src, post in zip(sources, postures)])
 
 
 def analogy_reenactments(bundle, a_b: np.ndarray, c: np.ndarray) -> np.ndarray:

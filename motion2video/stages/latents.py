@@ -105,21 +105,24 @@ def behavior_root(model: BehaviorModel, source: np.ndarray, start: np.ndarray) -
 # benchmark's TRAINING cases (transfer_benchmark.CASES, split "train"; 2026-11-26): the mean |log ratio| over their
 # behaviour and root-relative signatures was 0.389 as trained, 0.253 / 0.203 / 0.198 / 0.199 / 0.187 after 25 / 50 /
 # 100 / 200 / 300 Adam steps at 1e-3 (measured on the transfer benchmark); 300 is the best of those (about 6 s
-# per source on one CPU thread).
+# per source on one CPU thread). The step count was kept when the fit's goal became the source retargeted onto the
+# target (:func:`reenactment_goal`); a fit from the source's own start reproduced the source after 300 steps as
+# closely as after 1000 (docs/results.md, "Transfer from any posture").
 ADAPT_STEPS = 300
 ADAPT_LR = 1e-3
 
 
 def adapt_to_source(model: BehaviorModel, source: np.ndarray, z: np.ndarray, *, steps: int = ADAPT_STEPS,
                     lr: float = ADAPT_LR) -> BehaviorModel:
-    """A copy of ``model`` whose decoder was fine-tuned to re-enact ONE source from its own start posture.
+    """A copy of ``model`` whose decoder was fine-tuned to enact ``source`` from its own first frame.
 
     The trained decoder averages rare, large limb motions away: re-enacted from another posture, a held-out kick
     kept 0.23 of its ankle lift relative to the pelvis, and refining z alone did not bring it back
     (docs/results_transfer.md). Here z (the encoder's behaviour of the source) stays fixed and only the decoder's
     weights move, by ``steps`` Adam steps on the model's own reconstruction error of the source (its root path
-    given, as in a re-enactment). The adapted decoder is then run from the target's posture: the behaviour is
-    the source's, the start is the target's. Deterministic: no noise, the same steps for the same inputs.
+    given, as in a re-enactment). ``transfer`` passes the source retargeted onto the target's posture
+    (:func:`reenactment_goal`), so the decoder is fitted from the start it is then run from: the behaviour is the
+    source's, the start is the target's. Deterministic: no noise, the same steps for the same inputs.
 
     Args:
         model: a trained behaviour model (left unchanged).
@@ -154,6 +157,69 @@ def adapt_to_source(model: BehaviorModel, source: np.ndarray, z: np.ndarray, *, 
             optimiser.step()
     adapted.requires_grad_(False)
     return adapted
+
+
+# How long the target's posture takes to give way to the source's limb motion in a retargeted goal
+# (:func:`reenactment_goal`): about half a walking step, set once from that and not tuned on the clips scored.
+BLEND_SECONDS = 0.4
+
+
+def reenactment_goal(bundle: ModelBundle, sources: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """What a re-enactment should be, as normalised features: the sources' root-relative limb motion and root
+    path retargeted onto the start postures (:func:`motion2video.core.retarget.retarget_motion`: the start's
+    bone lengths, the start posture blended into the source's over :data:`BLEND_SECONDS`), for 3D bodies.
+
+    Fitting the decoder to the source from the source's OWN start (as it was trained) did not carry over to
+    another start: from a walker's posture an adapted decoder swung the arms 0.29-0.39 of a held-out jump's and
+    bent the knee of a kick 0.50 of the source's, with 300 or 1000 steps alike, while from the source's own
+    start it reproduced all of them (0.92-1.03; docs/results.md). The decoder is therefore fitted to the
+    re-enactment it is asked for, from the start it is run from. Other layouts (2D pixels, faces) have no
+    skeleton to retarget onto: their goal is the source itself.
+
+    Args:
+        sources: (N, 1 + H, 17, 3) world joints (or (N, 1 + H, ...) other layouts), start posture first.
+        starts: (N, 17, 3) the target postures.
+    Returns:
+        (N, 1 + H, F) float32 normalised features, each anchored at its first frame (:func:`encode_sequences`);
+        for 3D bodies the first frame is the target's posture.
+    """
+    if bundle.data_config.layout != "body3d":
+        return encode_sequences(bundle, sources)[0]
+    from motion2video.core.retarget import retarget_motion
+
+    blend = int(round(BLEND_SECONDS * bundle.data_config.fps))
+    goals = np.stack([retarget_motion(s, p, blend_frames=blend) for s, p in zip(sources, starts)])
+    return encode_sequences(bundle, goals)[0]
+
+
+def reenact_source(bundle: ModelBundle, source: np.ndarray, start: np.ndarray, *, adapt_steps: int = ADAPT_STEPS
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Re-enact one behaviour source from one start posture, as ``motion2video transfer`` does: z = the
+    encoder's behaviour of the source; the decoder fitted for ``adapt_steps`` steps to the source retargeted
+    onto the start (:func:`reenactment_goal`, :func:`adapt_to_source`; 0: the decoder as trained), then run
+    from the start along the goal's root path; 3D bodies keep the start's bone lengths (:func:`rigid_bones`).
+
+    Args:
+        source: (1 + H, ...) display coordinates at the model's rate (world joints, pixels or face parameters),
+            its start posture first.
+        start: (...) the target's posture, in the same coordinates.
+    Returns:
+        z (1, Z); the re-enactment (1, 1 + H, ...) (the start, then H generated frames); the source as the model
+        reads it back (1 + H, ...) (for display).
+    """
+    model = behavior_model(bundle)
+    horizon = source.shape[0] - 1
+    src_feats, src_frame = encode_sequences(bundle, source[None])  # (1, 1+H, F)
+    tgt_feats, tgt_frame = encode_sequences(bundle, start[None, None])  # (1, 1, F)
+    z = behavior_latents(model, src_feats)  # (1, Z)
+    goal = reenactment_goal(bundle, source[None], start[None])  # (1, 1+H, F)
+    fitted = adapt_to_source(model, goal, z, steps=adapt_steps)
+    root = behavior_root(fitted, goal, tgt_feats[:, 0])  # (1, H, R) or None
+    gen = reenact(fitted, z, tgt_feats[:, 0], horizon=horizon, root=root)  # (1, H, F)
+    seq = np.concatenate([tgt_feats, gen], axis=1)  # (1, 1+H, F)
+    reenacted = rigid_bones(bundle.data_config.layout, decode_sequences(bundle, seq[:, None], tgt_frame)[0])
+    shown = decode_sequences(bundle, src_feats[:, None], src_frame)[0, 0]
+    return z, reenacted, shown
 
 
 @torch.no_grad()

@@ -13,9 +13,11 @@ Without one, a body reference gets its pose estimated (BlazePose, :mod:`motion2v
 so), and a body reference where nobody is found is refused (InputError naming the picture): there is no person
 to move. A person cut by the picture's edge gets a note; when the estimated joints themselves lie beyond the
 edge, the picture is extended there (its edge repeated, :attr:`Reference.picture` marks those pixels as not the
-file's) so that the pose fits in it. A face reference without a pose file is assumed to show the face in the
-first observed pose, framed by the Anny close-up camera, and a note says so. With the true pose, the generated
-first observed frame matches the reference picture; with the assumption, it does when the assumption holds.
+file's) so that the pose fits in it. A face reference without a pose file (a photo or a painting of a face) gets
+the Anny head fitted to the face it shows (pose and expression, :mod:`motion2video.pose.face_portrait`), and the
+square around that face, framed as the face generators' training frames are, becomes the reference; one with no
+face is refused (InputError naming the picture). With the true or fitted pose, the generated frames start from
+where the pictured face is.
 
 """
 
@@ -287,6 +289,9 @@ class Reference:
             resize to S (None: ``image`` is the source); the face is taken from it
             (:func:`motion2video.stages.pictured_face.pictured_face`).
         source_scale, source_offset: ``image pixels = source pixels * source_scale + source_offset``.
+        relative_head: face: the head pose of the motion is applied relative to its first observed frame, on top of
+            the reference's own (a fitted portrait keeps its pose and turns as the clip's head turns, rather than
+            jumping to the clip's head pose; :func:`motion2video.stages.structure.relative_head_pose`).
     """
 
     image: np.ndarray
@@ -298,6 +303,7 @@ class Reference:
     source: np.ndarray | None = None
     source_scale: float = 1.0
     source_offset: tuple[float, float] = (0.0, 0.0)
+    relative_head: bool = False
 
     def picture_mask(self) -> np.ndarray:
         """(S, S) bool: the pixels that come from the image file (not a replicated border)."""
@@ -479,13 +485,50 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
                      source_offset=tuple((np.asarray(reference.source_offset) - [x0, y0]) * k))
 
 
+def portrait_reference(image: np.ndarray, path: Path, *, size: int, notes: tuple[str, ...] = (),
+                       pose_path: Path | None = None) -> Reference:
+    """A face reference from a picture without a pose file: the Anny head fitted to its largest face (pose and
+    expression, :func:`motion2video.pose.face_portrait.fit_portrait`) and the picture framed as the face frames
+    are, ``size`` x ``size`` (:func:`~motion2video.pose.face_portrait.portrait_framing`), so the generated frames
+    start from where the pictured face is. A note says what was fitted and cut.
+
+    Args:
+        image: (H, W, 3) uint8 RGB, the picture as read (:func:`read_reference_image`).
+        path: its file (named by the note and the error); pose_path: the pose file that was looked for.
+    Raises:
+        InputError: no face in the picture.
+    """
+    from motion2video.pose.face_portrait import fit_portrait, frame_portrait, portrait_framing
+
+    portrait = fit_portrait(image)
+    if portrait is None:
+        raise InputError("no face found in the reference image (face mesh detector): give a picture of a face, or "
+                         "its pose with --reference-pose", path)
+    framing = portrait_framing(portrait, size)
+    framed, picture = frame_portrait(image, framing)
+    pose = ReferencePose("face", size, size, face=portrait.params(), identity={}, camera=framing.camera)
+    x0, y0, side = framing.box()
+    h, w = image.shape[:2]
+    looked = f" ({pose_path.name})" if pose_path is not None else ""
+    line = (f"no reference pose file{looked}: fitted the Anny head to the face in the image (face mesh; its landmarks "
+            f"{100 * portrait.relative_error():.1f}% of the face size from the head's, median) and cut the "
+            f"{side:.0f} px square at ({x0:.0f}, {y0:.0f}) of the {w}x{h} image around it, framed as the face frames "
+            f"are, resized to {size}x{size}")
+    if picture.min() <= 0.5:
+        line += " (the square runs past the picture: its edge repeated)"
+    extra = [f"{portrait.faces} faces in the image: the largest is the reference"] if portrait.faces > 1 else []
+    return Reference(image=framed, pose=pose, notes=(*notes, line, *extra), path=path,
+                     picture=None if picture.min() > 0.5 else picture, relative_head=True)
+
+
 def load_reference(path: str | Path, *, size: int, domain: str,
                    pose_path: str | Path | None = None, crop_person: bool = False) -> Reference:
     """The reference image at ``size`` x ``size`` and its pose (see the module docstring).
 
     A body reference with no pose file gets its pose estimated (BlazePose, a note says so); a person cut by the
     picture's edge gets a note, and the picture is extended (its edge repeated) where the joints lie beyond it. A
-    face reference with no pose file is assumed to show the first observed pose (a note says so too).
+    face reference with no pose file gets the Anny head fitted to its face and is cut around it
+    (:func:`portrait_reference`; a note says so too).
 
     Args:
         path: the image.
@@ -495,9 +538,9 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         crop_person: body: cut a square around the person first (:func:`crop_to_person`), so that a person
             small in a large photo fills the generator's frame.
     Raises:
-        InputError: unreadable image, a pose file that is malformed or of the other domain, or (body) no pose
-        file and no person found, a pose file with joints outside the image or no person, or an image that shows
-        nothing along the pose's limbs; ``crop_person`` for a face model.
+        InputError: unreadable image, a pose file that is malformed or of the other domain, no pose file and
+        (body) no person or (face) no face found, a pose file with joints outside the image or no person, or an
+        image that shows nothing along the pose's limbs; ``crop_person`` for a face model.
     """
     path = Path(path)
     image, notes = read_reference_image(path)
@@ -513,6 +556,8 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         if pose.kind != domain:
             raise InputError(f"this reference pose is a {pose.kind} pose, but the frame model makes {domain} "
                              "frames", pose_path)
+    if not from_file and domain == "face":
+        return portrait_reference(image, path, size=size, notes=tuple(notes), pose_path=pose_path)
     picture = np.ones(image.shape[:2], np.float32)  # which pixels are the file's, through every cut and pad
     if not from_file and domain == "body":
         pose, person, landmarks = estimate_reference_pose(image, path)
@@ -558,9 +603,6 @@ def load_reference(path: str | Path, *, size: int, domain: str,
 
             check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
             check_reference_person(fitted, pose.points, path=path)
-    else:
-        notes.append(f"no reference pose file ({pose_path.name}): assuming the reference image shows the first "
-                     "observed face pose, framed like the default renderer")
     return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person,
                      picture=None if picture.min() > 0.5 else picture, source=None if (h, w) == (size, size) else image,
                      source_scale=fit.scale, source_offset=tuple(float(v) for v in fit.offset))

@@ -303,6 +303,30 @@ def render_structures(forecast, *, domain: str, size: int, reference: Reference)
     return Structures("face", size, to, k, tf, images=images, face_mesh=track)
 
 
+def relative_head_pose(params: np.ndarray, first: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Face parameters whose head pose is taken relative to ``first`` and applied on top of ``reference``'s: the
+    rotation ``R_t R_first^T R_ref`` (world axes), the translation ``T_t - T_first + T_ref``; the 52 coefficients
+    unchanged. So row ``first`` becomes the reference's head pose, and the head turns and moves from there as it
+    does in ``params``.
+
+    Args:
+        params: (N, 58); first, reference: (58,).
+    Returns:
+        (N, 58) float32.
+    """
+    from motion2video.core.motion import NUM_EXPRESSIONS
+    from motion2video.core.rotations import axis_angle_to_matrix, matrix_to_axis_angle
+
+    e = NUM_EXPRESSIONS
+    params = np.asarray(params, np.float64)
+    first, reference = np.asarray(first, np.float64), np.asarray(reference, np.float64)
+    turn = axis_angle_to_matrix(params[:, e:e + 3]) @ axis_angle_to_matrix(first[e:e + 3]).T  # (N, 3, 3)
+    out = params.copy()
+    out[:, e:e + 3] = matrix_to_axis_angle(turn @ axis_angle_to_matrix(reference[e:e + 3]))
+    out[:, e + 3:] = params[:, e + 3:] - first[e + 3:] + reference[e + 3:]
+    return out.astype(np.float32)
+
+
 def _render_face_structures(forecast, size: int, reference: Reference):
     """(1 + To + K*Tf, S, S) uint8 grey structure renders (reference, observed, futures) and the head mesh's
     :class:`~motion2video.generator.mesh_flow.MeshTrack` in the same rows."""
@@ -313,8 +337,10 @@ def _render_face_structures(forecast, size: int, reference: Reference):
     pose = reference.pose
     identity = dict(pose.identity) if pose is not None else {}
     ref_params = pose.face if pose is not None else forecast.observed[0]
-    params = np.concatenate([np.asarray(ref_params, np.float32)[None], forecast.observed,
-                             forecast.futures.reshape(k * tf, -1)]).astype(np.float32)
+    motion = np.concatenate([forecast.observed, forecast.futures.reshape(k * tf, -1)])  # (To + K*Tf, 58)
+    if reference.relative_head and pose is not None:
+        motion = relative_head_pose(motion, forecast.observed[0], ref_params)
+    params = np.concatenate([np.asarray(ref_params, np.float32)[None], motion]).astype(np.float32)
     with renderer_for("face", "structure", size=size) as renderer:
         if pose is not None:
             camera = pose.camera
