@@ -7,6 +7,7 @@
     python scripts/bench.py pose --json out/bench_pose.json           # pose estimation on a 720p video
     python scripts/bench.py sampling --json out/bench_sampling.json   # batched vs one-at-a-time sampling
     python scripts/bench.py long-bvh --json out/bench_long_bvh.json   # peak memory of render on a long capture
+    python scripts/bench.py mesh-video --json out/bench_mesh_video.json  # mesh generator videos at 256 and 512
 
 ``python scripts/bench.py SUB-COMMAND --help`` describes each record's keys. The numbers move with the machine's
 load: every record carries the load average and the versions it was measured with.
@@ -845,13 +846,15 @@ def bench_end_to_end(spec: dict, files: dict, *, repeats: int, work: Path) -> di
     }
 
 
-def bench_video_256(frame_models: dict, motion_model: Path, *, repeats: int, size: int = 256) -> dict:
+def bench_video_256(frame_models: dict, motion_model: Path, *, repeats: int, size: int = 256,
+                    reference: Path | None = None) -> dict:
     """Frames/s of :func:`generate_video_frames` at ``size`` for each frame model (name -> loaded model) on the
-    same placed forecast (see ``generators_256`` in the module docstring)."""
+    same placed forecast (see ``generators_256`` in the module docstring); ``reference``: the body reference
+    (default: the demo's)."""
     from motion2video.models.checkpoint import load_model
 
     bundle = load_model(motion_model)
-    ref = load_reference(demo.DEMO_INPUTS / "reference_body.png", size=size, domain="body")
+    ref = load_reference(reference or demo.DEMO_INPUTS / "reference_body.png", size=size, domain="body")
     from motion2video.stages.clips import load_clip
 
     clip = load_clip(bundle, demo.DEMO_INPUTS / "cmu_walk.npz").data
@@ -1200,6 +1203,57 @@ def long_bvh_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# mesh-video: frames/s of the mesh generator's videos at each output size
+# ----------------------------------------------------------------------------------------------------------------
+
+
+MESH_VIDEO_DOC = """Frames/s of the mesh generator's whole videos at each output size (256 and 512 by default).
+
+    python scripts/bench.py mesh-video --json out/bench_mesh_video.json [--sizes 256 512] [--repeats 3]
+        [--reference ../shared/data/photos/woman_blue_tracksuit.jpg]
+
+The same measurement as ``pipeline``'s ``generators_256`` (the real walk ``cmu_walk.npz``, K=2 futures x 48 frames
+after 16 observed, sampled once; :func:`~motion2video.stages.generation.generate_video_frames`: fitting, posing and
+rendering the body mesh of every frame, generation, compositing, the photo's face laid over the heads), at each
+``--sizes`` output size, for ``--frame-model`` (default ``frames-body-mesh-256``). Targets: 512 px >= 3 frames/s and
+256 px >= 8 on 2 cores. Medians over --repeats after one warm-up run; the load average is recorded at the start and
+the end (on a shared machine the numbers move with it).
+"""
+
+
+def mesh_video_main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=MESH_VIDEO_DOC.split("\n\n")[0])
+    parser.add_argument("--json", required=True, type=Path, help="output JSON")
+    parser.add_argument("--frame-model", default="frames-body-mesh-256")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[256, 512])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--reference", type=Path, default=None, help="body reference (default: the demo's)")
+    parser.add_argument("--threads", type=int, default=None, help="torch threads (default: the pipeline's)")
+    args = parser.parse_args(argv)
+    from motion2video.generator.checkpoint import load_frame_model
+
+    files = demo.weight_files(demo.WEIGHTS)
+    model = load_frame_model(args.frame_model)
+    name = model.path.name.removesuffix(".safetensors")
+    threads = args.threads or default_generator_threads()
+    result: dict = {"machine": machine(), "frame_model": name, "threads": threads,
+                    "reference": str(args.reference or demo.DEMO_INPUTS / "reference_body.png"),
+                    "targets_fps": {"256": 8.0, "512": 3.0}}
+    with torch_threads(threads):
+        for size in args.sizes:
+            print(f"videos at {size}x{size} ...", flush=True)
+            out = bench_video_256({name: model}, files[demo.BODY["motion_model"]], repeats=args.repeats, size=size,
+                                  reference=args.reference)
+            result[f"fps_{size}"] = out[name]
+            result["frames"] = out["frames"]
+    result["machine"]["load_average_1min_end"] = round(os.getloadavg()[0], 2)
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(result, indent=2) + "\n")
+    print(f"wrote {args.json}: " + ", ".join(f"{k} {v}" for k, v in result.items() if k.startswith("fps_")))
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------------------------
 
 COMMANDS = {
     "render": (render_main, RENDER_DOC),
@@ -1209,6 +1263,7 @@ COMMANDS = {
     "pose": (pose_main, POSE_DOC),
     "sampling": (sampling_main, SAMPLING_DOC),
     "long-bvh": (long_bvh_main, LONG_BVH_DOC),
+    "mesh-video": (mesh_video_main, MESH_VIDEO_DOC),
 }
 
 

@@ -94,3 +94,37 @@ def test_the_mesh_generators_reconstruction_has_head_metrics(dancer_clip, tmp_pa
         assert np.isfinite(scores["head_psnr"]) and 5 < scores["head_psnr"] < 60, name
         assert np.isfinite(scores["head_ssim"]) and -1 <= scores["head_ssim"] <= 1, name
     assert results["generator"]["person_psnr"] > 15
+
+
+def test_the_mesh_generator_lays_frame_0s_face_over_its_heads(dancer_clip):
+    """The protocol draws the mesh generator's frames as synthesize does: the face found in frame 0 (the reference)
+    is laid over each generated head. It changes pixels only around the truth's head (its square grown by a
+    quarter), and a target whose head turns away from frame 0's view is the generator's own frame."""
+    from dataclasses import replace
+
+    import cv2
+
+    from motion2video.evaluation.reconstruction import head_box_masks, with_mesh
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.generator.scores import run_generator
+
+    def grown(box: np.ndarray) -> np.ndarray:  # a head square grown by a quarter of its side each way
+        side = int(np.sqrt(box.sum()))
+        return cv2.dilate(box.astype(np.uint8), np.ones((side // 4 * 2 + 1,) * 2, np.uint8)) > 0
+
+    frames = video_frames(dancer_clip, size=128, targets=4)
+    pairs = with_mesh(video_pairs(frames), frames)
+    assert pairs.head_mattes is not None and pairs.head_mattes.shape == (4, 128, 128)
+    head0 = grown(head_box_masks(frames.points[:1], 128)[0])
+    assert pairs.head_mattes[0].max() > 0.9 and pairs.head_mattes[0][~head0].max() < 0.01  # her face, at her head
+    assert ((pairs.head_weights >= 0) & (pairs.head_weights <= 1)).all() and pairs.head_weights.max() > 0.9
+    net = load_frame_model("frames-body-mesh-128").model
+    with_face = run_generator(net, pairs)
+    without = run_generator(net, replace(pairs, head_mattes=None, head_affines=None, head_weights=None))
+    heads = head_box_masks(pairs.tgt_points, 128)
+    for i, weight in enumerate(pairs.head_weights):
+        changed = np.any(with_face[i] != without[i], axis=-1)
+        if weight == 0:
+            assert not changed.any()
+            continue
+        assert changed.any() and not (changed & ~grown(heads[i])).any()

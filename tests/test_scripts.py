@@ -26,10 +26,10 @@ def test_scripts_are_few_and_import_the_package():
 
 
 @pytest.mark.parametrize("script, subcommands", [
-    ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh")),
+    ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh", "mesh-video")),
     ("make_results", ("forecasting", "card", "corpus", "known-answer", "per-action", "five-minute-models",
                       "skeleton-figure", "frames", "frames-analysis", "frames-real", "transfer",
-                      "transfer-benchmark", "transfer-unseen")),
+                      "transfer-benchmark", "transfer-unseen", "face-sheet")),
 ])
 def test_entry_points_list_their_subcommands_and_refuse_unknown_ones(script, subcommands, monkeypatch, capsys):
     monkeypatch.syspath_prepend(str(SCRIPTS))  # as when the script runs: its folder first on the path

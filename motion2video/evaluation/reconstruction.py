@@ -185,16 +185,20 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     for the mesh generator: the fitted mesh's silhouettes, grown by the person's clothes margin in frame 0
     (:func:`generator.mesh_reference.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
     person masks). As in ``synthesize``, a vertex frame 0 shows counts as shown only where it lands on the person
-    (:func:`generator.mesh_reference.on_person`), and the colours are sampled from the segmented person
-    (:func:`generator.mesh_warp.mesh_source_mask`)."""
+    (:func:`generator.mesh_reference.on_person`), the colours are sampled from the segmented person
+    (:func:`generator.mesh_warp.mesh_source_mask`), and frame 0's face, when one is found, is laid over the generated
+    heads (:func:`stages.pictured_face.pictured_face`, :func:`generator.head_paste.head_moves`)."""
     from dataclasses import replace
 
     from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
     from motion2video.generator.mesh_reference import clothes_margin, on_person
+    from motion2video.generator.head_paste import pixel_index_affine
     from motion2video.stages.mesh_generation import video_mesh_track
+    from motion2video.stages.pictured_face import face_moves, pictured_face
+    from renderers import anny_model
 
     size = frames.images.shape[1]
-    track = video_mesh_track(frames.joints3d, frames.points, size=size, person_mask=frames.masks[0])
+    track, phenotype = video_mesh_track(frames.joints3d, frames.points, size=size, person_mask=frames.masks[0])
     # as synthesize does (stages.mesh_generation.mesh_video): a vertex frame 0 shows counts as shown only on the person
     shown = track.visible.copy()
     shown[0] &= on_person(track.uv[0], frames.masks[0])
@@ -202,9 +206,18 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     margin = clothes_margin(frames.masks[0], track.masks[0])
     ref_uv = complete_reference_uv(track.uv[0], track.visible[0], image=frames.images[0])
     flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)), margin=margin)
-    return replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
-                   mesh_ref_masks=np.repeat(grow_masks(track.masks[:1], margin), len(flows), axis=0),
-                   mesh_tgt_masks=grow_masks(track.masks[1:], margin))
+    pairs = replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
+                    mesh_ref_masks=np.repeat(grow_masks(track.masks[:1], margin), len(flows), axis=0),
+                    mesh_tgt_masks=grow_masks(track.masks[1:], margin))
+    face = pictured_face(frames.images[0], frames.points[0], person=frames.masks[0].astype(np.float32))
+    if face is None:
+        return pairs
+    # the face found in frame 0's square; frame 0 itself is the picture it is laid from
+    affines, weights = face_moves(face, track.uv[0], track.uv[1:], track.visible[1:],
+                                  rest=anny_model.anny_rest(phenotype))
+    mattes = cv2.warpAffine(face.matte, pixel_index_affine(face.to_reference), (size, size), flags=cv2.INTER_LINEAR)
+    return replace(pairs, head_mattes=np.repeat(mattes[None], len(flows), axis=0), head_affines=affines,
+                   head_weights=weights)
 
 
 def head_box_masks(points: np.ndarray, size: int) -> np.ndarray:

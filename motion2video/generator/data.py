@@ -118,6 +118,10 @@ class FramePairs:
         mesh_visibility: (B, H, W) float32 how much of each target pixel's surface the reference shows, or None.
         mesh_ref_masks, mesh_tgt_masks: (B, H, W) bool silhouettes of the fitted mesh when they differ from the
             person masks (a body fitted to real frames), or None (rendered data: the masks are the mesh's).
+        head_mattes: (B, H, W) float32 the face the reference shows (its matte in the reference's pixels,
+            :func:`generator.head_paste.face_matte`), laid over the mesh generator's heads; None: no face.
+        head_affines: (B, 2, 3) reference pixels -> target pixels of that face; head_weights: (B,) how much of it
+            each target takes (:func:`generator.head_paste.head_moves`).
     """
 
     ref_images: np.ndarray
@@ -132,6 +136,9 @@ class FramePairs:
     mesh_visibility: np.ndarray | None = None
     mesh_ref_masks: np.ndarray | None = None
     mesh_tgt_masks: np.ndarray | None = None
+    head_mattes: np.ndarray | None = None
+    head_affines: np.ndarray | None = None
+    head_weights: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])

@@ -106,6 +106,20 @@ def camera_covering(camera, scales: np.ndarray, shifts: np.ndarray, size: int):
     return type(camera)(camera.position, camera.target, float(yfov), camera.width + 2 * pad, height), pad
 
 
+def track_resolution(camera, scales: np.ndarray) -> tuple[object, np.ndarray]:
+    """The square camera at the track's resolution when every frame shows its pixels smaller (all ``scales`` (N,)
+    below 1), with the scales from its pixels: a 512 px output whose person the generator draws at 256 was rendered
+    at 512 and then shrunk, four times the pixels the track keeps. Same centre and field of view, so each pixel
+    coordinate scales by the side's ratio exactly (:func:`motion2video.core.camera.project`). Other cameras come back
+    as they are."""
+    top = float(np.max(scales))
+    if top >= 1.0 or camera.width != camera.height:
+        return camera, scales
+    side = int(np.ceil(camera.height * top))
+    ratio = side / camera.height
+    return type(camera)(camera.position, camera.target, camera.yfov, side, side), scales / ratio
+
+
 def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
                       size: int, progress=None, clear_arms: bool | np.ndarray = True) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
@@ -131,6 +145,7 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     n = len(joints)
     scales = np.broadcast_to(np.asarray(transform[0], np.float64), (n,))
     shifts = np.broadcast_to(np.asarray(transform[1], np.float64), (n, 2))
+    camera, scales = track_resolution(camera, scales)
     camera, pad = camera_covering(camera, scales, shifts, size)
     shifts = shifts - scales[:, None] * pad  # the widened camera's pixels are the given camera's + pad
     shape = anny_model.anny_rest(phenotype)

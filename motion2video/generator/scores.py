@@ -32,6 +32,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 from motion2video.generator.background import composite, inpaint_background, soft_matte
 from motion2video.generator.image_baselines import BASELINES, run_baseline
 from motion2video.generator.data import FramePairs, evaluation_pair_index, make_pairs
+from motion2video.generator.head_paste import paste_head
 from motion2video.generator.specs import FrameSequences
 from motion2video.generator.mesh_warp import MeshWarpGenerator, mesh_inputs, mesh_source_mask
 from motion2video.generator.model import FrameGenerator, generate, images_to_tensor
@@ -322,8 +323,10 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
     Pairs of real frames with a fitted body (``mesh_ref_masks`` given) are drawn as ``synthesize`` draws them: the
     reference's person (its segmentation joined with the fitted silhouette) inpainted
     (:func:`motion2video.generator.background.inpaint_background`) is the plate, and the generated person is laid
-    over it through its soft matte (:func:`~motion2video.generator.background.soft_matte`). Rendered pairs keep the
-    generator's own composite over its plate (:func:`~motion2video.generator.mesh_warp.mesh_plate`), as in training.
+    over it through its soft matte (:func:`~motion2video.generator.background.soft_matte`), and the reference's face
+    over the generated head where the pairs carry it (:func:`~motion2video.generator.head_paste.paste_head`).
+    Rendered pairs keep the generator's own composite over its plate
+    (:func:`~motion2video.generator.mesh_warp.mesh_plate`), as in training.
     """
     if pairs.mesh_flow is None:
         raise ValueError("the mesh generator needs pairs with their mesh correspondence (sequences that keep "
@@ -350,7 +353,12 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
                                     plate=images_to_tensor(behind), source_mask=mesh_source_mask(part))
         person = parts.person.clamp(0, 1).permute(0, 2, 3, 1).numpy()
         matte = soft_matte(parts.alpha[:, 0].numpy())
-        out.append(np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)]))
+        frames = np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)])
+        if part.head_mattes is not None:  # the reference's own face over the generated heads, as synthesize does
+            frames = np.stack([paste_head(f, r, m, a, w, within=p) for f, r, m, a, w, p in
+                               zip(frames, part.ref_images, part.head_mattes, part.head_affines, part.head_weights,
+                                   matte)])
+        out.append(frames)
     return np.concatenate(out)
 
 

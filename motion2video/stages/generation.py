@@ -40,10 +40,12 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     person BlazePose segments) in the reference pose and in every target pose; only the reference vertices that land
     on that segmented person count as shown, the fitted head is moved onto the eyes BlazePose finds
     (:func:`~motion2video.generator.mesh_reference.align_face`) and a fitted hand vertex that lands beside the pictured
-    hand samples the pictured hand (:func:`~motion2video.generator.mesh_reference.hand_colour_sources`). Face: None (the face
-    structures carry their head mesh)."""
+    hand samples the pictured hand (:func:`~motion2video.generator.mesh_reference.hand_colour_sources`); the face the
+    photo shows is found at its own resolution (:func:`~motion2video.stages.pictured_face.reference_face`) to be laid
+    over the generated heads. Face: None (the face structures carry their head mesh)."""
     from motion2video.core.errors import InputError
     from motion2video.stages.mesh_generation import mesh_video
+    from motion2video.stages.pictured_face import reference_face
 
     if net.config.domain != structures.domain:
         raise InputError(f"the mesh frame generator makes {net.config.domain} frames, not {structures.domain} frames")
@@ -63,7 +65,8 @@ def mesh_setup(net, reference: Reference, structures: Structures):
     return mesh_video(structures.placement, structures.points[0], structures.points[1:1 + n], phenotype=phenotype,
                       output_size=structures.size, model_size=net.config.image_size, person=person,
                       image=reference.image, fit_to_mask=not phenotype,
-                      pictured=None if reference.pose is None else reference.pose.camera_joints)
+                      pictured=None if reference.pose is None else reference.pose.camera_joints,
+                      face=reference_face(reference))
 
 
 def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,

@@ -33,11 +33,13 @@ from motion2video.core.camera import fit_camera, project
 from motion2video.core.errors import InputError
 from motion2video.generator.background import MATTE_FEATHER_PX, composite, inpaint_background, soft_matte
 from motion2video.generator.data import body_structures, face_structures
+from motion2video.generator.head_paste import compose_affine, paste_head
 from motion2video.generator.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
 from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
 from motion2video.generator.mesh_reference import clothes_margin, hand_colour_sources, reference_sampling
 from motion2video.generator.mesh_warp import mesh_plate, person_colours, sampled_colours
 from motion2video.generator.warp import limb_region, person_crop
+from motion2video.stages.pictured_face import PicturedFace, face_moves
 from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
 from renderers import anny_model
 
@@ -58,6 +60,11 @@ class MeshVideo:
             sampling beside the pictured hand).
         background: (S_out, S_out, 3) uint8 the reference picture with its person inpainted
             (:func:`reference_background`), or None (made from the fitted silhouette and the joints when needed).
+        face: the face the reference photo shows (:func:`motion2video.stages.pictured_face.reference_face`), laid over
+            every generated head where the head faces as it does in the photo; None: the generator's heads stay.
+        head_affines: (N, 2, 3) output pixels of the reference -> of each target, the fitted face's move
+            (:func:`motion2video.stages.pictured_face.face_moves`); head_weights: (N,) how much of the face each
+            target takes (None without a face).
     """
 
     crop: tuple[int, int, int]
@@ -69,11 +76,15 @@ class MeshVideo:
     margin: int = 0
     uv_sources: np.ndarray | None = None
     background: np.ndarray | None = None
+    face: PicturedFace | None = None
+    head_affines: np.ndarray | None = None
+    head_weights: np.ndarray | None = None
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
                output_size: int, model_size: int, person=None, image: np.ndarray | None = None,
-               fit_to_mask: bool = True, pictured: np.ndarray | None = None) -> MeshVideo:
+               fit_to_mask: bool = True, pictured: np.ndarray | None = None,
+               face: PicturedFace | None = None) -> MeshVideo:
     """The meshes of a placed body video.
 
     Args:
@@ -93,6 +104,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
             (:func:`~motion2video.generator.mesh_reference.hand_colour_sources`).
         pictured: (17, 3) the reference picture's own 3D pose in its camera's axes (its pose file's
             ``camera_joints``), or None (:func:`~motion2video.generator.mesh_fit.lift_reference`).
+        face: the reference photo's face (:func:`motion2video.stages.pictured_face.reference_face`), or None.
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -128,6 +140,12 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     margin = 0 if small is None else clothes_margin(small, ref.masks[0])
     video = MeshVideo((x0, y0, side), ref, tgt, ref_pts.astype(np.float32), tgt_pts.astype(np.float32), person=small,
                       margin=margin, uv_sources=sources)
+    if face is not None:  # the fitted face's move, in output pixels
+        corner = np.array([x0, y0], np.float64)
+        video.face = face
+        # the reference's vertices as its colours are sampled: the fitted face moved onto the pictured eyes
+        video.head_affines, video.head_weights = face_moves(face, ref_uv / k + corner, tgt.uv / k + corner,
+                                                            tgt.visible, rest=rest)
     if image is not None:
         video.background = reference_background(image, video, None if person is None else person.mask,
                                                  reference_points)
@@ -159,7 +177,7 @@ def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray
 
 
 def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, phenotype: dict | None = None,
-                     person_mask: np.ndarray | None = None) -> MeshTrack:
+                     person_mask: np.ndarray | None = None) -> tuple[MeshTrack, dict]:
     """The body mesh of a person seen in a real video, in the pixels of its frames.
 
     The estimator's 3D joints (canonical metres) pose Anny; a frontal camera fitted over the frames renders it,
@@ -171,6 +189,8 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
         person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it
             (:func:`~motion2video.generator.mesh_fit.fit_width`).
+    Returns:
+        the track, and the phenotype it was rendered with (the fitted width's).
     """
     joints3d = np.asarray(joints3d, np.float64)
     camera = fit_camera(joints3d, size, size, elevation_deg=0.0)
@@ -183,8 +203,9 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
                                  person_mask=person_mask, phenotype=phenotype)
     # the joints are this person's own, observed in every frame: no arms moved out of a torso (moved, dancer.avi's
     # person PSNR fell 21.26 -> 19.88 dB while L1 0.0191 -> 0.0174 and akd 3.42 -> 2.79 px; docs/results.md)
-    return render_mesh_track(joints3d, phenotype=phenotype or {}, camera=camera, transform=(scales, shifts),
-                             size=size, clear_arms=False)
+    phenotype = phenotype or {}
+    return render_mesh_track(joints3d, phenotype=phenotype, camera=camera, transform=(scales, shifts), size=size,
+                             clear_arms=False), phenotype
 
 
 def sampled_person(video: MeshVideo):
@@ -202,7 +223,9 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     """Frames of the mesh generator for target ``rows`` of ``video``: the generated person (at the model's size,
     resized to the crop) laid over the reference's background (``video.background``, :func:`reference_background`)
     through its soft matte (:func:`motion2video.generator.background.soft_matte` of the generator's alpha), so where
-    the reference person stood shows the background, and no background colour is mixed into the person.
+    the reference person stood shows the background, and no background colour is mixed into the person. With a
+    pictured face (``video.face``) the photo's face is laid over each generated head, moved as the fitted face moves
+    and faded out as the head turns away (:func:`motion2video.generator.head_paste.paste_head`).
 
     Args:
         net: a :class:`motion2video.generator.mesh_warp.MeshWarpGenerator`.
@@ -252,6 +275,14 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             # keeps the model's outline, whose stair of pixels grows with it
             matte = soft_matte(alpha, feather_px=MATTE_FEATHER_PX * side / size)
             out[start:start + n, y0:y0 + side, x0:x0 + side] = composite(behind, person, matte)
+            if video.face is not None:  # the photo's own face over the generated heads, inside the generated person
+                face = video.face
+                for i, row in enumerate(part):
+                    within = np.zeros(out.shape[1:3], np.float32)
+                    within[y0:y0 + side, x0:x0 + side] = matte[i]
+                    out[start + i] = paste_head(out[start + i], face.image, face.matte,
+                                                compose_affine(video.head_affines[row], face.to_reference),
+                                                video.head_weights[row], within=within)
     return out
 
 

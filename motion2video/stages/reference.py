@@ -285,6 +285,10 @@ class Reference:
             :func:`motion2video.stages.generation.mesh_setup`).
         picture: (S, S) float32, 1 where these pixels come from the image file, 0 where a pad or zoom replicated its
             border (None: all of them come from it).
+        source: (h, w, 3) uint8 the picture at the file's own resolution, after the cuts and pads but before the
+            resize to S (None: ``image`` is the source); the face is taken from it
+            (:func:`motion2video.stages.pictured_face.pictured_face`).
+        source_scale, source_offset: ``image pixels = source pixels * source_scale + source_offset``.
         relative_head: face: the head pose of the motion is applied relative to its first observed frame, on top of
             the reference's own (a fitted portrait keeps its pose and turns as the clip's head turns, rather than
             jumping to the clip's head pose; :func:`motion2video.stages.structure.relative_head_pose`).
@@ -296,6 +300,9 @@ class Reference:
     path: Path
     person: ReferencePerson | None = None
     picture: np.ndarray | None = None
+    source: np.ndarray | None = None
+    source_scale: float = 1.0
+    source_offset: tuple[float, float] = (0.0, 0.0)
     relative_head: bool = False
 
     def picture_mask(self) -> np.ndarray:
@@ -472,7 +479,10 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
     note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
             f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path,
-                     person=person, picture=picture)
+                     person=person, picture=picture,
+                     source=reference.image if reference.source is None else reference.source,
+                     source_scale=reference.source_scale * k,
+                     source_offset=tuple((np.asarray(reference.source_offset) - [x0, y0]) * k))
 
 
 def portrait_reference(image: np.ndarray, path: Path, *, size: int, notes: tuple[str, ...] = (),
@@ -594,4 +604,5 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
             check_reference_person(fitted, pose.points, path=path)
     return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person,
-                     picture=None if picture.min() > 0.5 else picture)
+                     picture=None if picture.min() > 0.5 else picture, source=None if (h, w) == (size, size) else image,
+                     source_scale=fit.scale, source_offset=tuple(float(v) for v in fit.offset))

@@ -1,0 +1,224 @@
+"""The pictured face drawn over the generated head: the photo's own pixels, moved as the fitted head moves.
+
+A body generator at 256 px draws a head about 20 px tall from a network working on a body crop; whatever face the
+photo shows does not survive it. So the face is taken from the photo itself and laid over each generated frame:
+
+1. **Where it goes.** The face's landmarks have points on the body mesh's head (the face mesh's correspondence
+   with Anny); the least-squares 2D affine map of those points from the reference mesh onto a target's posed mesh
+   (:func:`head_affine`: in-plane turn, scale, translation, and the foreshortening of a small nod or turn) moves
+   the face.
+2. **Whether it fits.** A face seen from another side is not an affine image of the pictured one. The head's turn
+   out of the picture plane between the photo and the target (the angle between the directions the camera looks
+   along in the head's own axes, :func:`view_direction`: in the photo from the face's landmarks, in the target from
+   the posed head's vertices) and the share of the landmarks' surface points the target still shows (an arm in
+   front, a turn) fade the face out (:func:`paste_weight`), leaving the generator's head: a wrong face is worse
+   than no face.
+3. **How it is laid over.** The face's matte (the convex hull of the face landmarks, feathered: :func:`face_matte`)
+   is warped with the face; ``weight * matte`` (times the generated person's matte) blends the warped photo over
+   the frame (:func:`paste_head`). Outside the warped matte the frame is untouched.
+
+Images are (H, W, 3) uint8; pixels x right, y down, the origin at the top-left corner of the top-left pixel (its
+centre at (0.5, 0.5)); affine maps are (2, 3) float64 acting on (x, y, 1) in those coordinates.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+# paste_weight: the face is laid over fully up to TURN_FULL_DEG of turn out of the picture plane, not at all from
+# TURN_NONE_DEG on, linear between. Photos of people facing the camera, driven by a walk towards it, measured 18-20
+# degrees (woman_blue_tracksuit.jpg, fashion_woman_shorts.png: the photo's camera looks down on the face a little
+# more than the placement's); the three-quarter face of fashion_man_red_jacket.png 22-26 degrees, where the affine
+# map stretches the far cheek visibly but the face stays his; a profile 85.
+TURN_FULL_DEG = 25.0
+TURN_NONE_DEG = 45.0
+# paste_weight: the share of the face landmarks' surface points that the target shows (all three vertices of each):
+# at or above SHOWN_FULL the face is laid over fully, at or below SHOWN_NONE not at all. On woman_blue_tracksuit.jpg
+# driven by the demo walk: 0.97-0.98 of them facing the camera, 0.53 turned by 90 degrees, none turned by 180.
+SHOWN_FULL = 0.85
+SHOWN_NONE = 0.6
+# face_matte: the hull is shrunk by this share of the face's size (its outline runs through hair and background at
+# the temples and the chin's edge) and feathered by a Gaussian of this share.
+MATTE_SHRINK = 0.03
+MATTE_FEATHER = 0.04
+MIN_POINTS = 8  # fewer face vertices than this fit no affine map
+
+
+def face_matte(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """(H, W) float32 in [0, 1]: the face inside the convex hull of its landmarks ``points`` (L, 2) pixels,
+    shrunk by :data:`MATTE_SHRINK` and feathered by :data:`MATTE_FEATHER` of the face's size (the long side of the
+    landmarks' box), 1 deep inside and 0 outside the hull."""
+    pts = np.asarray(points, np.float64)
+    size = float(np.max(pts.max(axis=0) - pts.min(axis=0)))
+    hull = cv2.convexHull(np.round((pts - 0.5) * 16).astype(np.int32))  # OpenCV's pixel centres, 4 fractional bits
+    mask = np.zeros(shape, np.uint8)
+    cv2.fillConvexPoly(mask, hull, 255, lineType=cv2.LINE_AA, shift=4)
+    shrink = max(1, int(round(MATTE_SHRINK * size)))
+    mask = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * shrink + 1, 2 * shrink + 1)))
+    matte = mask.astype(np.float32) / 255.0
+    sigma = max(0.5, MATTE_FEATHER * size)
+    return cv2.GaussianBlur(matte, (0, 0), sigmaX=sigma, borderType=cv2.BORDER_CONSTANT)
+
+
+def head_affine(ref_uv: np.ndarray, tgt_uv: np.ndarray) -> np.ndarray | None:
+    """(2, 3) the least-squares affine map taking (P, 2) reference points onto (P, 2) target points; None with
+    fewer than :data:`MIN_POINTS` points or a degenerate (collinear) set."""
+    ref, tgt = np.asarray(ref_uv, np.float64), np.asarray(tgt_uv, np.float64)
+    if len(ref) < MIN_POINTS:
+        return None
+    design = np.concatenate([ref, np.ones((len(ref), 1))], axis=1)  # (P, 3)
+    solution, _, rank, _ = np.linalg.lstsq(design, tgt, rcond=None)
+    if rank < 3:
+        return None
+    return solution.T  # (2, 3)
+
+
+def view_direction(points3d: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """(3,) unit vector: the direction the camera looks along, in the axes of ``points3d`` (P, 3) (a rigid head at
+    rest), from their pictured pixels ``uv`` (P, 2): the affine camera fitted by least squares, its two rows made
+    orthonormal, their cross product (image y down, so it points from the camera into the scene)."""
+    p = np.asarray(points3d, np.float64)
+    q = np.asarray(uv, np.float64)
+    p, q = p - p.mean(axis=0), q - q.mean(axis=0)
+    camera = np.linalg.lstsq(p, q, rcond=None)[0].T  # (2, 3)
+    u, _, vt = np.linalg.svd(camera, full_matrices=False)
+    rows = u @ vt  # nearest orthonormal rows
+    d = np.cross(rows[0], rows[1])
+    return d / np.linalg.norm(d)
+
+
+def paste_weight(turn_deg: float, shown: float) -> float:
+    """How much of the pictured face to lay over, in [0, 1]: 1 for a turn up to :data:`TURN_FULL_DEG` with at
+    least :data:`SHOWN_FULL` of the face still shown, falling linearly to 0 at :data:`TURN_NONE_DEG` or
+    :data:`SHOWN_NONE` (the product of the two ramps)."""
+    by_turn = np.clip((TURN_NONE_DEG - turn_deg) / (TURN_NONE_DEG - TURN_FULL_DEG), 0.0, 1.0)
+    by_shown = np.clip((shown - SHOWN_NONE) / (SHOWN_FULL - SHOWN_NONE), 0.0, 1.0)
+    return float(by_turn * by_shown)
+
+
+def compose_affine(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """(2, 3) the affine map ``outer(inner(x))``."""
+    o = np.vstack([np.asarray(outer, np.float64), [0.0, 0.0, 1.0]])
+    i = np.vstack([np.asarray(inner, np.float64), [0.0, 0.0, 1.0]])
+    return (o @ i)[:2]
+
+
+def pixel_index_affine(affine: np.ndarray) -> np.ndarray:
+    """(2, 3) the map ``affine`` (continuous pixel coordinates, centres at +0.5) in OpenCV's pixel indices (centres
+    at integers): ``y + 0.5 = M (x + 0.5) + t``."""
+    a = np.array(affine, np.float64)
+    a[:, 2] += a[:, :2] @ np.array([0.5, 0.5]) - 0.5
+    return a
+
+
+def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine: np.ndarray,
+               weight: float, *, within: np.ndarray | None = None) -> np.ndarray:
+    """The frame with the source face laid over it.
+
+    The source is first shrunk by area averaging to the map's scale when the map shrinks it (a photo at several
+    times the output's resolution would otherwise alias), then warped bilinearly by the rest of the map.
+
+    Args:
+        frame: (H, W, 3) uint8 a generated frame.
+        source: (h, w, 3) uint8 the picture the face comes from; matte: (h, w) float in [0, 1] the face in it
+            (:func:`face_matte`).
+        affine: (2, 3) source pixels -> frame pixels.
+        weight: in [0, 1] (:func:`paste_weight`); 0 returns the frame unchanged.
+        within: (H, W) float in [0, 1] the generated person's matte in the frame, or None: the face is laid over
+            the person only (a face from a three-quarter view, spread over a frontal head, reaches past its outline).
+    Returns:
+        (H, W, 3) uint8, equal to ``frame`` wherever the warped matte times ``weight`` is 0.
+    """
+    frame = np.asarray(frame, np.uint8)
+    if weight <= 0.0:
+        return frame.copy()
+    affine = pixel_index_affine(affine)
+    scale = float(np.sqrt(abs(np.linalg.det(affine[:, :2]))))
+    matte = np.asarray(matte, np.float32)
+    ys, xs = np.nonzero(matte > 0)
+    if len(xs) == 0:
+        return frame.copy()
+    # the matte's box only, 2 pixels grown: the rest of the picture is never laid over
+    h, w = matte.shape
+    sx0, sy0 = max(0, xs.min() - 2), max(0, ys.min() - 2)
+    sx1, sy1 = min(w, xs.max() + 3), min(h, ys.max() + 3)
+    source = np.asarray(source)[sy0:sy1, sx0:sx1]
+    matte = matte[sy0:sy1, sx0:sx1]
+    affine = compose_affine(affine, np.array([[1.0, 0.0, sx0], [0.0, 1.0, sy0]]))
+    if scale < 1.0:  # shrink by area first, then warp the shrunk picture by affine o (shrunk -> source)
+        h, w = matte.shape
+        sw, sh = max(1, int(round(w * scale))), max(1, int(round(h * scale)))
+        source = cv2.resize(source, (sw, sh), interpolation=cv2.INTER_AREA)
+        matte = cv2.resize(matte, (sw, sh), interpolation=cv2.INTER_AREA)
+        unshrink = np.array([[w / sw, 0.0, 0.0], [0.0, h / sh, 0.0]])
+        # a pixel centre c of the shrunk image is (c + 0.5) * w / sw - 0.5 in the source
+        unshrink[:, 2] = 0.5 * np.array([w / sw, h / sh]) - 0.5
+        affine = compose_affine(affine, unshrink)
+    # only the box the warped matte covers is warped and blended (a face is about 1% of a frame)
+    height, width = frame.shape[:2]
+    out = frame.copy()
+    mh, mw = matte.shape
+    corners = np.array([[-1, -1], [mw, -1], [-1, mh], [mw, mh]], np.float64) @ affine[:, :2].T + affine[:, 2]
+    x0, y0 = np.maximum(np.floor(corners.min(axis=0)).astype(int) - 1, 0)
+    x1, y1 = np.minimum(np.ceil(corners.max(axis=0)).astype(int) + 2, [width, height])
+    if x1 <= x0 or y1 <= y0:
+        return out
+    box = affine.copy()
+    box[:, 2] -= [x0, y0]
+    size = (int(x1 - x0), int(y1 - y0))
+    face = cv2.warpAffine(source, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    alpha = cv2.warpAffine(matte, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    if within is not None:
+        alpha = alpha * np.asarray(within, np.float32)[y0:y1, x0:x1]
+    alpha = np.clip(alpha * float(weight), 0.0, 1.0)[..., None]
+    under = frame[y0:y1, x0:x1].astype(np.float32)
+    mixed = alpha * face.astype(np.float32) + (1.0 - alpha) * under
+    out[y0:y1, x0:x1] = np.clip(np.rint(mixed), 0, 255).astype(np.uint8)
+    return out
+
+
+def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.ndarray, face_weights: np.ndarray,
+               ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, head_points: np.ndarray,
+               head_vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the pictured face goes in every target, and how much of it to lay over.
+
+    The face's landmarks have their points on the body mesh's head (the face mesh's correspondence with Anny,
+    :mod:`motion2video.pose.face_anny`): the affine map of those points from the reference mesh onto each target mesh
+    (:func:`head_affine`) moves the face. The map is the head's move, not a fit of the pictured face onto the
+    mesh's: a fitted head is seldom the pictured one's size and place (on ``dancer.avi`` at 128 px, mapping her
+    landmarks onto the mesh's stretched her 10 px face to 15 and raised its brow 5 px). How far the target's head is
+    turned from the pictured face (:func:`view_direction`, both against the same head at rest) and how many of the
+    landmarks' surface points the target shows give the weight (:func:`paste_weight`).
+
+    Args:
+        face_xy: (L, 2) the face's landmarks in the reference picture's pixels (the pictured view of the head).
+        face_points: (L, 3) their points on the head at rest, metres; face_vertices: (L, 3) int the mesh vertices
+            each point lies between; face_weights: (L, 3) its barycentric weights.
+        ref_uv: (V, 2) the body mesh's vertices in the reference, its pixels (where the reference samples them).
+        tgt_uv: (N, V, 2) the body mesh's vertices in each target, pixels; tgt_visible: (N, V) bool shown there.
+        head_points: (P, 3) the head's vertices at rest, metres; head_vertices: (P,) int their indices.
+    Returns:
+        affines (N, 2, 3) reference pixels -> target pixels (the identity where none fits) and weights (N,) in
+        [0, 1] (0 where no map fits).
+    """
+    face_xy = np.asarray(face_xy, np.float64)
+    face_vertices = np.asarray(face_vertices, np.int64)
+    face_weights = np.asarray(face_weights, np.float64)
+    pictured = view_direction(face_points, face_xy)
+    on_ref = np.einsum("lkd,lk->ld", np.asarray(ref_uv, np.float64)[face_vertices], face_weights)  # (L, 2)
+    n = len(tgt_uv)
+    affines = np.repeat(np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]), n, axis=0)
+    weights = np.zeros(n)
+    for i in range(n):
+        uv = np.asarray(tgt_uv[i], np.float64)
+        landmarks = np.einsum("lkd,lk->ld", uv[face_vertices], face_weights)  # (L, 2)
+        affine = head_affine(on_ref, landmarks)
+        if affine is None:
+            continue
+        affines[i] = affine
+        turn = float(np.degrees(np.arccos(np.clip(pictured @ view_direction(head_points, uv[head_vertices]),
+                                                  -1.0, 1.0))))
+        shown = float(np.mean(np.asarray(tgt_visible[i], bool)[face_vertices].all(axis=1)))
+        weights[i] = paste_weight(turn, shown)
+    return affines, weights

@@ -1,0 +1,232 @@
+"""The photo's own face laid over the generated heads.
+
+Real parts: photos of ../shared/data/photos, BlazePose and MediaPipe's face detector and face mesh on them, the
+demo's motion-capture walk, Anny rendered through OSMesa, the shipped mesh generator.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from motion2video.generator.head_paste import (
+    MATTE_FEATHER, MATTE_SHRINK, TURN_NONE_DEG, face_matte, paste_head, paste_weight,
+)
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+
+ROOT = Path(__file__).resolve().parents[1]
+SIZE = 256
+
+
+def psnr(a: np.ndarray, b: np.ndarray) -> float:
+    err = np.mean((np.asarray(a, np.float64) - np.asarray(b, np.float64)) ** 2)
+    return float(10 * np.log10(255.0 ** 2 / max(err, 1e-12)))
+
+
+def walk_forecast(turn_deg: tuple[float, ...] = (0.0, 0.0, 0.0)):
+    """The demo's walk, frames 0..3; target i (future frames 1..3) turned by ``turn_deg[i]`` about the vertical axis
+    through its pelvis."""
+    from motion2video.stages.sampling import Forecast
+
+    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)[:4].copy()
+    for i, deg in enumerate(turn_deg):
+        a = np.radians(deg)
+        rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+        pelvis = walk[1 + i, 0].copy()
+        walk[1 + i] = (walk[1 + i] - pelvis) @ rot.T + pelvis
+    return Forecast(observed=walk[:1], futures=walk[None, 1:], fps=25.0, layout="body3d", model="test", seed=0)
+
+
+@pytest.fixture(scope="module")
+def net():
+    from motion2video.generator.checkpoint import load_frame_model
+
+    return load_frame_model("frames-body-mesh-256").model
+
+
+@pytest.fixture(scope="module")
+def tracksuit(photos_dir):
+    from motion2video.stages.reference import load_reference
+
+    return load_reference(photos_dir / "woman_blue_tracksuit.jpg", size=SIZE, domain="body", crop_person=True)
+
+
+def mesh_video_of(net, reference, forecast):
+    from motion2video.stages.generation import mesh_setup
+    from motion2video.stages.structure import render_structures
+
+    return mesh_setup(net, reference, render_structures(forecast, domain="body", size=SIZE, reference=reference))
+
+
+def test_the_face_is_found_at_the_photos_own_resolution(tracksuit):
+    """On a 1080 x 1920 photo cut to its person and resized to 256, her face is some 14 px wide; the face is looked
+    for in the photo as given, where the square around her head is 5.6 times larger, and mapped into the 256 px
+    picture onto her eyes."""
+    from motion2video.stages.pictured_face import landmarks_in_reference, reference_face
+
+    face = reference_face(tracksuit)
+    assert face is not None and face.score > 0.9
+    assert tracksuit.source is not None and face.image.shape[0] > 4 * (face.to_reference[0, 0] * face.image.shape[0])
+    assert np.isclose(face.to_reference[0, 0], tracksuit.source_scale)
+    lm = landmarks_in_reference(face)
+    width = np.ptp(lm[:, 0])
+    assert 8 < width < 30  # the face in the 256 px picture (14.3 px)
+    # BlazePose's eyes (found on the 256 px picture) lie on the face mesh's eyes, mapped from the photo
+    eyes = tracksuit.person.eyes  # (2, 2) her left and right eye
+    mesh_eyes = np.stack([lm[[362, 263]].mean(axis=0), lm[[33, 133]].mean(axis=0)])  # the mesh's left, right eye
+    assert np.linalg.norm(eyes - mesh_eyes, axis=1).max() < 0.1 * width  # 0.6 px
+    # the matte is the face, not the hair or the wall: its pixels are skin-coloured (red over blue), none is the wall
+    inside = face.matte > 0.9
+    pixels = face.image[inside].astype(np.int64)
+    assert inside.sum() > 500 and np.mean(pixels[:, 0] > pixels[:, 2] + 15) > 0.8
+
+
+def test_pasting_the_face_where_it_was_gives_the_photo_back_and_touches_nothing_else(tracksuit):
+    """Laid over a grey frame by its own map to the reference picture, the face is the reference picture's face
+    (the photo shrunk by area to 256, as the reference is): PSNR over the face's core 29.5 dB; moved by a quarter
+    pixel it falls to 26.2-28.1 dB, so the map keeps the pixel grid. Where the warped matte is 0 the frame is
+    untouched, to the bit."""
+    from motion2video.stages.pictured_face import reference_face
+
+    from motion2video.generator.head_paste import pixel_index_affine
+
+    face = reference_face(tracksuit)
+    grey = np.full((SIZE, SIZE, 3), 128, np.uint8)
+    out = paste_head(grey, face.image, face.matte, face.to_reference, 1.0)
+
+    alpha = cv2.warpAffine(face.matte, pixel_index_affine(face.to_reference), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
+    core = alpha > 0.99
+    assert core.sum() > 60
+    assert psnr(out[core], tracksuit.image[core]) > 28.5  # 29.5 dB
+    untouched = cv2.dilate((alpha > 0).astype(np.uint8), np.ones((3, 3), np.uint8)) == 0
+    np.testing.assert_array_equal(out[untouched], grey[untouched])
+    assert untouched.mean() > 0.98  # 0.989: the face and its feather are about 1% of the frame
+    np.testing.assert_array_equal(paste_head(grey, face.image, face.matte, face.to_reference, 0.0), grey)
+
+
+def test_a_walk_carries_the_photos_face_and_changes_nothing_outside_the_head(net, tracksuit):
+    """synthesize's mesh path: the photo walks. In each frame the face lies where the fitted head's face points go
+    (a detector finds it there), its pixels are the photo's face moved (PSNR against the photo's face mapped by the
+    same move: 27-29 dB over the face's core), and the frame differs from the generator's own frame only inside the
+    head's square."""
+    from dataclasses import replace
+
+    from motion2video.generator.head_paste import compose_affine, pixel_index_affine
+    from motion2video.stages.generation import mesh_frames
+    from motion2video.stages.pictured_face import face_mesh, landmarks_in_reference
+    from motion2video.stages.structure import render_structures
+
+    forecast = walk_forecast()
+    structures = render_structures(forecast, domain="body", size=SIZE, reference=tracksuit)
+    video = mesh_video_of(net, tracksuit, forecast)
+    assert video.face is not None
+    np.testing.assert_array_less(0.99, video.head_weights)  # a walk towards the camera: the face fully laid over
+    rows = np.arange(3)
+    with_face = mesh_frames(net, tracksuit, structures, video, rows)
+    without = mesh_frames(net, tracksuit, structures, replace(video, face=None), rows)
+    face = video.face
+    lm = landmarks_in_reference(face)
+    for i in rows:
+        move = compose_affine(video.head_affines[i], face.to_reference)  # photo square -> frame
+        alpha = cv2.warpAffine(face.matte, pixel_index_affine(move), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
+        moved_photo = cv2.warpAffine(tracksuit.image, pixel_index_affine(video.head_affines[i]), (SIZE, SIZE),
+                                     flags=cv2.INTER_LINEAR)
+        core = alpha > 0.99
+        assert core.sum() > 40
+        assert psnr(with_face[i][core], moved_photo[core]) > 25.0
+        # nothing changes outside the head: the changed pixels lie within the moved landmarks' box grown by a third
+        target_lm = lm @ video.head_affines[i][:, :2].T + video.head_affines[i][:, 2]
+        lo, hi = target_lm.min(axis=0), target_lm.max(axis=0)
+        grow = (hi - lo) / 3
+        changed = np.argwhere(np.any(with_face[i] != without[i], axis=-1))[:, ::-1] + 0.5  # (x, y)
+        assert len(changed) > 40
+        assert (changed >= lo - grow).all() and (changed <= hi + grow).all()
+        # a face detector finds the face there, in the head's square enlarged
+        x0, y0 = np.floor(lo - (hi - lo)).astype(int)
+        side = int(np.ceil(3 * np.max(hi - lo)))
+        square = cv2.resize(with_face[i][max(0, y0):y0 + side, max(0, x0):x0 + side], (192, 192),
+                            interpolation=cv2.INTER_CUBIC)
+        assert face_mesh().detect(np.ascontiguousarray(square)), f"no face found in frame {i}"
+
+
+def test_a_head_turned_away_from_the_photos_view_keeps_the_generators_head(net, tracksuit):
+    """The same walk with its future frames turned by 0, 90 and 180 degrees about the vertical: the face is laid over
+    the first fully (its head 18.5 degrees from the photo's view), not at all over the other two (85 and 173 degrees:
+    a profile or the back of the head is not the pictured face), and those frames are the generator's own."""
+    from dataclasses import replace
+
+    from motion2video.stages.generation import mesh_frames
+    from motion2video.stages.structure import render_structures
+
+    forecast = walk_forecast((0.0, 90.0, 180.0))
+    structures = render_structures(forecast, domain="body", size=SIZE, reference=tracksuit)
+    video = mesh_video_of(net, tracksuit, forecast)
+    # targets: the observed frame, then the futures turned by 0, 90, 180 degrees
+    np.testing.assert_array_equal(video.head_weights, [1.0, 1.0, 0.0, 0.0])
+    rows = np.array([2, 3])
+    np.testing.assert_array_equal(mesh_frames(net, tracksuit, structures, video, rows),
+                                  mesh_frames(net, tracksuit, structures, replace(video, face=None), rows))
+
+
+def test_a_photo_without_a_face_keeps_the_generators_head(photos_dir, tracksuit):
+    """The photo with her head painted over by its background (no face left where the body puts the head): nothing
+    is found, and the mesh video carries no face."""
+    from dataclasses import replace
+
+    from motion2video.generator.background import inpaint_background
+    from motion2video.stages.pictured_face import head_square, reference_face
+
+    source = tracksuit.source.copy()
+    size = tracksuit.image.shape[0]
+    points = (np.asarray(tracksuit.pose.points) * size / tracksuit.pose.width - tracksuit.source_offset) \
+        / tracksuit.source_scale
+    x0, y0, side = head_square(points)
+    hole = np.zeros(source.shape[:2], np.float32)
+    cx, cy = x0 + side / 2, y0 + side / 2
+    cv2.circle(hole, (int(cx), int(cy)), int(side * 0.3), 1.0, -1)
+    faceless = inpaint_background(source, hole, grow_px=2)
+    assert reference_face(replace(tracksuit, source=faceless)) is None
+
+
+def test_the_paste_weight_falls_with_the_turn_and_the_hidden_face():
+    assert paste_weight(0.0, 1.0) == 1.0
+    assert paste_weight(TURN_NONE_DEG, 1.0) == 0.0 and paste_weight(0.0, 0.5) == 0.0
+    turns = np.linspace(0, 60, 13)
+    weights = [paste_weight(t, 1.0) for t in turns]
+    assert (np.diff(weights) <= 0).all() and 0 < paste_weight(30.0, 1.0) < 1
+
+
+def test_the_face_matte_is_the_hull_feathered(tracksuit):
+    from motion2video.stages.pictured_face import reference_face
+
+    face = reference_face(tracksuit)
+    matte = face_matte(face.landmarks, face.image.shape[:2])
+    hull = np.zeros(face.image.shape[:2], np.uint8)
+    cv2.fillConvexPoly(hull, cv2.convexHull(np.round(face.landmarks - 0.5).astype(np.int32)), 1)
+    assert matte.min() >= 0 and matte.max() <= 1
+    assert matte[hull == 0].max() < 0.5  # outside the hull it fades out
+    size = np.ptp(face.landmarks, axis=0).max()
+    reach = int(np.ceil((MATTE_SHRINK + 3 * MATTE_FEATHER) * size))  # the shrink and three feather widths
+    deep = cv2.erode(hull, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
+    assert deep.sum() > 1000 and matte[deep].min() > 0.99  # deep inside it is 1
+
+
+def test_a_reframed_reference_keeps_its_face_on_its_eyes(tracksuit):
+    """--fit-view re-frames the reference (zoomed out to 1.5 times, panned): the face found in the photo still lands on
+    the eyes BlazePose found, moved with the picture."""
+    from motion2video.stages.pictured_face import landmarks_in_reference, reference_face
+    from motion2video.stages.reference import zoom_to_view
+
+    zoomed = zoom_to_view(tracksuit, (-64.0, -40.0, 384.0))
+    face = reference_face(zoomed)
+    assert face is not None
+    lm = landmarks_in_reference(face)
+    mesh_eyes = np.stack([lm[[362, 263]].mean(axis=0), lm[[33, 133]].mean(axis=0)])
+    width = np.ptp(lm[:, 0])
+    assert 5 < width < 14  # two thirds of the 14 px face
+    assert np.linalg.norm(zoomed.person.eyes - mesh_eyes, axis=1).max() < 0.1 * width
