@@ -66,6 +66,23 @@ def test_the_rendered_head_lands_on_the_tracked_face_in_the_close_up(woman_track
     assert (face > 40).all() and (face < 100).all()  # the face mesh's points span about half the close-up
 
 
+def test_the_moved_head_is_laid_over_the_reference_frame(woman_clip, woman_track):
+    """Away from the head the generated frame is the reference's picture (mesh_face_frames' plate); on the head it
+    is not the reference (the head moved and changed expression by frame 58)."""
+    from motion2video.evaluation.talking_head import face_pairs, mesh_face_frames
+    from motion2video.generator.checkpoint import load_frame_model
+
+    frames = face_video_frames(woman_clip, woman_track, size=128, targets=1, stride=58)
+    pairs = face_pairs(frames)
+    out = mesh_face_frames(load_frame_model("frames-face-mesh-128").model, pairs)
+    assert out.shape == (1, 128, 128, 3)
+    diff = np.abs(out[0].astype(int) - pairs.ref_images[0]).mean(axis=-1)
+    corners = np.concatenate([diff[:12, :12].ravel(), diff[:12, -12:].ravel()])
+    assert corners.max() <= 2
+    head = hull_masks(pairs.tgt_points, 128)[0]
+    assert diff[head].mean() > 4
+
+
 def test_evaluate_frames_face_video_command(woman_clip, woman_track, tmp_path):
     out, sheet = tmp_path / "talking.json", tmp_path / "talking.png"
     assert main(["evaluate-frames", "--model", "frames-face-mesh-128", "--video", str(woman_clip),
