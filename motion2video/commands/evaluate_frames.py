@@ -23,6 +23,15 @@ real frame; akd_missing: generated frames where it finds none). The video is tra
 F of the video on; frame 0 stays the reference): the part train-frames --video --train-fraction F never trains
 on.
 
+With --video V and a face model: the talking-head protocol. The face is tracked as pose --face tracks it (face
+mesh, the Anny head fitted; cached); frame 0 of the track is the reference, the later frames' fitted head pose
+and expressions drive the generator (the fitted head rendered in each frame), the real frames are the truth, all
+cut to the close-up square the face generators were trained on. Per method (the generator, copy-reference,
+landmark-warp: a piecewise-affine warp on the tracked face points, and the previous face generator): l1, PSNR,
+SSIM, head_psnr / head_ssim inside the real face (the hull of its tracked landmarks), and landmark_error (the face
+mesh run on the generated and on the real frame: mean distance of its points over the real face's size;
+landmark_missing: generated frames where it finds no face). --video-frames and --video-stride choose the frames.
+
 With --poses PATH (a body motion file or a folder of them, any format the readers know), the pairs come from
 real motion instead: the frame test split's held-out identities, posed by windows spread evenly over each clip
 (--windows per clip, the test split's 9 frames over 1.2 s each), rendered with the Anny body renderer as the
@@ -38,6 +47,8 @@ examples:
   motion2video evaluate-frames --model frames-body-128 --video ../shared/data/video/dancer.avi --json out/dancer.json
   motion2video evaluate-frames --model out/dancer-body-128.safetensors --video ../shared/data/video/dancer.avi \\
       --video-start-fraction 0.8 --json out/dancer_tail.json
+  motion2video evaluate-frames --model frames-face-mesh-128 --video ../shared/data/video/face_talking_woman.mp4 \\
+      --json out/talking_woman.json --contact-sheet out/talking_woman.png
   motion2video evaluate-frames --model frames-body-128 --poses ../shared/data/mocap/cmu/08_01.bvh --json out/real.json
 """
 
@@ -59,7 +70,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="also score this generator (checkpoint or shipped name) as a named baseline on the same "
                    "pairs; repeatable (default for body models: the previous generator frames-body-128-v1)")
     p.add_argument("--video", default=None,
-                   help="a real video of one person: score by the reconstruction protocol (body models)")
+                   help="a real video of one person: score by the reconstruction protocol (body models) or, for a face "
+                   "model, the talking-head protocol on a face video")
     p.add_argument("--video-frames", type=int, default=64,
                    help="--video: later frames scored against frame 0 (default 64, spread over the video)")
     p.add_argument("--video-stride", type=int, default=None,

@@ -14,6 +14,7 @@ from tqdm import tqdm
 from motion2video.core.atomic import write_json
 from motion2video.core.errors import InputError
 from motion2video.evaluation.reconstruction import evaluate_video
+from motion2video.evaluation.talking_head import evaluate_face_video
 from motion2video.generator.checkpoint import load_frame_model
 from motion2video.generator.data import default_cache_dir, load_or_generate
 from motion2video.generator.scores import (FrameEvaluation, evaluate_sequences, evaluation_contact_sheet,
@@ -46,7 +47,8 @@ class FrameEvalSettings:
         head: body models on the held-out pairs: also head_psnr / head_ssim (renders the split again).
         poses: pose the held-out identities by the body motion file(s) here instead of the held-out pairs.
         windows: with ``poses``: windows per clip.
-        video: a real video of one person: the reconstruction protocol instead (body models).
+        video: a real video of one person: the reconstruction protocol instead (body models; for face models the
+            talking-head protocol, :mod:`motion2video.evaluation.talking_head`).
         video_frames, video_stride, video_start_fraction: the protocol's targets, their spacing (None: spread
             over the video) and where they start (a share of the video's frames; frame 0 stays the reference).
         progress: show progress bars.
@@ -186,8 +188,9 @@ def evaluate_frame_generator(settings: FrameEvalSettings, *,
     and write the JSON and the contact sheet asked for; ``note`` hears the clips and baselines left out.
 
     Raises:
-        InputError: a video that is not a file, a start fraction outside [0, 1) or without a video, a face model
-            with ``video``, ``poses`` or ``head``, an unusable explicit baseline.
+        InputError: a video that is not a file, a start fraction outside [0, 1), without a video or with a face
+            model, a face model with ``poses`` or ``head``, a face video without a face, an unusable explicit
+            baseline.
     """
     s = settings
     if s.video is not None:
@@ -199,8 +202,9 @@ def evaluate_frame_generator(settings: FrameEvalSettings, *,
         raise InputError("--video-start-fraction goes with --video")
     loaded = load_frame_model(s.model)
     cfg = loaded.config
-    if s.video is not None and cfg.domain != "body":
-        raise InputError("--video scores body frame generators (this one makes face frames)", loaded.path)
+    if s.video is not None and cfg.domain == "face" and s.video_start_fraction:
+        raise InputError("--video-start-fraction goes with body frame models (a face model is scored on the whole "
+                         "face video)", loaded.path)
     if cfg.domain != "body" and (s.poses is not None or s.head):
         raise InputError(f"{'--poses' if s.poses is not None else '--head'} needs a body frame model", loaded.path)
     clips = None
@@ -209,7 +213,14 @@ def evaluate_frame_generator(settings: FrameEvalSettings, *,
     baselines, left_out = load_baselines(s.baseline_models, loaded)
     for name, why in left_out.items():
         note(f"baseline {name} left out: {why}")
-    if s.video is not None:
+    if s.video is not None and cfg.domain == "face":
+        result = evaluate_face_video(loaded.model, s.video, size=cfg.image_size, targets=s.video_frames,
+                                     stride=s.video_stride, baseline_models=baselines, note=note)
+        payload = result.to_dict()
+        payload.update(model=str(loaded.path), model_kind=loaded.kind, model_step=loaded.step)
+        json_out = write_json(s.json, payload) if s.json else None
+        sheet_of = result.frames
+    elif s.video is not None:
         result = evaluate_video(loaded.model, s.video, size=cfg.image_size, targets=s.video_frames,
                                 stride=s.video_stride, baseline_models=baselines,
                                 start_fraction=s.video_start_fraction)
