@@ -506,6 +506,11 @@ def cmd_results(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sources(source) -> str:
+    """A checkpoint's recorded data source: one folder, or the folders of a joined corpus as ``A + B``."""
+    return " + ".join(map(str, source)) if isinstance(source, (list, tuple)) else str(source)
+
+
 def cmd_card(args: argparse.Namespace) -> int:
     """Write ``weights/<name>.md`` for a trained checkpoint from its metadata and an evaluate JSON."""
     path = Path(args.checkpoint)
@@ -529,7 +534,7 @@ def cmd_card(args: argparse.Namespace) -> int:
         "",
         "## Data",
         "",
-        f"{summary.get('source')}: {summary.get('clips')} clips, {summary.get('frames')} frames at "
+        f"{_sources(summary.get('source'))}: {summary.get('clips')} clips, {summary.get('frames')} frames at "
         f"{summary.get('fps')} fps; split train/val/test clips "
         + "/".join(str(summary['per_split'][s]['clips']) for s in ('train', 'val', 'test'))
         + f" (held-out test groups: {', '.join(summary.get('test_groups', []))}). Windows of "
@@ -3116,7 +3121,7 @@ def _bandai_mixture_card(path: Path, ev: dict, command: str) -> str:
         "",
         "## Data",
         "",
-        f"The learned parts' (identical for both): {summary.get('source')}: {summary.get('clips')} clips, "
+        f"The learned parts' (identical for both): {_sources(summary.get('source'))}: {summary.get('clips')} clips, "
         f"{summary.get('frames')} frames at {summary.get('fps')} fps (held-out test groups: "
         f"{', '.join(summary.get('test_groups', []))}). Windows of {meta.data_config.observed} observed + "
         f"{meta.data_config.future} future frames.",
