@@ -23,6 +23,7 @@ the page between its markers and keeps the rest, and the raw numbers as JSON und
 from __future__ import annotations
 
 import argparse
+import ast
 import dataclasses
 import datetime
 import json
@@ -508,6 +509,8 @@ def cmd_results(args: argparse.Namespace) -> int:
 
 def _sources(source) -> str:
     """A checkpoint's recorded data source: one folder, or the folders of a joined corpus as ``A + B``."""
+    if isinstance(source, str) and source.startswith("["):  # a joined corpus recorded as the list's text
+        source = ast.literal_eval(source)
     return " + ".join(map(str, source)) if isinstance(source, (list, tuple)) else str(source)
 
 
