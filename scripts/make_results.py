@@ -15,6 +15,8 @@ the page between its markers and keeps the rest, and the raw numbers as JSON und
     python scripts/make_results.py transfer           # behaviour transfer and analogy (docs/results_transfer.md)
     python scripts/make_results.py transfer-benchmark # liveliness of the sampled futures and of transfers
     python scripts/make_results.py face-sheet CLIP PHOTO... -o SHEET.png  # the photo's face over the generated heads
+    python scripts/make_results.py transfer-unseen    # behaviour transfer on clips the behaviour model never saw
+    python scripts/make_results.py bandai             # the samplers retrained with Bandai-Namco beside the shipped
 
 ``python scripts/make_results.py SUB-COMMAND --help`` gives each one's options, cost and outputs.
 """
@@ -22,6 +24,7 @@ the page between its markers and keeps the rest, and the raw numbers as JSON und
 from __future__ import annotations
 
 import argparse
+import ast
 import dataclasses
 import json
 import platform
@@ -46,6 +49,7 @@ from motion2video.data.dataset import (DEFAULT_MOCAP, MULTIMODAL_SOURCE, Dataset
                                        build_dataset, decode_samples)
 from motion2video.data.multimodal import MultimodalBenchmark, score_futures
 from motion2video.evaluation.forecasting import EvalProtocol, evaluate_bundles
+from motion2video.evaluation.per_action import COUNT_KEY
 from motion2video.formats.io import load_motion
 from motion2video.generator.image_baselines import run_baseline
 from motion2video.generator.checkpoint import load_frame_model
@@ -332,6 +336,13 @@ def cmd_results(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sources(source) -> str:
+    """A checkpoint's recorded data source: one folder, or the folders of a joined corpus as ``A + B``."""
+    if isinstance(source, str) and source.startswith("["):  # a joined corpus recorded as the list's text
+        source = ast.literal_eval(source)
+    return " + ".join(map(str, source)) if isinstance(source, (list, tuple)) else str(source)
+
+
 def cmd_card(args: argparse.Namespace) -> int:
     """Write ``weights/<name>.md`` for a trained checkpoint from its metadata and an evaluate JSON."""
     path = Path(args.checkpoint)
@@ -355,7 +366,7 @@ def cmd_card(args: argparse.Namespace) -> int:
         "",
         "## Data",
         "",
-        f"{summary.get('source')}: {summary.get('clips')} clips, {summary.get('frames')} frames at "
+        f"{_sources(summary.get('source'))}: {summary.get('clips')} clips, {summary.get('frames')} frames at "
         f"{summary.get('fps')} fps; split train/val/test clips "
         + "/".join(str(summary['per_split'][s]['clips']) for s in ('train', 'val', 'test'))
         + f" (held-out test groups: {', '.join(summary.get('test_groups', []))}). Windows of "
@@ -2065,6 +2076,327 @@ def face_sheet_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# The samplers retrained on the joined corpus (mocap + Bandai-Namco) beside the shipped ones
+
+BANDAI_DOC = """The samplers retrained on ../shared/data/mocap + ../shared/data/bandai beside the shipped ones, per action
+and macro, best of K, on the same windows of two splits.
+
+    python scripts/make_results.py bandai            # both splits, K = 50
+    python scripts/make_results.py bandai --samples 5 --subject-stride 512 --json out/quick.json --doc out/quick.md
+
+1. ``evaluate --split subjects`` on the joined corpus (the corpus's test subjects and Bandai-Namco's skeleton
+   groups 1B and 2C held out; a model that trained on a held-out clip is refused), stride ``--subject-stride``:
+   per action, the macro over the actions training covers, the unseen action and the cross-dataset row.
+2. The corpus's held-out test windows of ``../shared/data/mocap`` (whole CMU subjects 2, 131, 140, 94 and the
+   clips linked to them: the first model's recorded split), stride ``--stride``.
+
+The retrained models come from scripts/train_shipped_bandai.sh. Writes the section between
+``<!-- bandai-retrained:begin -->`` and ``<!-- bandai-retrained:end -->`` of --doc (appended when absent) and both
+evaluations' JSON to --json.
+"""
+
+BANDAI_BEGIN = "<!-- bandai-retrained:begin -->"
+BANDAI_END = "<!-- bandai-retrained:end -->"
+BANDAI_PAIRS = (("mixture-periodic", "mixture-periodic-bandai"), ("mtvae-add-dlow", "mtvae-add-dlow-bandai"),
+                ("mixer-cvae-dlow", "mixer-cvae-dlow-bandai"), ("mtvae-add", "mtvae-add-bandai"),
+                ("mixer-cvae", "mixer-cvae-bandai"))
+# The targets (ADE, FDE ratios to zero-velocity): whole held-out CMU subjects, and the subject split's macro.
+BANDAI_TARGETS = {"corpus": (0.60, 0.48), "subjects": (0.65, 0.55)}
+
+
+def _pair_cell(row: dict | None) -> str:
+    return "-" if not row else f"{row['ade']:.2f} / {row['fde']:.2f}"
+
+
+def _ratio(row: dict | None, ref: dict | None) -> dict | None:
+    return {"ade": row["ade"] / ref["ade"], "fde": row["fde"] / ref["fde"]} if row and ref else None
+
+
+def bandai_subject_rows(record: dict, labels: list[str]) -> tuple[list[str], dict[str, dict[str, dict | None]]]:
+    """The subject split's rows from the JSON of ``evaluate --split subjects``: row name -> {label: ADE / FDE
+    ratios to zero-velocity}; per action, the macro (ratio of the macro means, as evaluate prints it), each unseen
+    action and the cross-dataset row (the held-out Bandai groups)."""
+    report = record["subjects"]["report"]
+    zv = report[BASELINE]
+    names: list[str] = []
+    rows: dict[str, dict[str, dict | None]] = {}
+
+    def add(name: str, part: str, key: str | None) -> None:
+        names.append(name)
+        ref = zv[part] if key is None else zv[part][key]
+        rows[name] = {m: _ratio(report[m][part] if key is None else report[m][part].get(key), ref) for m in labels}
+
+    for action, ref in zv["per_action"].items():
+        add(f"{action} ({ref[COUNT_KEY]})", "per_action", action)
+    add(f"**macro, {len(zv['per_action'])} actions**", "macro", None)
+    for action, ref in zv["unseen"].items():
+        add(f"unseen action: {action} ({ref[COUNT_KEY]})", "unseen", action)
+    if zv["cross_dataset"] is not None:
+        add(f"Bandai's held-out groups ({zv['cross_dataset'][COUNT_KEY]})", "cross_dataset", None)
+    return names, rows
+
+
+def bandai_corpus_rows(record: dict, labels: list[str]) -> tuple[list[str], dict[str, dict[str, dict]]]:
+    """The corpus test split's rows: per action, the macro (mean of the per-action ratios) and the pooled ratio,
+    each {label: ADE / FDE ratios to zero-velocity} (:func:`ratios`)."""
+    per = {m: ratios(record, m) for m in labels}
+    zv = record["per_action"][BASELINE]
+    keys = list(zv) + ["macro", "pooled"]
+    names = [f"{a} ({zv[a][COUNT_KEY]})" for a in zv] + ["**macro**", "pooled"]
+    return names, {n: {m: per[m][k] for m in labels} for n, k in zip(names, keys)}
+
+
+def _bandai_table(names: list[str], rows: dict, pairs: list[tuple[str, str]]) -> str:
+    lines = ["| row (windows) | " + " | ".join(f"`{a}` → `{b}`" for a, b in pairs) + " |",
+             "| --- |" + " ---: |" * len(pairs)]
+    for n in names:
+        lines.append(f"| {n} | " + " | ".join(f"{_pair_cell(rows[n][a])} → {_pair_cell(rows[n][b])}"
+                                                for a, b in pairs) + " |")
+    return "\n".join(lines)
+
+
+def bandai_section(subjects: dict, corpus: dict, pairs: list[tuple[str, str]], *, command: str,
+                   minutes: float) -> str:
+    """The results section: both tables (each cell: the shipped model → its retrained twin) and the targets of the
+    first pair."""
+    labels = [m for pair in pairs for m in pair]
+    s_names, s_rows = bandai_subject_rows(subjects, labels)
+    c_names, c_rows = bandai_corpus_rows(corpus, labels)
+    zv = subjects["subjects"]["report"][BASELINE]
+    s_windows = sum(v[COUNT_KEY] for part in ("per_action", "unseen") for v in zv[part].values())
+    c_windows = sum(v[COUNT_KEY] for v in corpus["per_action"][BASELINE].values())
+    samples = corpus["protocol"]["samples"]
+    first, second = pairs[0]
+    s_macro = next(n for n in s_names if n.startswith("**macro"))
+    targets = [("whole held-out CMU subjects, macro", BANDAI_TARGETS["corpus"], c_rows["**macro**"]),
+               ("the subject split, macro over actions", BANDAI_TARGETS["subjects"], s_rows[s_macro])]
+    lines = [
+        "### The samplers retrained with Bandai-Namco",
+        "",
+        "The `*-bandai` models are the recipes of `mixture-periodic` and its parts (same configs and steps) trained on "
+        "`../shared/data/mocap` + `../shared/data/bandai`, on the subject split's training part: neither the corpus's "
+        "test subjects nor Bandai-Namco's groups 1B and 2C (`scripts/train_shipped_bandai.sh`; their cards give the "
+        "wall times). Bandai-Namco's files are CC BY-NC 4.0, so these models are for non-commercial use. Each cell: "
+        f"the shipped model → its retrained twin, best-of-{samples} ADE / FDE as a ratio to zero-velocity on the same "
+        f"windows (lower is better). Generated by `{command}` ({minutes:.0f} min, one thread, on the shared machine).",
+        "",
+        f"The subject split (`evaluate --split subjects`, stride {subjects['protocol']['stride']}, {s_windows} "
+        "windows; macro = ratio of the macro means, as `evaluate` prints it):",
+        "",
+        _bandai_table(s_names, s_rows, pairs),
+        "",
+        f"Whole held-out CMU subjects (the corpus's test split of `../shared/data/mocap`, stride "
+        f"{corpus['protocol']['stride']}, {c_windows} windows; macro = mean of the per-action ratios, as in "
+        "\"Forecasting body motion\"):",
+        "",
+        _bandai_table(c_names, c_rows, pairs),
+        "",
+        f"Targets, `{first}` → `{second}`:",
+        "",
+        "| target (ADE / FDE ratio) | shipped | retrained | |",
+        "| --- | ---: | ---: | --- |",
+    ]
+    for text, (ta, tf), row in targets:
+        got = row[second]
+        met = "met" if got["ade"] <= ta and got["fde"] <= tf else "missed"
+        lines.append(f"| {text} <= {ta:.2f} / {tf:.2f} | {_pair_cell(row[first])} | {_pair_cell(got)} | {met} |")
+    return "\n".join(lines)
+
+
+BANDAI_MIXTURE_COMMAND = ("python scripts/make_mixture.py motion2video/weights/mtvae-add-dlow-bandai.safetensors "
+                          "motion2video/weights/mixer-cvae-dlow-bandai.safetensors mirror-periodic --shares 19,19,12 "
+                          "-o motion2video/weights/mixture-periodic-bandai.safetensors")
+
+
+def _bandai_mixture_card(path: Path, ev: dict, command: str) -> str:
+    """The head of a composed mixture's card: what it draws from, the command, its data and held-out metrics."""
+    meta = load_model(path).meta
+    summary = meta.data_summary
+    parts = meta.training["composed_from"]
+    shares = meta.config.get("shares")
+    res = ev["results"]
+    return "\n".join([
+        f"# {path.stem}",
+        "",
+        f"Model `{meta.model}` ({meta.kind}), layout `{meta.data_config.layout}`, {path.stat().st_size / 2 ** 20:.1f} MB, "
+        f"motion2video {meta.version}. The composition of `mixture-periodic` (its card says what the parts and the "
+        "rule do and why) with learned parts trained on the corpus joined with Bandai-Namco's files.",
+        "",
+        "## How it was made",
+        "",
+        "Nothing was trained for it. Composed from "
+        + ", ".join(f"`{c['name']}` ({c['steps']} steps)" if c.get("steps") else f"`{c['name']}`" for c in parts)
+        + (f" with shares {':'.join(f'{x:g}' for x in shares)}" if shares else "") + ":",
+        "",
+        f"```\n{command}\n```",
+        "",
+        "## Data",
+        "",
+        f"The learned parts' (identical for both): {_sources(summary.get('source'))}: {summary.get('clips')} clips, "
+        f"{summary.get('frames')} frames at {summary.get('fps')} fps (held-out test groups: "
+        f"{', '.join(summary.get('test_groups', []))}). Windows of {meta.data_config.observed} observed + "
+        f"{meta.data_config.future} future frames.",
+        "",
+        "## Metrics",
+        "",
+        f"Held-out test windows: {ev['protocol']['windows']} from {', '.join(ev['protocol']['clips'])}; best of "
+        f"{ev['protocol']['samples']}; units: {ev['protocol']['units']}.",
+        "",
+        _forecasting_md_table(["method", "ADE", "FDE", "MMADE", "MMFDE", "APD"],
+                              [[n, r["ade"], r["fde"], r["mmade"], r["mmfde"], r["apd"]] for n, r in res.items()]),
+        "",
+    ])
+
+
+def write_bandai_cards(subjects: dict, corpus: dict, pairs: list[tuple[str, str]], *, logs: Path) -> list[Path]:
+    """The model card of every retrained model of ``pairs`` (:func:`cmd_card` on its rows of the corpus test
+    evaluation, then both per-action tables against its shipped twin). The training command is the one
+    scripts/train_shipped_bandai.sh logged to ``logs/NAME.command``; a mixture's is its make_mixture.py line."""
+    written = []
+    for shipped, name in pairs:
+        path = shipped_path(name)
+        log = logs / f"{name}.command"
+        if log.is_file():
+            command = log.read_text().strip().split(": ", 1)[1]
+        elif load_model(path).meta.model == "mixture":
+            command = BANDAI_MIXTURE_COMMAND
+        else:
+            raise InputError(f"no training command logged for {name} (scripts/train_shipped_bandai.sh writes it)", log)
+        keep = [name] + list(BASELINES)
+        ev = {"protocol": {**corpus["protocol"], "windows": sum(
+                  v[COUNT_KEY] for v in corpus["per_action"][BASELINE].values())},
+              "results": {m: corpus["results"][m] for m in keep}}
+        card = WEIGHTS_DIR / f"{name}.md"
+        if command == BANDAI_MIXTURE_COMMAND:
+            card.write_text(_bandai_mixture_card(path, ev, command))
+        else:
+            with tempfile.TemporaryDirectory() as tmp:
+                ev_path = Path(tmp) / "eval.json"
+                ev_path.write_text(json.dumps(ev))
+                cmd_card(argparse.Namespace(checkpoint=str(path), eval=str(ev_path), command=command, out=str(card)))
+        s_names, s_rows = bandai_subject_rows(subjects, [shipped, name])
+        c_names, c_rows = bandai_corpus_rows(corpus, [shipped, name])
+        extra = [
+            "Those are the corpus's held-out test windows (whole CMU subjects). Per action, best-of-"
+            f"{corpus['protocol']['samples']} ADE / FDE as a ratio to zero-velocity, `{shipped}` (trained without "
+            f"Bandai-Namco) → `{name}`, on the same windows (`python scripts/make_results.py bandai`, "
+            "docs/results.md):",
+            "",
+            _bandai_table(c_names, c_rows, [(shipped, name)]),
+            "",
+            f"The subject split (`evaluate --split subjects` on `../shared/data/mocap` + `../shared/data/bandai`, "
+            f"stride {subjects['protocol']['stride']}; it trained on neither the corpus's test subjects nor "
+            "Bandai-Namco's groups 1B and 2C):",
+            "",
+            _bandai_table(s_names, s_rows, [(shipped, name)]),
+            "",
+        ]
+        card.write_text(card.read_text() + "\n".join(extra))
+        written.append(card)
+    return written
+
+
+def bandai_evaluate(models: list[str], *, mocap: str, bandai: str, samples: int, stride: int, subject_stride: int,
+                    windows_from: str = "mixture-periodic") -> dict:
+    """Both evaluations of ``models`` (and the baselines): the subject split of ``mocap`` + ``bandai`` and the
+    corpus's test split of ``mocap``, on the windows ``windows_from``'s data settings and recorded split give
+    (:func:`motion2video.evaluation.forecasting.subject_windows`), so that models scored in separate runs are scored
+    on the same windows. Returns ``{"subjects": evaluate's JSON with its "subjects" record, "corpus": ...}``."""
+    from motion2video.evaluation.forecasting import subject_split_tables, subject_windows
+
+    ref = load_model(windows_from)
+    cfg = ref.data_config
+    bundles = [load_model(m) for m in models]
+    protocol = EvalProtocol(samples=samples, stride=subject_stride, split="subjects", seed=0)
+    # the first bundle carries the statistics the windows were normalised with
+    scored = [baseline_bundle(n, cfg, stats=ref.stats) for n in BASELINES[:1]] + bundles + [
+        baseline_bundle(n, cfg, stats=ref.stats) for n in BASELINES[1:]]
+    _, windows, train_actions = subject_windows((mocap, bandai), cfg, [ref] + bundles, stride=subject_stride,
+                                                character=None)
+    result = evaluate_bundles(scored, windows, protocol=protocol)
+    subjects = {**result.to_json(), "subjects": subject_split_tables(result, bundles, train_actions).json}
+    print(f"subject split: {len(windows)} windows", flush=True)
+    dataset = build_dataset(mocap, cfg, split=ref.meta.split, stats=ref.stats)
+    protocol = dataclasses.replace(protocol, stride=stride, split="test")
+    corpus = evaluate_bundles(scored, dataset.windows("test", stride=stride), protocol=protocol).to_json()
+    return {"subjects": subjects, "corpus": corpus}
+
+
+def merge_bandai(parts: list[dict]) -> dict:
+    """One record of several :func:`bandai_evaluate` records of other models on the same windows."""
+    out = json.loads(json.dumps(parts[0]))
+    for part in parts[1:]:
+        for split in ("subjects", "corpus"):
+            if out[split]["protocol"]["clips"] != part[split]["protocol"]["clips"]:
+                raise InputError(f"the {split} evaluations were run on other windows: evaluate them together")
+            for key in ("results", "per_action", "macro", "ade_per_frame"):
+                out[split][key].update(part[split][key])
+        for key in ("report", "trained_on_bandai"):
+            out["subjects"]["subjects"][key].update(part["subjects"]["subjects"][key])
+    return out
+
+
+def bandai_main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="make_results.py bandai", description=BANDAI_DOC,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--pair", action="append", default=[], metavar="SHIPPED=RETRAINED",
+                   help="two models side by side (repeatable; default: mixture-periodic and its parts with their "
+                        "-bandai twins); the first pair's are checked against the targets")
+    p.add_argument("--mocap", default=str(DEFAULT_MOCAP))
+    p.add_argument("--bandai", default=str(Path(DEFAULT_MOCAP).parent / "bandai"))
+    p.add_argument("--samples", type=int, default=50)
+    p.add_argument("--stride", type=int, default=16, help="frames between the corpus's test windows (default 16)")
+    p.add_argument("--subject-stride", type=int, default=128,
+                   help="frames between the subject split's windows (default 128, as in its section above)")
+    p.add_argument("--doc", default=str(ROOT / "docs" / "results_bandai.md"))
+    p.add_argument("--json", default=str(ROOT / "out" / "results_bandai.json"))
+    p.add_argument("--side", choices=("shipped", "retrained"), default=None,
+                   help="evaluate one side of the pairs only, into --json with .SIDE before .json (nothing else "
+                        "written); --merge joins the two")
+    p.add_argument("--merge", action="store_true",
+                   help="join the two --side files of --json instead of evaluating, then write as usual")
+    p.add_argument("--cards", action="store_true",
+                   help="also write the retrained models' cards (motion2video/weights/NAME.md; then run "
+                        "scripts/shipped_licences.py for their data licence sections)")
+    p.add_argument("--logs", default=str(ROOT / "out" / "train_bandai"),
+                   help="where scripts/train_shipped_bandai.sh logged the training commands (for --cards)")
+    args = p.parse_args(argv)
+    pairs = [tuple(x.split("=", 1)) for x in args.pair] or [tuple(x) for x in BANDAI_PAIRS]
+    if any(len(x) != 2 or not all(x) for x in pairs):
+        raise InputError(f"--pair takes SHIPPED=RETRAINED, got {args.pair!r}")
+    json_path = Path(args.json)
+    side_path = {side: json_path.with_suffix(f".{side}.json") for side in ("shipped", "retrained")}
+    kw = dict(mocap=args.mocap, bandai=args.bandai, samples=args.samples, stride=args.stride,
+              subject_stride=args.subject_stride, windows_from=pairs[0][0])
+    t0 = time.time()
+    if args.side is not None:
+        models = [pair[0 if args.side == "shipped" else 1] for pair in pairs]
+        record = {**bandai_evaluate(models, **kw), "minutes": (time.time() - t0) / 60}
+        write_json(side_path[args.side], record)
+        print(f"wrote {side_path[args.side]} ({record['minutes']:.1f} min)")
+        return 0
+    if args.merge:
+        parts = [json.loads(side_path[s].read_text()) for s in ("shipped", "retrained")]
+        record = merge_bandai(parts)
+        minutes = sum(part["minutes"] for part in parts)
+    else:
+        record = bandai_evaluate([m for pair in pairs for m in pair], **kw)
+        minutes = (time.time() - t0) / 60
+    write_json(json_path, {**record, "pairs": pairs, "minutes": minutes})
+    subjects, corpus = record["subjects"], record["corpus"]
+    if args.cards:
+        for card in write_bandai_cards(subjects, corpus, pairs, logs=Path(args.logs)):
+            print(f"wrote {card}")
+    asked = [a for a in (sys.argv[2:] if argv is None else argv) if a not in ("--cards", "--merge")]
+    command = shlex.join(["python", "scripts/make_results.py", "bandai", *asked])
+    section = bandai_section(subjects, corpus, pairs, command=command, minutes=minutes)
+    write_section(args.doc, BANDAI_BEGIN, BANDAI_END, section)
+    print(section)
+    print(f"wrote {args.doc} and {json_path} ({minutes:.1f} min)")
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------------------------
 # transfer-unseen: behaviour transfer on clips the shipped behaviour model never saw
 
 TRANSFER_UNSEEN_DOC = """Behaviour transfer on clips the shipped ``behavior`` model never saw: CMU jumps and leg lifts of the corpus's
@@ -2257,6 +2589,7 @@ COMMANDS = {
     "transfer-benchmark": (transfer_benchmark_main, TRANSFER_BENCHMARK_DOC),
     "transfer-unseen": (transfer_unseen_main, TRANSFER_UNSEEN_DOC),
     "face-sheet": (face_sheet_main, FACE_SHEET_DOC),
+    "bandai": (bandai_main, BANDAI_DOC),
 }
 
 

@@ -29,7 +29,7 @@ def test_scripts_are_few_and_import_the_package():
     ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh", "mesh-video")),
     ("make_results", ("forecasting", "card", "corpus", "known-answer", "per-action", "five-minute-models",
                       "skeleton-figure", "frames", "frames-analysis", "frames-real", "transfer",
-                      "transfer-benchmark", "transfer-unseen", "face-sheet")),
+                      "transfer-benchmark", "transfer-unseen", "face-sheet", "bandai")),
 ])
 def test_entry_points_list_their_subcommands_and_refuse_unknown_ones(script, subcommands, monkeypatch, capsys):
     monkeypatch.syspath_prepend(str(SCRIPTS))  # as when the script runs: its folder first on the path
@@ -56,6 +56,7 @@ def test_every_results_section_has_its_markers_on_its_page(monkeypatch):
     module = importlib.import_module("make_results")
     docs = SCRIPTS.parent / "docs"
     pages = {"results.md": ("FORECASTING", "CORPUS", "KNOWN_ANSWER", "PER_ACTION", "FRAMES", "FRAMES_REAL"),
+             "results_bandai.md": ("BANDAI",),
              "results_transfer.md": ("TRANSFER_ANALOGY", "TRANSFER_CLAIMS", "TRANSFER_BENCHMARK")}
     for name, parts in pages.items():
         text = (docs / name).read_text()

@@ -32,19 +32,39 @@ def checkpoint_clips(path: str | Path) -> tuple[str, list[str]]:
 
 def shipped_licence_records(data_root: str | Path, *, weights_dir: Path = WEIGHTS_DIR) -> dict[str, dict]:
     """``{shipped name: licence record}`` (:func:`~motion2video.data.licences.licence_record`) with the
-    record's ``"data"``: the folder the clips come from and how many there are.
+    record's ``"data"``: the folders the clips come from and how many there are.
+
+    A clip of a corpus joined from several folders is named with its folder in front (``bandai/bvh/...``,
+    :func:`motion2video.data.dataset.load_clips`); its licence is looked up in that folder's manifest.
 
     Args:
-        data_root: the folder holding ``mocap/`` and ``face/`` with their ``manifest.csv`` (``../shared/data``).
+        data_root: the folder holding ``mocap/`` and ``face/`` (and any folder joined to ``mocap/``, such as
+            ``bandai/``) with their ``manifest.csv`` (``../shared/data``).
     """
     root = Path(data_root)
     folders = {"body": "mocap", "face": "face"}
-    manifests = {d: read_manifest(root / f / "manifest.csv") for d, f in folders.items()}
+    manifests: dict[str, dict] = {}
+
+    def manifest(folder: str) -> dict:
+        if folder not in manifests:
+            path = root / folder / "manifest.csv"
+            manifests[folder] = read_manifest(path) if path.is_file() else {}
+        return manifests[folder]
+
     out = {}
     for name in shipped_names():
         domain, clips = checkpoint_clips(weights_dir / f"{name}.safetensors")
-        entries = manifests[domain]
-        record = licence_record([entries[c].licence if c in entries else None for c in clips])
-        record["data"] = f"{len(clips)} clips of ../shared/data/{folders[domain]}"
+        used = [folders[domain]]
+        licences = []
+        for clip in clips:
+            folder, rest = folders[domain], clip
+            head, _, tail = clip.partition("/")
+            if clip not in manifest(folder) and tail and head != folder and manifest(head):
+                folder, rest = head, tail
+                used += [] if folder in used else [folder]
+            entry = manifest(folder).get(rest)
+            licences.append(entry.licence if entry is not None else None)
+        record = licence_record(licences)
+        record["data"] = f"{len(clips)} clips of " + " + ".join(f"../shared/data/{f}" for f in used)
         out[name] = record
     return out
