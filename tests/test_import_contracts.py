@@ -58,3 +58,43 @@ def test_every_contract_holds_on_the_code(graph):
 ])
 def test_each_violation_breaks_its_contract(graph, importer, imported, contract):
     assert contract in _broken(graph, importer, imported)
+
+
+def package_of(module: str) -> str:
+    """The unit a layer is made of: ``renderers`` or the first folder (or module) under ``motion2video``."""
+    parts = module.split(".")
+    return parts[0] if parts[0] == "renderers" or len(parts) == 1 else ".".join(parts[:2])
+
+
+def import_height(graph: grimp.ImportGraph) -> dict[str, int]:
+    """Per package (:func:`package_of`): the number of packages on the longest chain of imports starting at it
+    (1 for one that imports no other). A cycle between packages raises ValueError."""
+    edges: dict[str, set[str]] = {}
+    for module in graph.modules:
+        for imported in graph.find_modules_directly_imported_by(module):
+            a, b = package_of(module), package_of(imported)
+            if a != b and b != "motion2video":  # the package __init__'s lazy names are not imports
+                edges.setdefault(a, set()).add(b)
+    heights: dict[str, int] = {}
+
+    def height(node: str, path: tuple[str, ...]) -> int:
+        if node in path:
+            raise ValueError(f"import cycle: {' -> '.join(path + (node,))}")
+        if node not in heights:
+            heights[node] = 1 + max((height(b, path + (node,)) for b in edges.get(node, ())), default=0)
+        return heights[node]
+
+    for node in list(edges):
+        height(node, ())
+    return heights
+
+
+def test_the_package_graph_has_no_cycle_and_at_most_seven_layers(graph):
+    heights = import_height(graph)
+    assert max(heights.values()) <= 7, sorted(heights.items(), key=lambda kv: -kv[1])[:3]
+    assert heights["motion2video.core"] == 1 and heights["motion2video.cli"] <= 2  # the CLI loads commands lazily
+    broken = grimp.build_graph("motion2video", "renderers", include_external_packages=False)
+    broken.add_import(importer="motion2video.core.motion", imported="motion2video.formats.bvh", line_number=1,
+                      line_contents="import x")
+    with pytest.raises(ValueError, match="import cycle"):
+        import_height(broken)

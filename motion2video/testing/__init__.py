@@ -1,6 +1,6 @@
 """Golden-frame testing for projects that render motion: ``from motion2video.testing import assert_frames_match``
 (defined in :mod:`~motion2video.testing.golden`, with the metrics and the synthetic test motions); the pytest
-fixture ``golden_frames`` is :mod:`motion2video.pytest_plugin`."""
+fixture ``golden_frames`` is :mod:`motion2video.testing.pytest_plugin`."""
 
 from __future__ import annotations
 

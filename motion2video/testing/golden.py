@@ -1,7 +1,7 @@
 """Helpers for tests and benchmarks: golden-frame comparison and a synthetic human-like motion.
 
 Golden frames (in the spirit of aitviewer's test utilities, but a missing golden FAILS instead of skipping). The
-pytest plugin (:mod:`motion2video.pytest_plugin`, fixture ``golden_frames``) calls :func:`assert_frames_match`;
+pytest plugin (:mod:`motion2video.testing.pytest_plugin`, fixture ``golden_frames``) calls :func:`assert_frames_match`;
 it can also be called directly::
 
     assert_frames_match(frames, GOLDEN / "skeleton_walk", tolerance=1, metric="max")
