@@ -14,26 +14,11 @@ from motion2video.cli import main
 from motion2video.core.motion import FACE_DIM, NUM_EXPRESSIONS, FaceMotion
 from motion2video.core.rotations import axis_angle_to_matrix
 from motion2video.stages.structure import relative_head_pose
+from tests.test_pose import _cut_video
 
 PORTRAITS = ("portrait_mona_lisa", "portrait_pearl_earring")
 INNER_LIPS = (13, 14)  # the face mesh's upper and lower inner lip centres
 FIRST_FRAME_L1 = 12.0  # mean grey levels between the first generated frame and the framed portrait
-
-
-def _cut_video(src: Path, dst: Path, frames: int) -> Path:
-    """The first ``frames`` frames of ``src`` as an MJPG .avi, for a fast test."""
-    cap = cv2.VideoCapture(str(src))
-    fps = cap.get(cv2.CAP_PROP_FPS)
-    writer = None
-    for _ in range(frames):
-        ok, frame = cap.read()
-        assert ok
-        if writer is None:
-            writer = cv2.VideoWriter(str(dst), cv2.VideoWriter_fourcc(*"MJPG"), fps, (frame.shape[1], frame.shape[0]))
-        writer.write(frame)
-    writer.release()
-    cap.release()
-    return dst
 
 
 @pytest.fixture(scope="module")

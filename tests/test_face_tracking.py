@@ -15,6 +15,7 @@ from motion2video.core.errors import InputError
 from motion2video.core.motion import ARKIT_NAMES, FACE_DIM
 from motion2video.pose import facemesh as fm
 from motion2video.pose.face_fit import FitConfig, fit_frame, project
+from tests.test_pose import _cut_video
 
 FRAMES = 30
 MAX_MEDIAN_ERROR = 0.03  # landmarks re-projected from the fitted head, in face sizes (median)
@@ -68,22 +69,6 @@ def test_fit_recovers_a_known_pose_and_expression():
 
 
 # --- the real face videos -------------------------------------------------------------------------------------------
-
-def _cut_video(src: Path, dst: Path, frames: int) -> Path:
-    """The first ``frames`` frames of ``src`` as an MJPG .avi, for a fast test."""
-    cap = cv2.VideoCapture(str(src))
-    fps = cap.get(cv2.CAP_PROP_FPS)
-    writer = None
-    for _ in range(frames):
-        ok, frame = cap.read()
-        assert ok
-        if writer is None:
-            writer = cv2.VideoWriter(str(dst), cv2.VideoWriter_fourcc(*"MJPG"), fps, (frame.shape[1], frame.shape[0]))
-        writer.write(frame)
-    writer.release()
-    cap.release()
-    return dst
-
 
 @pytest.fixture(scope="module")
 def face_clips(shared_dir, tmp_path_factory) -> dict[str, Path]:
