@@ -147,6 +147,20 @@ def _forecasting_md_table(header: list[str], rows: list[list]) -> str:
 SHIPPED_DIR = [ROOT / "out" / "five_minute"]  # --weights replaces it
 
 
+
+def _card_metrics(ev: dict, res: dict) -> list[str]:
+    """A model card's "Metrics" lines from an ``evaluate --json`` payload ``ev`` and its ``results`` ``res``."""
+    return [
+        "## Metrics",
+        "",
+        f"Held-out test windows: {ev['protocol']['windows']} from {', '.join(ev['protocol']['clips'])}; best of "
+        f"{ev['protocol']['samples']}; units: {ev['protocol']['units']}.",
+        "",
+        _forecasting_md_table(["method", "ADE", "FDE", "MMADE", "MMFDE", "APD"],
+                              [[n, r["ade"], r["fde"], r["mmade"], r["mmfde"], r["apd"]] for n, r in res.items()]),
+        "",
+    ]
+
 def shipped_path(name: str) -> Path:
     path = SHIPPED_DIR[0] / f"{name}.safetensors"
     if not path.is_file():
@@ -385,14 +399,7 @@ def cmd_card(args: argparse.Namespace) -> int:
         "",
         "```json\n" + json.dumps(meta.config, indent=1) + "\n```",
         "",
-        "## Metrics",
-        "",
-        f"Held-out test windows: {ev['protocol']['windows']} from {', '.join(ev['protocol']['clips'])}; best of "
-        f"{ev['protocol']['samples']}; units: {ev['protocol']['units']}.",
-        "",
-        _forecasting_md_table(["method", "ADE", "FDE", "MMADE", "MMFDE", "APD"],
-                 [[n, r["ade"], r["fde"], r["mmade"], r["mmfde"], r["apd"]] for n, r in res.items()]),
-        "",
+        *_card_metrics(ev, res),
     ]
     out = WEIGHTS_DIR / f"{path.stem}.md" if args.out is None else Path(args.out)
     # The data licence block is scripts/shipped_licences.py's (write_section needs its markers): an existing
@@ -2237,14 +2244,7 @@ def _bandai_mixture_card(path: Path, ev: dict, command: str) -> str:
         f"{', '.join(summary.get('test_groups', []))}). Windows of {meta.data_config.observed} observed + "
         f"{meta.data_config.future} future frames.",
         "",
-        "## Metrics",
-        "",
-        f"Held-out test windows: {ev['protocol']['windows']} from {', '.join(ev['protocol']['clips'])}; best of "
-        f"{ev['protocol']['samples']}; units: {ev['protocol']['units']}.",
-        "",
-        _forecasting_md_table(["method", "ADE", "FDE", "MMADE", "MMFDE", "APD"],
-                              [[n, r["ade"], r["fde"], r["mmade"], r["mmfde"], r["apd"]] for n, r in res.items()]),
-        "",
+        *_card_metrics(ev, res),
     ])
 
 
