@@ -106,6 +106,9 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
             page.click("#animate")  # with the demo photo
             too_long = _status(page, "#status", "dancer.avi")
             page.click("#clip button[aria-label=Clear]")
+            # the cleared box re-renders its upload area: give the file to the new input, not the one going away
+            page.wait_for_selector("#clip :text('dancer.avi')", state="detached", timeout=60_000)
+            page.wait_for_selector("#clip input[type=file]", state="attached", timeout=60_000)
 
             page.locator("#clip input[type=file]").set_input_files(clip)
             page.wait_for_selector("#clip :text('mass_walk.bvh')", timeout=180_000)  # uploaded
