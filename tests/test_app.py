@@ -70,6 +70,14 @@ def _status(page, selector: str, text: str) -> str:
     return page.inner_text(selector).strip()
 
 
+def _file_shown(page, selector: str, name: str, shown: bool = True) -> None:
+    """Wait until a file box (``selector``) shows the uploaded file ``name`` (or, with ``shown=False``, no longer
+    shows it). The box writes the name's stem and extension in separate elements, so its text is read whole."""
+    page.wait_for_function("([s, n, shown]) => { const e = document.querySelector(s); "
+                           "return !!e && e.textContent.replace(/\\s/g, '').includes(n) === shown }",
+                           arg=[selector, name, shown], timeout=180_000)
+
+
 def _downloads(page, folder: Path, selector: str) -> dict[str, Path]:
     """Click every download link of a downloads list (``selector``) and save what the browser receives."""
     folder.mkdir()
@@ -102,16 +110,16 @@ def test_app_animates_a_photo_and_keeps_serving_after_bad_input(app_url, shared_
             page.goto(app_url)
             page.wait_for_selector("#animate")
             page.locator("#clip input[type=file]").set_input_files(long_video)
-            page.wait_for_selector("#clip :text('dancer.avi')", timeout=180_000)
+            _file_shown(page, "#clip", "dancer.avi")
             page.click("#animate")  # with the demo photo
             too_long = _status(page, "#status", "dancer.avi")
             page.click("#clip button[aria-label=Clear]")
             # the cleared box re-renders its upload area: give the file to the new input, not the one going away
-            page.wait_for_selector("#clip :text('dancer.avi')", state="detached", timeout=60_000)
+            _file_shown(page, "#clip", "dancer.avi", shown=False)
             page.wait_for_selector("#clip input[type=file]", state="attached", timeout=60_000)
 
             page.locator("#clip input[type=file]").set_input_files(clip)
-            page.wait_for_selector("#clip :text('mass_walk.bvh')", timeout=180_000)  # uploaded
+            _file_shown(page, "#clip", "mass_walk.bvh")
             page.locator("#photo input[type=file]").set_input_files(wall)
             page.wait_for_selector("#photo img", timeout=180_000)
 
