@@ -10,9 +10,10 @@ TEST_STAMP := $(VENV)/.installed-test
 SUDO   := $(shell [ "$$(id -u)" = "0" ] || echo sudo)
 export PYOPENGL_PLATFORM ?= osmesa
 # test workers: two processes share the machine's cores (tests are xdist-safe: tmp_path outputs, atomic caches);
-# a file's tests stay on one worker, so its module fixtures (trained models, renders) are built once
+# a file's tests stay on one worker, so its module fixtures (trained models, renders) are built once; files go out
+# in collection order, the longest first (tests/conftest.py LONGEST_FIRST)
 WORKERS ?= 2
-XDIST  = -n $(WORKERS) --dist loadfile
+XDIST  = -n $(WORKERS) --dist loadfile --no-loadscope-reorder
 # pip quiet: no progress, no version check, and not the warnings a machine's pip configuration can add about index
 # folders it does not have ("Location ... is ignored"); pip's errors and its exit status still come through
 PIP_INSTALL = $(PY) -m pip install -q --disable-pip-version-check

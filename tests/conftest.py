@@ -25,6 +25,21 @@ from motion2video.core.motion import Motion
 
 SHARED_DIR = Path(__file__).resolve().parents[2] / "shared"
 
+# The files that keep a test worker longest (minutes each in a full run on 2 cores), started first so that the
+# workers finish together: xdist hands out whole files (--dist loadfile) in collection order when told not to
+# start the files with the most tests first (--no-loadscope-reorder, as make test runs it), which would leave
+# these single long tests for the end.
+LONGEST_FIRST = ("test_cli_examples_show.py", "test_cli_examples_make.py", "test_cli_examples_score.py",
+                 "test_cli_examples_frames.py", "test_transfer.py", "test_readme_examples.py", "test_exact_resume.py",
+                 "test_interrupts.py", "test_determinism.py", "test_pipeline.py", "test_batch.py", "test_analogy.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    """The files of :data:`LONGEST_FIRST` first, in that order; every other test after them in its own order."""
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+
+
 
 def _existing(path: Path) -> Path:
     if not path.is_dir():

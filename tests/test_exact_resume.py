@@ -56,19 +56,19 @@ def _motion_steps_done(last: Path) -> int:
 @pytest.mark.slow
 def test_motion_model_killed_and_resumed_matches_the_uninterrupted_run(tmp_path, mocap_dir):
     config = ('{"model": {"hidden_dim": 16, "latent_dim": 4}, '
-              '"train": {"batch_size": 8, "checkpoint_every": 40, "val_every": 0}}')
+              '"train": {"batch_size": 8, "checkpoint_every": 20, "val_every": 0}}')
     base = [sys.executable, "-m", "motion2video.cli", "train", "--model", "cvae", "--data",
-            str(mocap_dir / "cmu"), "--steps", "600", "--config", config, "--no-progress", "--threads", "1"]
+            str(mocap_dir / "cmu"), "--steps", "240", "--config", config, "--no-progress", "--threads", "1"]
     straight = tmp_path / "straight.safetensors"
     subprocess.run(base + ["-o", str(straight)], env=ENV, check=True, capture_output=True, timeout=900)
 
     killed = tmp_path / "killed.safetensors"
     proc = subprocess.Popen(base + ["-o", str(killed)], env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
-    _kill_when(proc, lambda: _motion_steps_done(tmp_path / "killed.last.safetensors") >= 120)
+    _kill_when(proc, lambda: _motion_steps_done(tmp_path / "killed.last.safetensors") >= 60)
     assert not killed.exists()
     stopped_at = _motion_steps_done(tmp_path / "killed.last.safetensors")
-    assert 120 <= stopped_at < 600
+    assert 60 <= stopped_at < 240
     subprocess.run(base + ["-o", str(killed), "--resume"], env=ENV, check=True, capture_output=True, timeout=900)
 
     _tensors_equal(straight, killed)  # weights
