@@ -146,8 +146,10 @@ def multimodal_per_window(pred: np.ndarray, futures: np.ndarray, groups: list[np
     scores = np.empty(len(groups))
     for i, idx in enumerate(groups):
         others = futures[idx]  # (M, T, D)
-        dist = np.linalg.norm(pred[i][:, None] - others[None], axis=-1)  # (K, M, T)
-        err = dist[:, :, -1] if final else dist.mean(axis=2)  # (K, M)
+        if final:  # the last frame only: (K, M)
+            err = np.linalg.norm(pred[i][:, None, -1] - others[None, :, -1], axis=-1)
+        else:
+            err = np.linalg.norm(pred[i][:, None] - others[None], axis=-1).mean(axis=2)  # (K, M, T) -> (K, M)
         scores[i] = err.min(axis=0).mean()  # best sample per ground truth, averaged over them
     return scores
 
