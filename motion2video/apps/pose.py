@@ -4,6 +4,8 @@ either optionally with the joints drawn on the input."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -65,9 +67,12 @@ class FacePoseFile:
     overlay: Path | None
 
 
-def estimate_pose_file(settings: PoseSettings) -> PhotoPoseFile | VideoPoseFile | FacePoseFile:
-    """Estimate the pose of ``settings.input``'s person and write it (and the overlay). InputError for a
-    missing input, an unknown extension or an output of the wrong kind, before any estimate."""
+def estimate_pose_file(settings: PoseSettings, *, note: Callable[[str], None] | None = None
+                       ) -> PhotoPoseFile | VideoPoseFile | FacePoseFile:
+    """Estimate the pose of ``settings.input``'s person and write it (and the overlay). A video's track is read
+    from the user cache when any command tracked the same file before (and cached for the next one); ``note``
+    hears which. InputError for a missing input, an unknown extension or an output of the wrong kind, before any
+    estimate."""
     src = Path(settings.input)
     if not src.exists():
         raise InputError("no such file", src)
@@ -83,12 +88,12 @@ def estimate_pose_file(settings: PoseSettings) -> PhotoPoseFile | VideoPoseFile 
     if settings.overlay is not None:
         check_output_path(settings.overlay, (".mp4",) if video else (".png",))
     if settings.face:
-        track = people.face_video_track(src, cache=False)
+        track = people.face_video_track(src, note=note)
         save_face_track(out, track)
         overlay = None if settings.overlay is None else people.write_face_overlay(settings.overlay, src, track)
         return FacePoseFile(track, out, overlay)
     if video:
-        pose = people.video_pose(src, person=settings.person, cache=False)
+        pose = people.video_pose(src, person=settings.person, note=note)
         save_video_pose(out, pose)
         overlay = None if settings.overlay is None else people.write_video_overlay(settings.overlay, src, pose)
         return VideoPoseFile(pose, out, overlay)

@@ -23,7 +23,8 @@ interpolated (the count is printed). --person picks one of several people: the l
 counted left to right in the first frame with people; a video follows that ONE person in every frame by the
 colours of their torso and the motion of their pelvis, so a passer-by is not taken for them. The 3D root moves
 in depth with the person's apparent size (a 60 degree field of view across the frame is assumed). --overlay
-draws the joints on the input so you can check them.
+draws the joints on the input so you can check them. A video's track is cached by the file's contents (in
+~/.cache/motion2video, as every command that reads a video caches it), so a second run reads it back.
 
 --face tracks a face video instead (MediaPipe's face detector, 468-point face mesh and eye model, bundled) and
 fits the Anny head to every frame: the output is a face motion .npz (the 52 ARKit coefficients and the head pose per
@@ -62,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:
         raise InputError(str(err)) from None
     result = estimate_pose_file(PoseSettings(input=args.input, output=args.output, person=person,
-                                             overlay=args.overlay, face=args.face))
+                                             overlay=args.overlay, face=args.face), note=print)
     if isinstance(result, FacePoseFile):
         track = result.track
         trimmed_end = track.video_frames - track.first_frame - track.num_frames
