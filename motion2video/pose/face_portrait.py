@@ -31,7 +31,6 @@ from motion2video.core.camera import PinholeCamera
 from motion2video.core.motion import FACE_DIM, NUM_EXPRESSIONS
 from motion2video.pose.face_anny import head_basis, posed_landmarks
 from motion2video.pose.face_fit import FitConfig, FrameFit, fit_frame
-from motion2video.pose.face_shape import fit_offsets, head_shape
 from motion2video.pose.blazepose import weighted_nms
 from motion2video.pose.facemesh import (MIN_PRESENCE, NMS_MIN_IOU, FaceDetection, FaceLandmarks, FaceMesh,
                                         detection_roi)
@@ -57,15 +56,12 @@ class PortraitFit:
         score: the face-presence score in [0, 1].
         fit: the fitted weak-perspective pose and coefficients (:class:`.face_fit.FrameFit`, the picture's pixels).
         faces: how many faces the detector found.
-        offsets: (470, 3) the pictured face's own shape: the points' residual after the fit, metres in the head's
-            rest frame (:func:`.face_shape.fit_offsets`).
     """
 
     landmarks: np.ndarray
     score: float
     fit: FrameFit
     faces: int
-    offsets: np.ndarray
 
     @property
     def size(self) -> float:
@@ -80,20 +76,8 @@ class PortraitFit:
         return out
 
     def relative_error(self) -> float:
-        """The median distance of the landmarks from the fitted head's (Anny's face), in face sizes."""
+        """The median distance of the landmarks from the fitted head's, in face sizes."""
         return float(np.median(self.fit.residual) / self.size)
-
-    def shaped_error(self) -> float:
-        """The median distance of the landmarks from the fitted head's with the person's shape spread over it
-        (:func:`.face_shape.head_shape`, read back at the points), in face sizes."""
-        from motion2video.pose.face_anny import load_correspondence
-        from motion2video.pose.face_fit import project
-
-        basis = head_basis()
-        points = basis.neutral + np.tensordot(self.fit.expressions, basis.basis, axes=1)
-        points = points + load_correspondence().points(head_shape(self.offsets).astype(np.float64))
-        moved = project(points, self.fit.rotation, self.fit.scale, self.fit.shift)
-        return float(np.median(np.linalg.norm(moved - self.landmarks, axis=1)) / self.size)
 
 
 def face_candidates(image: np.ndarray, model: FaceMesh, *, levels: int = TILE_LEVELS) -> Iterator[list[FaceDetection]]:
@@ -153,8 +137,7 @@ def _fit(lm: FaceLandmarks, faces: int) -> PortraitFit:
     xy = lm.points()
     basis = head_basis()
     fit = fit_frame(basis.neutral, basis.basis, xy, PORTRAIT_FIT, None, PORTRAIT_FIT.weights())
-    fitted = basis.neutral + np.tensordot(fit.expressions, basis.basis, axes=1)  # (470, 3)
-    return PortraitFit(xy, lm.score, fit, faces, fit_offsets(fitted, xy, fit))
+    return PortraitFit(xy, lm.score, fit, faces)
 
 
 @dataclass(frozen=True)
@@ -201,12 +184,6 @@ def portrait_framing(portrait: PortraitFit, size: int) -> PortraitFraming:
     params = portrait.params()[None].astype(np.float64)  # (1, 58)
     e = NUM_EXPRESSIONS
     points = posed_landmarks(params[:, :e], params[:, e:e + 3], params[:, e + 3:])[0]  # (470, 3)
-    # the person's face on the head, turned with it
-    from motion2video.core.rotations import axis_angle_to_matrix
-    from motion2video.pose.face_anny import load_correspondence
-
-    offsets = load_correspondence().points(head_shape(portrait.offsets).astype(np.float64))
-    points = points + offsets @ axis_angle_to_matrix(params[0, e:e + 3]).T
     seen = camera.project(points)[:, :2]  # (470, 2) the head's landmarks in the close-up
     scale, offset = similarity_fit(portrait.landmarks, seen)
     moved = portrait.landmarks * scale + offset
