@@ -48,7 +48,7 @@ FACE_VISIBILITY_TOLERANCE_M = 0.01
 # 256 px) lay 1-10 mm behind the depth map: they took the nostril's shadow as the cavity's colour, and when a future
 # showed them under the nostril (within 1 cm of its thin skin) they drew it there, a dark dot under the nose. Their
 # own test is 2 mm: of the cavity vertices counted as shown over that clip's 137 renders, 23% lay within 1 mm of
-# the depth map and 59% 3-10 mm behind it.
+# the depth map and 66% 3-10 mm behind it.
 MOUTH_VISIBILITY_TOLERANCE_M = 0.002
 # Face landmarks (Anny vertices picked on the rest mesh by :func:`face_landmark_vertices`), in this order.
 FACE_LANDMARK_NAMES: tuple[str, ...] = (
