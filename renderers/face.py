@@ -42,6 +42,14 @@ STYLES = ("appearance", "structure")
 # row of specks along the jaw, a dotted mouth). At 1 cm: 550 (and 50 shown ones missed, against 26); the held-out
 # face pairs' person PSNR 30.06 -> 30.12 dB (0.5 cm: 30.08, 1.5 cm: 30.08; docs/results.md).
 FACE_VISIBILITY_TOLERANCE_M = 0.01
+# The mouth cavity and tongue (:func:`renderers.anny_model.mouth_vertices`) are seen only through the lips' opening,
+# where they are the front surface itself; behind the skin they lie within 1 cm of it under the nose and behind the
+# lips. At 1 cm, 104 of the 128 cavity vertices counted as shown on a fitted portrait (portrait_pearl_earring.jpg at
+# 256 px) lay 1-10 mm behind the depth map: they took the nostril's shadow as the cavity's colour, and when a future
+# showed them under the nostril (within 1 cm of its thin skin) they drew it there, a dark dot under the nose. Their
+# own test is 2 mm: of the cavity vertices counted as shown over that clip's 137 renders, 23% lay within 1 mm of
+# the depth map and 66% 3-10 mm behind it.
+MOUTH_VISIBILITY_TOLERANCE_M = 0.002
 # Face landmarks (Anny vertices picked on the rest mesh by :func:`face_landmark_vertices`), in this order.
 FACE_LANDMARK_NAMES: tuple[str, ...] = (
     "right_eye", "left_eye", "nose_tip", "right_mouth_corner", "left_mouth_corner", "upper_lip",
@@ -211,6 +219,7 @@ class _HeadMesh:
     colors: np.ndarray  # (K, 3) float sRGB
     landmarks: np.ndarray  # (L,) indices into the subset, FACE_LANDMARK_NAMES order
     rest: AnnyRest = field(repr=False)
+    tolerance: np.ndarray = field(repr=False)  # (K,) metres a vertex may lie behind the depth map (front-surface test)
 
 
 class FaceRenderer(RendererBase):
@@ -264,8 +273,10 @@ class FaceRenderer(RendererBase):
                                      (len(vertex_ids), 3))
         else:
             colors = anny_model.vertex_colors(self.style.region_colors(), rest)[vertex_ids]
+        tolerance = np.where(np.isin(vertex_ids, anny_model.mouth_vertices()), MOUTH_VISIBILITY_TOLERANCE_M,
+                             FACE_VISIBILITY_TOLERANCE_M)
         head = _HeadMesh(vertex_ids=vertex_ids, faces=faces, colors=np.ascontiguousarray(colors),
-                         landmarks=remap[face_landmark_vertices(rest)], rest=rest)
+                         landmarks=remap[face_landmark_vertices(rest)], rest=rest, tolerance=tolerance)
         if np.any(head.landmarks < 0):
             raise RuntimeError("a face landmark lies outside the drawn head mesh")
         self._heads[phenotype] = head
@@ -327,7 +338,7 @@ class FaceRenderer(RendererBase):
                     uvz = camera.project(v)  # (K, 3) the drawn vertices
                     vertex_uv[start + k, head.vertex_ids] = uvz[:, :2]
                     vertex_visible[start + k, head.vertex_ids] = vertex_visibility(
-                        uvz, out.depth, tolerance=FACE_VISIBILITY_TOLERANCE_M)
+                        uvz, out.depth, tolerance=head.tolerance)
             if progress is not None:
                 progress(len(verts))
         return FaceFrames(frames=frames, masks=masks, camera=camera, landmarks=landmarks, vertex_uv=vertex_uv,

@@ -491,14 +491,15 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
     return out
 
 
-def vertex_visibility(uvz: np.ndarray, depth: np.ndarray, *, tolerance: float = VISIBILITY_TOLERANCE_M,
+def vertex_visibility(uvz: np.ndarray, depth: np.ndarray, *, tolerance: float | np.ndarray = VISIBILITY_TOLERANCE_M,
                       rest: np.ndarray | None = None) -> np.ndarray:
     """Which vertices are the front surface of a render.
 
     Args:
         uvz: (V, 3) projected vertices: pixel x, pixel y, depth in metres (:func:`core.camera.project`).
         depth: (H, W) the render's depth map (0 where nothing was drawn).
-        tolerance: metres a vertex may lie behind the depth map and still count as seen.
+        tolerance: metres a vertex may lie behind the depth map and still count as seen: one for every vertex, or
+            (V,) one per vertex.
         rest: (V, 3) the mesh's vertices on the body at rest, or None. Given, where two surfaces of the body meet
             in the picture only the front one counts as seen (:func:`behind_a_touching_surface`).
     Returns:
@@ -510,7 +511,8 @@ def vertex_visibility(uvz: np.ndarray, depth: np.ndarray, *, tolerance: float = 
     inside = (x >= 0) & (x < w) & (y >= 0) & (y < h) & (uvz[:, 2] > 0)
     seen = np.zeros(len(uvz), bool)
     d = depth[y[inside], x[inside]]
-    seen[inside] = (d > 0) & (uvz[inside, 2] <= d + tolerance)
+    allowed = np.broadcast_to(np.asarray(tolerance, np.float64), (len(uvz),))[inside]
+    seen[inside] = (d > 0) & (uvz[inside, 2] <= d + allowed)
     if rest is not None:
         behind = np.zeros(len(uvz))
         behind[inside] = uvz[inside, 2] - d

@@ -56,6 +56,8 @@ def test_vertex_visibility_keeps_the_front_surface():
                     [9.5, 3.5, 2.0],  # outside the image
                     [4.5, 4.5, 2.02]])  # within the tolerance
     assert vertex_visibility(uvz, depth).tolist() == [True, False, False, False, True]
+    # a tolerance per vertex: the last one's 5 mm leaves it 2 cm behind the surface unseen
+    assert vertex_visibility(uvz, depth, tolerance=np.array([0.025] * 4 + [0.005])).tolist() == [True] + [False] * 4
 
 
 def test_where_two_surfaces_interleave_only_the_front_one_is_seen():

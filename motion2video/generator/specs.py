@@ -22,8 +22,9 @@ SPLITS = ("train", "test")
 # version 2 (core.skeletons.SKELETON_VERSION), so renders cached with the old joints are not reused
 DATA_VERSION = 3
 # Face splits with vertices: 2 = the head vertices' front-surface test at 1 cm (renderers.face.
-# FACE_VISIBILITY_TOLERANCE_M; it was 2.5 cm), so face correspondence cached before it is not reused.
-FACE_VISIBILITY_VERSION = 2
+# FACE_VISIBILITY_TOLERANCE_M; it was 2.5 cm); 3 = the mouth cavity's at 2 mm (MOUTH_VISIBILITY_TOLERANCE_M): face
+# correspondence cached before either is not reused.
+FACE_VISIBILITY_VERSION = 3
 
 
 def default_data_root() -> Path:

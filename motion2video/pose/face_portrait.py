@@ -16,7 +16,9 @@ the face in one image, and the square of the image framed as the face renderer's
 The head keeps Anny's default identity: letting the six phenotype values vary (a coordinate search over 0, 0.25,
 ..., 1) lowered the mean re-projection error only from 1.66% to 1.55% of the face size on
 ``portrait_mona_lisa.jpg`` and from 2.40% to 2.37% on ``portrait_pearl_earring.jpg``, and took the oldest age for
-both.
+both. Nor does it take the person's own face as offsets of its vertices (the points' residual after the fit, spread
+over the head): the landmarks came within 0.2-0.3% of the face size, but the talking-head protocol's L1 and face PSNR
+got worse on both shared videos (docs/experiments.md).
 """
 
 from __future__ import annotations
