@@ -120,12 +120,12 @@ def test_a_small_face_in_a_full_length_photo_is_found_in_squares_of_it(photos_di
     the truck it finds a pattern that the face mesh rejects): the squares of half the picture find it, and the
     framed reference holds it as a portrait's."""
     from motion2video.pose.face_portrait import fit_portrait, portrait_framing
-    from motion2video.pose.face_track import default_face_model
+    from motion2video.pose.facemesh import shared_face_mesh
     from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
     from motion2video.stages.reference import read_reference_image
 
     image, _ = read_reference_image(photos_dir / name)
-    model = default_face_model()
+    model = shared_face_mesh()
     assert all(model.landmarks(image, detection_roi(d)).score < MIN_PRESENCE for d in model.detect(image))
     portrait = fit_portrait(image, model=model)
     assert portrait is not None and portrait.relative_error() < 0.03 and portrait.size < 0.1 * image.shape[1]

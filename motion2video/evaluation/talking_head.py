@@ -54,7 +54,7 @@ from motion2video.generator.scores import FrameEvaluation, MethodScores, evaluat
 from motion2video.pose.estimate import iter_video_frames
 from motion2video.pose.face_fit import PROJECTION
 from motion2video.pose.face_track import FaceTrack
-from motion2video.pose.facemesh import FaceMesh
+from motion2video.pose.facemesh import FaceMesh, shared_face_mesh
 
 LANDMARK_WARP = "landmark-warp"
 
@@ -303,7 +303,7 @@ def evaluate_face_video_frames(model, frames: FaceVideoFrames, *, video: str | P
                                ) -> FaceVideoEvaluation:
     """Score a face generator (and the baselines) on frames of :func:`face_video_frames` (the module
     docstring's metrics)."""
-    face_model = face_model or FaceMesh(num_threads=1)
+    face_model = face_model or shared_face_mesh(num_threads=1)
     pairs = face_pairs(frames)
     size = pairs.tgt_images.shape[1]
     heads = hull_masks(pairs.tgt_points, size)

@@ -35,7 +35,7 @@ from motion2video.pose.face_anny import head_basis, posed_landmarks
 from motion2video.pose.face_fit import FitConfig, FrameFit, fit_frame
 from motion2video.pose.blazepose import weighted_nms
 from motion2video.pose.facemesh import (MIN_PRESENCE, NMS_MIN_IOU, FaceDetection, FaceLandmarks, FaceMesh,
-                                        detection_roi)
+                                        detection_roi, shared_face_mesh)
 
 # The coefficients' ridge for one picture, where no other frame tells the person's face from their expression: at
 # the tracker's 1e-6 a dozen coefficients of either shared portrait went to 1 (the face's shape taken for an
@@ -121,9 +121,7 @@ def fit_portrait(image: np.ndarray, *, model: FaceMesh | None = None) -> Portrai
     """Fit the Anny head to the largest face of an (H, W, 3) uint8 RGB picture (the largest of the first level of
     :func:`face_candidates` whose face mesh confirms a face); None when no face is found (no detection, or none
     with a face-presence score over the tracker's threshold)."""
-    from motion2video.pose.face_track import default_face_model
-
-    model = model or default_face_model()
+    model = model or shared_face_mesh()
     for detections in face_candidates(image, model):
         for det in sorted(detections, key=lambda d: d.area, reverse=True):
             lm = model.landmarks(image, detection_roi(det))

@@ -37,22 +37,11 @@ from motion2video.pose.estimate import interpolate_gaps, iter_video_frames, open
 from motion2video.pose.face_anny import head_basis, head_offset, posed_landmarks
 from motion2video.pose.face_fit import PROJECTION, FitConfig, FrameFit, fit_frame, person_neutral_offsets
 from motion2video.pose.facemesh import (MIN_PRESENCE, NUM_POINTS, FaceDetection, FaceLandmarks, FaceMesh,
-                                        detection_roi)
+                                        detection_roi, shared_face_mesh)
 from motion2video.pose.smoothing import IMAGE_LANDMARKS, one_euro, runs
 
 FOCAL_PER_LONG_SIDE = 1.0  # the assumed pinhole focal length, in frame long sides (about 53 degrees across)
 FACE_ESTIMATOR = "facemesh-anny-v1"  # names the face track's cache files; change it when the output changes
-
-_MODEL: FaceMesh | None = None
-
-
-def default_face_model() -> FaceMesh:
-    """One shared :class:`FaceMesh` per process."""
-    global _MODEL
-    if _MODEL is None:
-        _MODEL = FaceMesh()
-    return _MODEL
-
 
 def track_faces(frames: Iterable[np.ndarray], *, model: FaceMesh | None = None,
                 min_presence: float = MIN_PRESENCE) -> Iterator[FaceLandmarks | None]:
@@ -61,7 +50,7 @@ def track_faces(frames: Iterable[np.ndarray], *, model: FaceMesh | None = None,
     Yields:
         the face's :class:`FaceLandmarks` per frame, or None where it is not found.
     """
-    model = model or default_face_model()
+    model = model or shared_face_mesh()
     roi = None
     last_centre: np.ndarray | None = None
     for frame in frames:

@@ -258,3 +258,10 @@ class FaceMesh:
                                                                    eye_box, mirrored)
             iris[eye] = decode_eye_points(self._eye.get_tensor(self._eye_iris)[0], eye_box, mirrored)[0]
         return FaceLandmarks(xy, lm.z, lm.score, lm.roi, iris)
+
+
+@lru_cache(maxsize=None)
+def shared_face_mesh(*, num_threads: int = 2, refine_eyes: bool = True) -> FaceMesh:
+    """One :class:`FaceMesh` per process and setting, for every caller that does not bring its own (the face
+    tracker, the portrait fit, the pictured face of a body reference, the talking-head protocol)."""
+    return FaceMesh(num_threads=num_threads, refine_eyes=refine_eyes)

@@ -10,7 +10,6 @@ is found, and the generator's own head stays.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -47,13 +46,12 @@ class PicturedFace:
     score: float
 
 
-@lru_cache(maxsize=1)
 def face_mesh():
-    """One shared :class:`motion2video.pose.facemesh.FaceMesh` per process (without the eye model: the matte needs
-    the face's outline only)."""
-    from motion2video.pose.facemesh import FaceMesh
+    """The process's shared :class:`motion2video.pose.facemesh.FaceMesh` without the eye model (the matte needs the
+    face's outline only)."""
+    from motion2video.pose.facemesh import shared_face_mesh
 
-    return FaceMesh(num_threads=1, refine_eyes=False)
+    return shared_face_mesh(num_threads=1, refine_eyes=False)
 
 
 def head_square(points: np.ndarray) -> tuple[int, int, int]:
