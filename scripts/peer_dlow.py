@@ -144,6 +144,8 @@ def window_dataset_class(base):
 
 
 class Logger:
+    """The logger DLow's train functions write their epoch lines to: printed and appended to a file."""
+
     def __init__(self, path: Path):
         self.path = path
 
@@ -153,7 +155,7 @@ class Logger:
             f.write(text + "\n")
 
 
-def train_dlow(args, cfg_dict: dict, train_seq: np.ndarray, dlow_mods) -> None:
+def train_dlow(args, train_seq: np.ndarray, dlow_mods) -> None:
     """DLow's two training stages (exp_vae.py's then exp_dlow.py's main, their train functions as they are)."""
     Config, Dataset, models, exp_vae, exp_dlow, _ = dlow_mods
     from torch import optim
@@ -289,7 +291,7 @@ def run(args) -> int:
         train_seq = dlow_sequences(train_windows.raw, reference.layout)
         print(f"{len(train_windows)} training windows of {len(set(train_windows.clip_names))} clips, "
               f"{cfg.observed} + {cfg.future} frames at {cfg.fps:g} fps", flush=True)
-        train_dlow(args, cfg_dict, train_seq, dlow_mods)
+        train_dlow(args, train_seq, dlow_mods)
         del train_seq
     if args.stage not in ("all", "score"):
         return 0
