@@ -298,6 +298,7 @@ def run(args) -> int:
     windows = dataset.windows(args.split, stride=args.stride)
     test_seq = dlow_sequences(windows.raw, reference.layout)
     pred, info = sample_dlow(args, windows, test_seq, dlow_mods)
+    torch.set_default_dtype(torch.float32)  # DLow runs in float64; the project's models are built in float32
     protocol = EvalProtocol(samples=cfg_dict["nk"], stride=args.stride, split=args.split, seed=args.seed)
     compare = [load_model(name) for name in args.compare]
     bundles = compare + [baseline_bundle(name, cfg, stats=reference.stats) for name in BASELINES]
