@@ -51,25 +51,17 @@ from motion2video.models.checkpoint import baseline_bundle, load_model
 CFG_ID = "m2v_nsamp50"
 PEER = "dlow-peer"  # the method name of DLow's own code in the tables and JSON
 
-# DLow's Human3.6M recipe (motion_pred/cfg/h36m_nsamp50.yml), with t_his / t_pred and the epochs set per run.
-H36M_NSAMP50 = {
-    "nz": 128, "lambda_v": 1000, "beta": 0.1,
-    "vae_specs": {"rnn_type": "gru", "x_birnn": False, "e_birnn": False, "use_drnn_mlp": True},
-    "vae_lr": 1.0e-3, "batch_size": 64, "num_vae_epoch": 500, "num_vae_epoch_fix": 100, "num_vae_data_sample": 5000,
-    "nk": 50, "dlow_batch_size": 32, "d_scale": 100, "lambda_j": 25, "lambda_recon": 2.0, "dlow_lr": 1.0e-4,
-    "dlow_specs": {"model_name": "NFDiag", "rnn_type": "gru", "nh_mlp": [1024, 512], "x_birnn": False},
-    "num_dlow_epoch": 500, "num_dlow_epoch_fix": 100, "num_dlow_data_sample": 1000,
-}
+RECIPE = Path("motion_pred") / "cfg" / "h36m_nsamp50.yml"  # DLow's Human3.6M recipe, read from the checkout
 
 
-def dlow_config(*, t_his: int, t_pred: int, vae_epochs: int, dlow_epochs: int, save_every: int) -> dict:
-    """DLow's h36m_nsamp50 settings for windows of t_his + t_pred frames and the given epoch counts (the
-    constant-rate epochs keep the recipe's share, 100 of 500)."""
+def dlow_config(recipe: dict, *, t_his: int, t_pred: int, vae_epochs: int, dlow_epochs: int, save_every: int) -> dict:
+    """DLow's settings ``recipe`` (its h36m_nsamp50.yml) for windows of t_his + t_pred frames and the given epoch
+    counts, the constant-rate epochs keeping the recipe's share (100 of 500)."""
     if min(t_his, t_pred, vae_epochs, dlow_epochs, save_every) < 1:
         raise InputError("t_his, t_pred, the epoch counts and the save interval must be at least 1")
-    cfg = dict(H36M_NSAMP50, t_his=int(t_his), t_pred=int(t_pred), save_model_interval=int(save_every))
+    cfg = dict(recipe, t_his=int(t_his), t_pred=int(t_pred), save_model_interval=int(save_every))
     for part, epochs in (("vae", vae_epochs), ("dlow", dlow_epochs)):
-        share = H36M_NSAMP50[f"num_{part}_epoch_fix"] / H36M_NSAMP50[f"num_{part}_epoch"]
+        share = recipe[f"num_{part}_epoch_fix"] / recipe[f"num_{part}_epoch"]
         cfg[f"num_{part}_epoch"] = int(epochs)
         cfg[f"num_{part}_epoch_fix"] = int(round(share * epochs))
     return cfg
@@ -95,8 +87,8 @@ def predictions_to_metric(pred: np.ndarray, num_windows: int, nk: int) -> np.nda
 
 def check_checkout(path: Path) -> Path:
     """The resolved DLow checkout, or InputError naming the folder."""
-    if not (path / "motion_pred" / "exp_dlow.py").is_file() or not (path / "models" / "motion_pred.py").is_file():
-        raise InputError("not a DLow checkout (no motion_pred/exp_dlow.py or models/motion_pred.py)", path)
+    if not all((path / part).is_file() for part in ("motion_pred/exp_dlow.py", "models/motion_pred.py", RECIPE)):
+        raise InputError(f"not a DLow checkout (no motion_pred/exp_dlow.py, models/motion_pred.py or {RECIPE})", path)
     return path.resolve()
 
 
@@ -280,9 +272,10 @@ def run(args) -> int:
     dataset = build_dataset(args.data, cfg, split=reference.meta.split, stats=reference.stats)
     out = args.out.resolve()
     (out / "motion_pred" / "cfg").mkdir(parents=True, exist_ok=True)
-    cfg_dict = dlow_config(t_his=cfg.observed, t_pred=cfg.future, vae_epochs=args.vae_epochs,
-                           dlow_epochs=args.dlow_epochs, save_every=args.save_every)
     import yaml
+    recipe = yaml.safe_load((dlow_path / RECIPE).read_text())
+    cfg_dict = dlow_config(recipe, t_his=cfg.observed, t_pred=cfg.future, vae_epochs=args.vae_epochs,
+                           dlow_epochs=args.dlow_epochs, save_every=args.save_every)
     (out / "motion_pred" / "cfg" / f"{CFG_ID}.yml").write_text(yaml.safe_dump(cfg_dict, sort_keys=False))
     dlow_mods = import_dlow()
     os.chdir(out)  # DLow's Config reads motion_pred/cfg/<id>.yml and writes results/<id>/ under the working folder

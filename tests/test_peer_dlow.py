@@ -22,19 +22,24 @@ def peer(monkeypatch):
     return importlib.import_module("peer_dlow")
 
 
+# a few settings of DLow's motion_pred/cfg/h36m_nsamp50.yml
+RECIPE = {"nz": 128, "t_his": 25, "t_pred": 100, "nk": 50, "num_vae_epoch": 500, "num_vae_epoch_fix": 100,
+          "num_dlow_epoch": 500, "num_dlow_epoch_fix": 100, "dlow_specs": {"model_name": "NFDiag"}}
+
+
 def test_config_keeps_dlows_recipe_and_scales_the_constant_rate_epochs(peer):
-    cfg = peer.dlow_config(t_his=16, t_pred=48, vae_epochs=30, dlow_epochs=9, save_every=1)
+    cfg = peer.dlow_config(RECIPE, t_his=16, t_pred=48, vae_epochs=30, dlow_epochs=9, save_every=1)
     changed = {"t_his", "t_pred", "save_model_interval", "num_vae_epoch", "num_vae_epoch_fix", "num_dlow_epoch",
                "num_dlow_epoch_fix"}
     assert {k: v for k, v in cfg.items() if k not in changed} == {
-        k: v for k, v in peer.H36M_NSAMP50.items() if k not in changed}
+        k: v for k, v in RECIPE.items() if k not in changed}
     assert (cfg["t_his"], cfg["t_pred"], cfg["nk"], cfg["nz"]) == (16, 48, 50, 128)
     assert (cfg["num_vae_epoch"], cfg["num_vae_epoch_fix"]) == (30, 6)  # DLow: 100 of 500 at the full rate
     assert (cfg["num_dlow_epoch"], cfg["num_dlow_epoch_fix"]) == (9, 2)
-    full = peer.dlow_config(t_his=25, t_pred=100, vae_epochs=500, dlow_epochs=500, save_every=20)
+    full = peer.dlow_config(RECIPE, t_his=25, t_pred=100, vae_epochs=500, dlow_epochs=500, save_every=20)
     assert (full["num_vae_epoch_fix"], full["num_dlow_epoch_fix"]) == (100, 100)
     with pytest.raises(InputError):
-        peer.dlow_config(t_his=16, t_pred=48, vae_epochs=0, dlow_epochs=9, save_every=1)
+        peer.dlow_config(RECIPE, t_his=16, t_pred=48, vae_epochs=0, dlow_epochs=9, save_every=1)
 
 
 def test_windows_reach_dlow_as_root_relative_joints_with_a_zero_root(peer, mocap_dir):
