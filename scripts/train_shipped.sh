@@ -44,16 +44,20 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Settings both runs share (each may be overridden from the environment).
+PY=${PY:-.venv/bin/python}
+MOCAP=${MOCAP:-../shared/data/mocap}
+WEIGHTS=${WEIGHTS:-motion2video/weights}
+STEPS_SCALE=${STEPS_SCALE:-1}
+export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
+
+steps() { "$PY" -c "import sys; print(max(1, round($1 * float(sys.argv[1]))))" "$STEPS_SCALE"; }
+
 # The --bandai run: the samplers of mixture-periodic retrained on the joined corpus (header above).
 train_bandai() {
-  PY=${PY:-.venv/bin/python}
-  MOCAP=${MOCAP:-../shared/data/mocap}
   BANDAI=${BANDAI:-../shared/data/bandai}
-  WEIGHTS=${WEIGHTS:-motion2video/weights}
   LOGS=${LOGS:-out/train_bandai}
-  STEPS_SCALE=${STEPS_SCALE:-1}
   ONLY=${ONLY:-"mtvae-add-bandai mtvae-add-dlow-bandai mixer-cvae-bandai mixer-cvae-dlow-bandai mixture-periodic-bandai"}
-  export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
   mkdir -p "$WEIGHTS" "$LOGS"
 
   BASE_MINUTES=${BASE_MINUTES:-0}
@@ -65,7 +69,6 @@ train_bandai() {
   # DLow reuses its base checkpoint's data settings and split (apps/train.py), so it has no data section.
   DLOW='"model": {"num_samples": 50}, "train": {"batch_size": 16, "lr": 0.0005, "checkpoint_every": 200, "val_every": 200, "augment": true, "max_minutes": '$DLOW_MINUTES'}'
 
-  steps() { "$PY" -c "import sys; print(max(1, round($1 * float(sys.argv[1]))))" "$STEPS_SCALE"; }
 
   # bandai_train_one NAME MODEL STEPS CONFIG [EXTRA ARGS...]
   bandai_train_one() {
@@ -116,14 +119,9 @@ case "${1:-}" in
 esac
 
 
-PY=${PY:-.venv/bin/python}
-MOCAP=${MOCAP:-../shared/data/mocap}
 FACE=${FACE:-../shared/data/face}
-WEIGHTS=${WEIGHTS:-motion2video/weights}
 LOGS=${LOGS:-out/train_shipped}
-STEPS_SCALE=${STEPS_SCALE:-1}
 ONLY=${ONLY:-"mtvae-add mtvae-add-dlow mtvae-add-2d mtvae-add-face lcpvae behavior mixer-cvae mixer-cvae-dlow mixture-dlow mixture-periodic"}
-export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 mkdir -p "$WEIGHTS" "$LOGS"
 
 # Every body model learns from the whole corpus of ../shared/data/mocap (all 275 files, duplicates
@@ -144,7 +142,6 @@ MIXER_CVAE='"model": {"kl_weight": 0.01, "stats_weight": 1.0}, "data": {"held_ou
 # DLow on top of the trained mtvae-add: K = 50 affine maps of one noise, the base model frozen.
 DLOW='"model": {"num_samples": 50}, "train": {"batch_size": 16, "lr": 0.0005, "checkpoint_every": 200, "val_every": 200, "augment": true}'
 
-steps() { "$PY" -c "import sys; print(max(1, round($1 * float(sys.argv[1]))))" "$STEPS_SCALE"; }
 
 # train_one NAME MODEL DATA STEPS CONFIG [EXTRA ARGS...]
 train_one() {

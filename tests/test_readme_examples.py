@@ -129,6 +129,19 @@ def run_examples(commands: list[str], tmp_path: Path) -> None:
     assert not failures, "documented examples that fail:\n" + "\n".join(failures)
 
 
+def part_test(part: str):
+    """The test that runs :func:`example_parts`'s ``part`` as written, for a test file of its own (xdist hands
+    out whole files, so each part can go to its own worker)."""
+
+    @pytest.mark.slow
+    def test_examples_run_as_written(tmp_path):
+        commands = example_parts()[part]
+        assert commands
+        run_examples(commands, tmp_path)
+
+    return test_examples_run_as_written
+
+
 def test_example_parts_hold_every_example_once():
     parts = example_parts()
     joined = [c for part in parts.values() for c in part]
