@@ -5,7 +5,6 @@ either optionally with the joints drawn on the input."""
 from __future__ import annotations
 
 from collections.abc import Callable
-
 from dataclasses import dataclass
 from pathlib import Path
 
