@@ -91,32 +91,36 @@ class Terminated(KeyboardInterrupt):
 
 
 def _raise_terminated(signum, frame) -> None:
-    interrupts.clear()  # this interrupt is the one delivered
+    interrupts.note(Terminated)  # kept until main has it: a library that drops it meets it again (raise_pending)
     raise Terminated()
 
 
 def _raise_interrupted(signum, frame) -> None:
-    interrupts.clear()
+    interrupts.note(KeyboardInterrupt)
     raise KeyboardInterrupt()
 
 
-def _send_again(sig: int) -> None:
-    """The timer of :func:`_redeliver_interrupts`: the signal again, unless the interrupt was delivered since (at
-    a :func:`motion2video.core.interrupts.raise_pending` point, or by another signal) or the command has ended."""
-    if interrupts.pending() is not None and not _finished.is_set():
+def _send_again(sig: int, raised: int) -> None:
+    """The timer of :func:`_redeliver_interrupts`: the signal again, unless an interrupt was raised since the
+    dropped one (``raised``: :func:`motion2video.core.interrupts.raised` then; at a ``raise_pending`` point, or
+    by another signal) or the command has ended."""
+    if interrupts.pending() is not None and interrupts.raised() == raised and not _finished.is_set():
         os.kill(os.getpid(), sig)
 
 
 def _redeliver_interrupts(unraisable) -> None:
     """``sys.unraisablehook``: a SIGTERM or Ctrl-C that arrives while Python runs a finaliser (``__del__``, e.g.
-    OpenGL freeing a buffer) is printed and dropped by Python, and the command would run on to the end. Record it
-    (:mod:`motion2video.core.interrupts`: the video writers raise it at their next chunk) and send the signal
-    again, so it stops the command at the next ordinary line; other unraisable errors are printed as usual."""
+    OpenGL freeing a buffer) is printed and dropped by Python, and the command would run on to the end. It stays
+    recorded (:mod:`motion2video.core.interrupts`: the video writers raise it at their next chunk), and the signal
+    is sent again, so it stops the command at the next ordinary line; other unraisable errors are printed as
+    usual."""
     if isinstance(unraisable.exc_value, KeyboardInterrupt):
         terminated = isinstance(unraisable.exc_value, Terminated)
-        interrupts.note_swallowed(Terminated if terminated else KeyboardInterrupt)
+        if interrupts.pending() is None:  # raised by a handler of Python's own rather than this module's
+            interrupts.note(Terminated if terminated else KeyboardInterrupt)
         # From another thread a moment later: sent from here, it would be handled inside this hook and dropped again.
-        timer = threading.Timer(REDELIVER_DELAY_S, _send_again, (signal.SIGTERM if terminated else signal.SIGINT,))
+        timer = threading.Timer(REDELIVER_DELAY_S, _send_again,
+                                (signal.SIGTERM if terminated else signal.SIGINT, interrupts.raised()))
         timer.daemon = True
         timer.start()
         return
@@ -158,6 +162,7 @@ def main(argv: list[str] | None = None) -> int:
         return 143 if terminated else 130
     finally:
         _finished.set()  # a signal sent again from now on would kill the interpreter as it exits
+        interrupts.clear()
 
 
 if __name__ == "__main__":

@@ -140,6 +140,7 @@ def test_an_interrupt_swallowed_by_a_finaliser_is_delivered_again():
     """SIGTERM landing inside a ``__del__`` (here raised from one, as the signal handler would) is not lost: it is
     sent again and stops the code at the next ordinary line (the race that once let a terminated render finish)."""
     from motion2video.cli import Terminated, install_signal_handlers
+    from motion2video.core import interrupts
 
     class Freed:
         def __del__(self):
@@ -155,12 +156,14 @@ def test_an_interrupt_swallowed_by_a_finaliser_is_delivered_again():
     finally:
         signal.signal(signal.SIGTERM, old_handler)
         sys.unraisablehook = old_hook
+        interrupts.clear()  # what main does once the interrupt has stopped the command
 
 
 
 def test_a_swallowed_interrupt_stops_the_next_video_chunk(tmp_path):
-    """Ctrl-C swallowed by a finaliser (recorded as the CLI's unraisable hook records it, before its re-sent signal
-    arrives): the video writer raises it at its next chunk, and neither the video nor its temporary file is left."""
+    """Ctrl-C swallowed on its way (recorded as the CLI's handler records it): the video writer raises it at its
+    next chunk, and neither the video nor its temporary file is left; the re-sent signal a finaliser's drop started
+    is not sent any more (an interrupt was raised since)."""
     from motion2video.core import interrupts
     from motion2video.formats.video import VideoWriter
 
@@ -170,18 +173,45 @@ def test_a_swallowed_interrupt_stops_the_next_video_chunk(tmp_path):
         with pytest.raises(KeyboardInterrupt):
             with VideoWriter(out, 25) as writer:
                 writer.write(frames)
-                interrupts.note_swallowed(KeyboardInterrupt)  # what the hook records for a dropped interrupt
+                interrupts.note(KeyboardInterrupt)  # what the handler records before it raises
+                dropped_at = interrupts.raised()
                 writer.write(frames)  # raised here
                 pytest.fail("the second chunk was encoded after the interrupt")
-        assert interrupts.pending() is None  # delivered once: a late re-sent signal sends nothing
+        assert interrupts.raised() == dropped_at + 1
+    finally:
+        interrupts.clear()
+    assert not out.exists() and _temporaries(tmp_path) == []
+
+
+def test_a_ctrl_c_a_library_drops_stops_the_command_at_the_next_chunk(tmp_path):
+    """The CLI's SIGINT handler raises inside a library's bare ``except:`` that drops the interrupt without a word
+    (no finaliser, so no re-sent signal): the interrupt stays recorded and the video writer raises it at its next
+    chunk. Without the record the command ran on to the end and exited 0 (a SIGINT'd mesh render, under load)."""
+    from motion2video import cli
+    from motion2video.core import interrupts
+    from motion2video.formats.video import VideoWriter
+
+    out = tmp_path / "clip.mp4"
+    frames = np.zeros((4, 32, 32, 3), np.uint8)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with VideoWriter(out, 25) as writer:
+                writer.write(frames)
+                try:
+                    cli._raise_interrupted(signal.SIGINT, None)
+                except BaseException:  # noqa: BLE001 - what the library does
+                    pass
+                writer.write(frames)
+                pytest.fail("the second chunk was encoded after the interrupt")
     finally:
         interrupts.clear()
     assert not out.exists() and _temporaries(tmp_path) == []
 
 
 def test_an_interrupt_sent_again_after_the_command_ended_is_not_sent():
-    """The re-sent signal of a swallowed interrupt that was delivered otherwise, or after ``main`` has its exit
-    code, is not sent: at interpreter exit it would kill the process with the signal (exit -2 instead of 130)."""
+    """The re-sent signal of a swallowed interrupt is not sent when an interrupt was raised since (at a chunk, or
+    by another signal), when nothing is pending, or after ``main`` has its exit code: at interpreter exit it would
+    kill the process with the signal (exit -2 instead of 130)."""
     from motion2video import cli
     from motion2video.core import interrupts
 
@@ -189,12 +219,15 @@ def test_an_interrupt_sent_again_after_the_command_ended_is_not_sent():
         sys.unraisablehook
     try:
         cli.install_signal_handlers()
-        interrupts.note_swallowed(KeyboardInterrupt)
+        interrupts.note(KeyboardInterrupt)
+        dropped_at = interrupts.raised()
         cli._finished.set()
-        cli._send_again(signal.SIGINT)  # a SIGINT here would raise KeyboardInterrupt in this test
-        interrupts.clear()
+        cli._send_again(signal.SIGINT, dropped_at)  # a SIGINT here would raise KeyboardInterrupt in this test
         cli._finished.clear()
-        cli._send_again(signal.SIGINT)  # nothing pending
+        interrupts.note(KeyboardInterrupt)  # raised again since
+        cli._send_again(signal.SIGINT, dropped_at)
+        interrupts.clear()
+        cli._send_again(signal.SIGINT, interrupts.raised())  # nothing pending
         for _ in range(100):
             time.sleep(0.001)
     finally:
