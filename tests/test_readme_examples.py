@@ -1,10 +1,16 @@
 """Every ``motion2video`` example of the README and of docs/cli.md runs as written.
 
 The examples are read out of the code blocks of README.md, then docs/cli.md, at test time (a continued line
-with its ``\\`` joined), and run in that order (an example both give runs once) with the installed command, from
-a working folder laid out like a fresh clone beside ``../shared``: ``demo_inputs/`` and ``scripts/`` of this
-checkout are linked in, ``out/`` and ``runs/`` start empty, so the examples write their own outputs and never
-over anything of the checkout.
+with its ``\\`` joined), and run in that order (an example both give runs once), from a working folder laid out
+like a fresh clone beside ``../shared``: ``demo_inputs/`` and ``scripts/`` of this checkout are linked in, ``out/``
+and ``runs/`` start empty, so the examples write their own outputs and never over anything of the checkout.
+
+Each example runs through :func:`motion2video.cli.main`, the function the installed ``motion2video`` command
+calls, in the test's own process (its working folder, output, torch threads, signal handlers and unraisable hook
+set for the example and restored after it), so torch, Anny, MediaPipe and the renderers load once per part
+rather than once per example. ``batch``, which starts worker processes of its own, runs as a process of its own;
+so do the tests of tests/test_interrupts.py and tests/test_determinism.py, which check the command as a process
+(signals, exit codes, results across processes), and :func:`test_the_installed_command_runs_the_cli_main`.
 
 Training examples run with tiny step counts (``--steps 2``; ``train-frames`` also renders only 8 training
 sequences, unless it fine-tunes on a ``--video``): that is the only change made to any command. The cluster
@@ -14,11 +20,15 @@ example is left out because it needs a running multi-node Ray cluster (``--addre
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import shlex
+import signal
 import subprocess
 import sys
+import traceback
 from pathlib import Path
 
 import pytest
@@ -106,6 +116,47 @@ def example_parts() -> dict[str, list[str]]:
     return parts
 
 
+OWN_PROCESS = ("batch",)  # commands that start worker processes of their own: run as the installed command
+
+
+def run_in_this_process(argv: list[str], work: Path) -> tuple[int, str]:
+    """``motion2video`` ``argv[1:]`` through :func:`motion2video.cli.main` in this process, from ``work``, on one
+    torch thread: (exit code, its output). What the command changes of the process (working folder, torch
+    threads, signal handlers, unraisable hook) is put back after it."""
+    import torch
+
+    from motion2video.cli import main
+
+    before = (os.getcwd(), torch.get_num_threads(), signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM),
+              sys.unraisablehook)
+    output = io.StringIO()
+    os.chdir(work)
+    torch.set_num_threads(1)
+    try:
+        with contextlib.redirect_stdout(output), contextlib.redirect_stderr(output):
+            code = main(argv[1:])
+    except SystemExit as err:  # argparse's usage errors
+        code = err.code if isinstance(err.code, int) else 2
+    except Exception:  # a traceback is a failure of the example, reported with it
+        code = 1
+        output.write(traceback.format_exc())
+    finally:
+        os.chdir(before[0])
+        torch.set_num_threads(before[1])
+        signal.signal(signal.SIGINT, before[2])
+        signal.signal(signal.SIGTERM, before[3])
+        sys.unraisablehook = before[4]
+    return code, output.getvalue()
+
+
+def run_in_own_process(argv: list[str], work: Path) -> tuple[int, str]:
+    """``motion2video`` ``argv[1:]`` as the installed command, from ``work``: (exit code, its output)."""
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "PYOPENGL_PLATFORM": os.environ.get("PYOPENGL_PLATFORM", "osmesa")}
+    run = subprocess.run([sys.executable, "-m", "motion2video.cli", *argv[1:]], cwd=work, env=env,
+                         capture_output=True, text=True, timeout=900)
+    return run.returncode, run.stderr or run.stdout
+
+
 def run_examples(commands: list[str], tmp_path: Path) -> None:
     """Run ``commands`` in order in a working folder laid out like a fresh clone beside ``../shared``; fails with
     every command that exited non-zero."""
@@ -116,17 +167,31 @@ def run_examples(commands: list[str], tmp_path: Path) -> None:
     os.symlink(SHARED, tmp_path / "shared")
     for name in ("demo_inputs", "scripts"):
         os.symlink(ROOT / name, work / name)
-    env = {**os.environ, "OMP_NUM_THREADS": "1", "PYOPENGL_PLATFORM": os.environ.get("PYOPENGL_PLATFORM", "osmesa")}
     failures = []
     for command in commands:
         if any(flag in command for flag in NEEDS_A_CLUSTER):
             continue
         argv = tiny(shlex.split(command))
-        run = subprocess.run([sys.executable, "-m", "motion2video.cli", *argv[1:]], cwd=work, env=env,
-                             capture_output=True, text=True, timeout=900)
-        if run.returncode != 0:
-            failures.append(f"{command}\n  exit {run.returncode}: {(run.stderr or run.stdout).strip()[-400:]}")
+        run = run_in_own_process if argv[1] in OWN_PROCESS else run_in_this_process
+        code, output = run(argv, work)
+        if code != 0:
+            failures.append(f"{command}\n  exit {code}: {output.strip()[-400:]}")
     assert not failures, "documented examples that fail:\n" + "\n".join(failures)
+
+
+def test_the_installed_command_runs_the_cli_main(tmp_path):
+    """The ``motion2video`` command pip installed beside this interpreter is :func:`motion2video.cli.main`: its
+    version, and a missing input as one line naming the file with exit 2."""
+    from motion2video import __version__
+
+    command = Path(sys.executable).parent / "motion2video"
+    version = subprocess.run([command, "--version"], capture_output=True, text=True, timeout=120)
+    assert version.returncode == 0 and version.stdout.strip() == f"motion2video {__version__}"
+    missing = subprocess.run([command, "render", "missing.bvh", "-o", "walk.mp4"], cwd=tmp_path,
+                             capture_output=True, text=True, timeout=300)
+    lines = missing.stderr.strip().splitlines()
+    assert missing.returncode == 2 and len(lines) == 1 and "missing.bvh" in lines[0], missing.stderr
+    assert list(tmp_path.iterdir()) == []
 
 
 def part_test(part: str):
