@@ -26,6 +26,25 @@ def test_ade_fde_are_best_of_k():
     np.testing.assert_allclose(M.displacement(pred, gt), [[[5.0, 0.0], [1.0, 2.0]]])
 
 
+def test_best_of_k_scores_from_one_displacement_match_the_single_metrics():
+    """ADE, FDE and ADE per frame computed once from the displacements equal the functions that compute each."""
+    rng = np.random.default_rng(3)
+    pred, gt = rng.normal(size=(7, 5, 9, 6)), rng.normal(size=(7, 9, 6))
+    best = M.best_of_k_displacements(M.displacement(pred, gt))
+    np.testing.assert_array_equal(best["ade"], M.ade_per_window(pred, gt))
+    np.testing.assert_allclose(best["fde"], np.linalg.norm(pred[:, :, -1] - gt[:, None, -1], axis=-1).min(axis=1))
+    np.testing.assert_array_equal(best["fde"], M.fde_per_window(pred, gt))
+    np.testing.assert_array_equal(best["ade_per_frame"], M.ade_per_frame(pred, gt))
+
+
+def test_liveliness_of_windows_averages_to_the_liveliness_of_any_set_of_them():
+    rng = np.random.default_rng(4)
+    seq = rng.normal(size=(6, 3, 10, 4)).cumsum(axis=2)
+    vel, acc = M.liveliness_per_window(seq)
+    for idx in (np.arange(6), np.array([1, 4]), np.array([5])):
+        np.testing.assert_allclose((vel[idx].mean(), acc[idx].mean()), M.liveliness(seq[idx]), rtol=1e-12)
+
+
 def test_framewise_oracle_takes_the_closest_sample_at_each_frame():
     pred, gt = _pred_gt()  # frame 0: min(5, 1) = 1; frame 1: min(0, 2) = 0
     np.testing.assert_allclose(M.framewise_oracle_ade_per_window(pred, gt), [0.5])

@@ -163,13 +163,16 @@ def rigid_vectors(pred: np.ndarray, last_observed: np.ndarray) -> np.ndarray:
 
 
 def dlow_metrics_per_window(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
-                            threshold: float) -> dict[str, np.ndarray]:
+                            threshold: float, displacements: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """ADE, FDE, MMADE, MMFDE and APD of each window: metric-space samples pred (N, K, T, D) against gt
-    (N, T, D), the multimodal ground truth drawn from all N windows -> name -> (N,)."""
+    (N, T, D), the multimodal ground truth drawn from all N windows -> name -> (N,). ``displacements``: their
+    :func:`~motion2video.evaluation.metrics.displacement` (N, K, T) when the caller has it already."""
     groups = M.multimodal_ground_truth(last_observed, threshold=threshold)
+    d = M.displacement(pred, gt) if displacements is None else displacements
+    best = M.best_of_k_displacements(d)
     return {
-        "ade": M.ade_per_window(pred, gt),
-        "fde": M.fde_per_window(pred, gt),
+        "ade": best["ade"],
+        "fde": best["fde"],
         "mmade": M.multimodal_per_window(pred, gt, groups, final=False),
         "mmfde": M.multimodal_per_window(pred, gt, groups, final=True),
         "apd": M.apd_per_window(pred),
@@ -183,12 +186,19 @@ def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
     return {k: float(v.mean()) for k, v in per_window.items()}
 
 
-def liveliness_ratios(samples: np.ndarray, truth: np.ndarray) -> dict[str, float]:
+def liveliness_ratios(samples: np.ndarray, truth: np.ndarray, groups: dict[str, np.ndarray]
+                      ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
     """How lively samples (N, K, T, F) are against the true futures (N, T, F), un-normalised features:
     ``velocity_ratio`` and ``acceleration_ratio`` of their mean absolute velocity / acceleration
-    (:func:`motion2video.evaluation.metrics.liveliness`)."""
-    (v, a), (v_true, a_true) = M.liveliness(samples), M.liveliness(truth)
-    return {"velocity_ratio": v / v_true, "acceleration_ratio": a / a_true}
+    (:func:`motion2video.evaluation.metrics.liveliness`), over all windows and over each group of window indices
+    (name -> (M,)): (all, name -> ratios)."""
+    (v, a), (v_true, a_true) = M.liveliness_per_window(samples), M.liveliness_per_window(truth)
+
+    def ratios(idx) -> dict[str, float]:
+        return {"velocity_ratio": float(v[idx].mean() / v_true[idx].mean()),
+                "acceleration_ratio": float(a[idx].mean() / a_true[idx].mean())}
+
+    return ratios(slice(None)), {name: ratios(idx) for name, idx in groups.items()}
 
 
 def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol: EvalProtocol,
@@ -244,7 +254,8 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
         pred = to_metric(samples)
         if protocol.rigid_bones and layout.kind == "body3d":
             pred = rigid_vectors(pred, last)
-        per_window = dlow_metrics_per_window(pred, gt, last, threshold=threshold)
+        displacements = M.displacement(pred, gt)  # (N, K, T), once for ADE, FDE and ADE per frame
+        per_window = dlow_metrics_per_window(pred, gt, last, threshold=threshold, displacements=displacements)
         bandwidth = None
         if extended:
             per_window["s_mse"] = M.best_of_k_mse_per_window(pred, gt)
@@ -266,10 +277,12 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
         by_action = per_action_means(per_window, actions)
         # how lively the samples are against the true futures (all features, root included; before rigid_bones)
         lively, truth = own.denormalize(samples), windows.raw[:, obs_len:]
-        row.update(liveliness_ratios(lively, truth))
-        for action, idx in actions.items():
-            by_action[action].update(liveliness_ratios(lively[idx], truth[idx]))
-        result.ade_per_frame[bundle.label] = [float(v) for v in M.ade_per_frame(pred, gt)]
+        pooled, per_action = liveliness_ratios(lively, truth, actions)
+        row.update(pooled)
+        for action, ratios in per_action.items():
+            by_action[action].update(ratios)
+        per_frame = M.best_of_k_displacements(displacements)["ade_per_frame"]
+        result.ade_per_frame[bundle.label] = [float(v) for v in per_frame]
         result.results[bundle.label] = {k: float(v) for k, v in row.items()}
         result.per_action[bundle.label] = by_action
         result.macro[bundle.label] = macro_average(by_action)

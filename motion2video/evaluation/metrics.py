@@ -62,20 +62,28 @@ def displacement(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
 
 def ade_per_window(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     """(N,) best-of-K average displacement error: min over K of the mean over T of the L2 distance."""
-    return displacement(pred, gt).mean(axis=2).min(axis=1)
+    return best_of_k_displacements(displacement(pred, gt))["ade"]
 
 
 def fde_per_window(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     """(N,) best-of-K final displacement error: min over K of the L2 distance at the last frame."""
-    return displacement(pred, gt)[:, :, -1].min(axis=1)
+    return best_of_k_displacements(displacement(pred[:, :, -1:], gt[:, -1:]))["fde"]
 
 
 def ade_per_frame(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     """(T,) the displacement at each future frame of each window's best-of-K sample (the sample with the
     lowest ADE), averaged over windows; its mean over T is :func:`ade`."""
-    d = displacement(pred, gt)  # (N, K, T)
-    best = d.mean(axis=2).argmin(axis=1)  # (N,)
-    return d[np.arange(d.shape[0]), best].mean(axis=0)
+    return best_of_k_displacements(displacement(pred, gt))["ade_per_frame"]
+
+
+def best_of_k_displacements(d: np.ndarray) -> dict[str, np.ndarray]:
+    """The best-of-K scores of per-frame displacements d (N, K, T) (:func:`displacement`), computed from them
+    once: ``ade`` (N,) and ``fde`` (N,) as :func:`ade_per_window` and :func:`fde_per_window`, ``ade_per_frame``
+    (T,) as :func:`ade_per_frame`."""
+    mean = d.mean(axis=2)  # (N, K)
+    best = mean.argmin(axis=1)  # (N,)
+    return {"ade": mean.min(axis=1), "fde": d[:, :, -1].min(axis=1),
+            "ade_per_frame": d[np.arange(d.shape[0]), best].mean(axis=0)}
 
 
 def framewise_oracle_ade_per_window(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
@@ -303,6 +311,16 @@ def liveliness(seq: np.ndarray) -> tuple[float, float]:
     sequences, per frame (units of the features per frame, per frame^2)."""
     s = _f64(seq)
     return float(np.abs(np.diff(s, 1, axis=-2)).mean()), float(np.abs(np.diff(s, 2, axis=-2)).mean())
+
+
+def liveliness_per_window(seq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`liveliness` of each window of (N, ..., T, F) sequences: two (N,) arrays. Every window holds as many
+    values, so the mean over any set of windows is :func:`liveliness` of that set (to float rounding)."""
+    s = _f64(seq)
+    n = s.shape[0]
+    vel = np.diff(s, 1, axis=-2)
+    acc = np.diff(vel, 1, axis=-2)
+    return np.abs(vel).reshape(n, -1).mean(axis=1), np.abs(acc).reshape(n, -1).mean(axis=1)
 
 
 def sequence_descriptor(seq: np.ndarray) -> np.ndarray:
