@@ -8,6 +8,7 @@
     python scripts/bench.py sampling --json out/bench_sampling.json   # batched vs one-at-a-time sampling
     python scripts/bench.py long-bvh --json out/bench_long_bvh.json   # peak memory of render on a long capture
     python scripts/bench.py mesh-video --json out/bench_mesh_video.json  # mesh generator videos at 256 and 512
+    python scripts/bench.py transfer-fit --json out/bench_transfer_fit.json  # transfer's decoder fits: alone vs side by side
 
 ``python scripts/bench.py SUB-COMMAND --help`` describes each record's keys. The numbers move with the machine's
 load: every record carries the load average and the versions it was measured with.
@@ -1254,6 +1255,62 @@ def mesh_video_main(argv: list[str] | None = None) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# transfer-fit: behaviour transfer's decoder fits, one source at a time against side by side
+# ----------------------------------------------------------------------------------------------------------------
+
+
+TRANSFER_FIT_DOC = """Behaviour transfer's re-enactments (``stages.latents.reenact_sources``), each decoder fitted alone
+against all of them side by side (the decoders' weights stacked, one vmapped step for all), on one torch thread.
+
+    python scripts/bench.py transfer-fit --json out/bench_transfer_fit.json [--sources 8]
+
+The sources are the first --sources pairs of the transfer benchmark's held-out cases (real CMU jumps, kicks and
+walks retargeted onto other subjects' postures, fitted for ``ADAPT_STEPS`` steps as ``motion2video transfer``
+fits them), for the shipped ``behavior`` model. Both ways run in one process, alone first; each is timed once (a
+fit takes seconds).
+
+JSON keys: ``alone_s_per_source``, ``side_by_side_s_per_source``, ``speedup`` (the first over the second),
+``joint_difference_m`` (max and mean distance between a joint re-enacted alone and side by side: the stacked
+arithmetic rounds differently, and 300 Adam steps carry that a little way), plus the settings.
+"""
+
+
+def transfer_fit_main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=TRANSFER_FIT_DOC.split("\n\n")[0])
+    parser.add_argument("--json", required=True, type=Path, help="output JSON")
+    parser.add_argument("--sources", type=int, default=8)
+    args = parser.parse_args(argv)
+    from motion2video import load_model
+    from motion2video.evaluation import transfer_benchmark as B
+    from motion2video.stages.latents import ADAPT_STEPS, reenact_source, reenact_sources
+
+    torch.set_num_threads(1)
+    bundle = load_model("behavior")
+    pairs = []
+    for case in (c for c in B.CASES if c.split == "held-out"):
+        clip = B.load_clip_25(str(MOCAP), case.clip)
+        pairs += [(clip[case.start:case.start + 1 + case.horizon], B.load_clip_25(str(MOCAP), t[0])[t[1]])
+                  for t in B.targets_for(case)]
+    length = len(pairs[0][0])
+    pairs = [p for p in pairs if len(p[0]) == length][:args.sources]  # one length: one side-by-side fit
+    start = time.perf_counter()
+    alone = np.stack([reenact_source(bundle, source, posture)[1][0] for source, posture in pairs])
+    alone_s = (time.perf_counter() - start) / len(pairs)
+    start = time.perf_counter()
+    together = reenact_sources(bundle, np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs]))[1]
+    together_s = (time.perf_counter() - start) / len(pairs)
+    apart = np.linalg.norm(alone - together, axis=-1)
+    result = {"machine": machine(), "sources": len(pairs), "steps": ADAPT_STEPS, "threads": 1,
+              "alone_s_per_source": round(alone_s, 2), "side_by_side_s_per_source": round(together_s, 2),
+              "speedup": round(alone_s / together_s, 2),
+              "joint_difference_m": {"max": round(float(apart.max()), 4), "mean": round(float(apart.mean()), 5)}}
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(result, indent=2) + "\n")
+    print(json.dumps(result, indent=2))
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------------------------
 
 COMMANDS = {
     "render": (render_main, RENDER_DOC),
@@ -1264,6 +1321,7 @@ COMMANDS = {
     "sampling": (sampling_main, SAMPLING_DOC),
     "long-bvh": (long_bvh_main, LONG_BVH_DOC),
     "mesh-video": (mesh_video_main, MESH_VIDEO_DOC),
+    "transfer-fit": (transfer_fit_main, TRANSFER_FIT_DOC),
 }
 
 

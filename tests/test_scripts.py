@@ -26,7 +26,8 @@ def test_scripts_are_few_and_import_the_package():
 
 
 @pytest.mark.parametrize("script, subcommands", [
-    ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh", "mesh-video")),
+    ("bench", ("render", "batch", "frames", "pipeline", "pose", "sampling", "long-bvh", "mesh-video",
+               "transfer-fit")),
     ("make_results", ("forecasting", "card", "corpus", "known-answer", "per-action", "five-minute-models",
                       "skeleton-figure", "frames", "frames-analysis", "frames-real", "transfer",
                       "transfer-benchmark", "transfer-unseen", "face-sheet", "bandai")),

@@ -157,6 +157,26 @@ def test_adapting_the_decoder_fits_the_source_and_leaves_the_model_as_it_was(ckp
     assert np.abs(as_trained.reenacted[0, 1:] - fitted.reenacted[0, 1:]).max() > 1e-3
 
 
+def test_decoders_fitted_side_by_side_move_as_each_fitted_alone(ckpts, clips):
+    """adapt_to_sources fits one decoder copy per source in one vmapped loop: each ends where fitting it alone
+    (adapt_to_source) ends, to float rounding, and differs from the other source's."""
+    from motion2video.stages.latents import adapt_to_source, adapt_to_sources, behavior_latents, encode_sequences
+
+    bundle = load_model(ckpts["behavior"])
+    model = bundle.model
+    data = load_clip(bundle, clips["source"]).data
+    feats, _ = encode_sequences(bundle, np.stack([data[40:40 + 1 + HORIZON], data[10:10 + 1 + HORIZON]]))
+    z = behavior_latents(model, feats)
+    together = adapt_to_sources(model, feats, z, steps=20)
+    alone = [adapt_to_source(model, feats[i:i + 1], z[i:i + 1], steps=20) for i in range(2)]
+    for a, b in zip(together, alone):
+        for (key, x), y in zip(a.decoder.state_dict().items(), b.decoder.state_dict().values()):
+            torch.testing.assert_close(x, y, atol=1e-5, rtol=1e-4, msg=key)
+    first, second = (m.decoder.state_dict()["out.weight"] for m in together)
+    assert not torch.allclose(first, second)
+    assert adapt_to_sources(model, feats, z, steps=0) == [model, model]
+
+
 def test_flow_samples_grid_is_seeded(ckpts, clips, tmp_path):
     paths = {}
     for name, seed in (("a", 3), ("b", 3), ("c", 4)):

@@ -272,14 +272,14 @@ def _window_before(clip: np.ndarray, frame: int, length: int) -> np.ndarray:
 def transfer_reenactments(bundle, sources: np.ndarray, postures: np.ndarray, *, adapt_steps: int | None = None
                           ) -> np.ndarray:
     """A behaviour model's re-enactments: sources (N, 1 + H, 17, 3), postures (N, 17, 3) -> (N, 1 + H, 17, 3)
-    (the target posture, then H generated frames), exactly as ``motion2video transfer`` makes them
-    (:func:`motion2video.stages.latents.reenact_source`: the decoder fitted for ``adapt_steps`` steps, default
-    ``ADAPT_STEPS`` as the command, to each source retargeted onto each posture; 0: as trained)."""
-    from motion2video.stages.latents import ADAPT_STEPS, reenact_source
+    (the target posture, then H generated frames), as ``motion2video transfer`` makes them
+    (:func:`motion2video.stages.latents.reenact_sources`: a decoder fitted for ``adapt_steps`` steps, default
+    ``ADAPT_STEPS`` as the command, to each source retargeted onto its posture, all N side by side; 0: as
+    trained). The sources must have one length."""
+    from motion2video.stages.latents import ADAPT_STEPS, reenact_sources
 
     steps = ADAPT_STEPS if adapt_steps is None else adapt_steps
-    return np.stack([reenact_source(bundle, src, post, adapt_steps=steps)[1][0]
-                     for src, post in zip(sources, postures)])
+    return reenact_sources(bundle, np.asarray(sources), np.asarray(postures), adapt_steps=steps)[1]
 
 
 def analogy_reenactments(bundle, a_b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -295,8 +295,8 @@ def analogy_reenactments(bundle, a_b: np.ndarray, c: np.ndarray) -> np.ndarray:
 def run_benchmark(mocap: str, *, transfer=None, analogy=None, cases=CASES, adapt_steps: int | None = None
                   ) -> list[PairResult]:
     """Every case x target, re-enacted by ``transfer`` (a behaviour bundle; its decoder adapted to each source
-    for ``adapt_steps`` steps, default as ``motion2video transfer``), ``analogy`` (an MT-VAE bundle) and the copy
-    baseline (either bundle may be None)."""
+    for ``adapt_steps`` steps, default as ``motion2video transfer``, every pair of every case fitted side by
+    side), ``analogy`` (an MT-VAE bundle) and the copy baseline (either bundle may be None)."""
     clips: dict[str, np.ndarray] = {}
 
     def clip(name: str) -> np.ndarray:
@@ -304,25 +304,33 @@ def run_benchmark(mocap: str, *, transfer=None, analogy=None, cases=CASES, adapt
             clips[name] = load_clip_25(mocap, name)
         return clips[name]
 
-    results: list[PairResult] = []
+    pairs = []  # (case, target, source (1 + H, 17, 3), posture (17, 3)) for every case x target
     for case in cases:
         data = clip(case.clip)
         if case.start + 1 + case.horizon > len(data):
             raise ValueError(f"{case.clip}: {len(data)} frames at 25 fps, too short for {case}")
         source = data[case.start:case.start + 1 + case.horizon]
-        targets = targets_for(case)
-        postures = np.stack([clip(t[0])[t[1]] for t in targets])  # (N, 17, 3)
-        n = len(targets)
-        made = {"copy": np.stack([copy_reenactment(source, p) for p in postures])}
-        if transfer is not None:
-            made["transfer"] = transfer_reenactments(transfer, np.repeat(source[None], n, axis=0), postures,
-                                                     adapt_steps=adapt_steps)
-        if analogy is not None:
+        pairs += [(case, t, source, clip(t[0])[t[1]]) for t in targets_for(case)]
+    made: dict[str, list[np.ndarray]] = {"copy": [copy_reenactment(src, post) for _, _, src, post in pairs]}
+    if transfer is not None:  # the sources differ in length between cases: one fit per length, side by side
+        made["transfer"] = [None] * len(pairs)
+        for length in sorted({len(src) for _, _, src, _ in pairs}):
+            rows = [i for i, (_, _, src, _) in enumerate(pairs) if len(src) == length]
+            seqs = transfer_reenactments(transfer, np.stack([pairs[i][2] for i in rows]),
+                                         np.stack([pairs[i][3] for i in rows]), adapt_steps=adapt_steps)
+            for i, seq in zip(rows, seqs):
+                made["transfer"][i] = seq
+    if analogy is not None:
+        made["analogy"] = []
+        for case in cases:
+            data, targets = clip(case.clip), targets_for(case)
+            source = data[case.start:case.start + 1 + case.horizon]
             a = _window_before(data, case.start, CONTEXT)
-            a_b = np.concatenate([a, source[1:]])[None].repeat(n, axis=0)
+            a_b = np.concatenate([a, source[1:]])[None].repeat(len(targets), axis=0)
             c = np.stack([_window_before(clip(t[0]), t[1], CONTEXT) for t in targets])
-            made["analogy"] = analogy_reenactments(analogy, a_b, c)
-        for method, seqs in made.items():
-            for t, seq, post in zip(targets, seqs, postures):
-                results.append(score(method, case, (t[0], t[1]), source, post, seq))
+            made["analogy"] += list(analogy_reenactments(analogy, a_b, c))
+    results: list[PairResult] = []
+    for (case, target, source, posture), *seqs in zip(pairs, *made.values()):
+        results += [score(method, case, (target[0], target[1]), source, posture, seq)
+                    for method, seq in zip(made, seqs)]
     return results
