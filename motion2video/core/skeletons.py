@@ -274,10 +274,12 @@ def bone_lengths(joints: np.ndarray, parents: tuple[int, ...] = H36M_17.parents)
 
 def with_bone_lengths(joints: np.ndarray, lengths: np.ndarray,
                       parents: tuple[int, ...] = H36M_17.parents) -> np.ndarray:
-    """Rigid bones: (..., J, D) joints with every bone rescaled along its own direction to ``lengths`` (J,)
-    (from :func:`bone_lengths`; the root's entry is ignored), walking down the tree from the root, which stays
-    where it is. A bone of zero length keeps its parent's position."""
+    """Rigid bones: (..., J, D) joints with every bone rescaled along its own direction to ``lengths`` (J,), or
+    lengths per sequence that broadcast against the joints' (..., J) (from :func:`bone_lengths`; the root's entry
+    is ignored), walking down the tree from the root, which stays where it is. A bone of zero length keeps its
+    parent's position."""
     j = np.asarray(joints, np.float64)
+    lengths = np.asarray(lengths, np.float64)
     out = j.copy()
     for i, p in enumerate(parents):  # parents come before their children in every skeleton here
         if p < 0:
@@ -285,7 +287,7 @@ def with_bone_lengths(joints: np.ndarray, lengths: np.ndarray,
         d = j[..., i, :] - j[..., p, :]
         norm = np.linalg.norm(d, axis=-1, keepdims=True)
         unit = np.divide(d, norm, out=np.zeros_like(d), where=norm > 1e-12)
-        out[..., i, :] = out[..., p, :] + unit * float(lengths[i])
+        out[..., i, :] = out[..., p, :] + unit * lengths[..., i, None]
     return out
 
 

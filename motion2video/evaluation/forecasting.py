@@ -19,6 +19,7 @@ import torch
 
 from motion2video.core.atomic import write_json
 from motion2video.core.errors import InputError
+from motion2video.core.skeletons import bone_lengths, with_bone_lengths
 from motion2video.evaluation import metrics as M
 from motion2video.evaluation.plots import plot_ade_per_frame
 from motion2video.models.baselines import BASELINES
@@ -29,7 +30,7 @@ from motion2video.data.dataset import WindowSet, build_dataset
 from motion2video.data.windows import FeatureLayout, metric_vectors
 from motion2video.evaluation.per_action import (COUNT_KEY, family_key, group_by_action, macro_average, per_action_means,
                                                 subject_split_report)
-from motion2video.stages.sampling import as_model_input, keep_bone_lengths
+from motion2video.stages.sampling import as_model_input
 from motion2video.stages.sampling import sample_futures
 
 # DLow's multimodal threshold is 0.5 m on H36M; the others give a similar share of neighbours here.
@@ -152,14 +153,15 @@ def posterior_futures(model: torch.nn.Module, obs: np.ndarray, future: np.ndarra
 def rigid_vectors(pred: np.ndarray, last_observed: np.ndarray) -> np.ndarray:
     """Body3d metric vectors (root-relative non-root joints) of samples pred (N, K, T, 48) with every frame's
     bones set to the lengths of the window's last observed frame last_observed (N, 48), directions kept
-    (:func:`motion2video.stages.sampling.keep_bone_lengths`; bone lengths do not depend on the root)."""
+    (:func:`motion2video.core.skeletons.with_bone_lengths`, as ``sample --rigid-bones``; bone lengths do not
+    depend on the root)."""
     def joints(v: np.ndarray) -> np.ndarray:  # (..., 48) -> (..., 17, 3), the root at the origin
         j = v.reshape(*v.shape[:-1], -1, 3)
         return np.concatenate([np.zeros_like(j[..., :1, :]), j], axis=-2)
 
-    out = [keep_bone_lengths(joints(p), joints(last))[..., 1:, :].reshape(p.shape)
-           for p, last in zip(np.asarray(pred, np.float64), np.asarray(last_observed, np.float64))]
-    return np.stack(out)
+    pred = np.asarray(pred, np.float64)
+    lengths = bone_lengths(joints(np.asarray(last_observed, np.float64)))[:, None, None]  # (N, 1, 1, 17)
+    return with_bone_lengths(joints(pred), lengths)[..., 1:, :].reshape(pred.shape)
 
 
 def dlow_metrics_per_window(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
