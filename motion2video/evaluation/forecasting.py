@@ -165,13 +165,11 @@ def rigid_vectors(pred: np.ndarray, last_observed: np.ndarray) -> np.ndarray:
 
 
 def dlow_metrics_per_window(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
-                            threshold: float, displacements: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                            threshold: float) -> dict[str, np.ndarray]:
     """ADE, FDE, MMADE, MMFDE and APD of each window: metric-space samples pred (N, K, T, D) against gt
-    (N, T, D), the multimodal ground truth drawn from all N windows -> name -> (N,). ``displacements``: their
-    :func:`~motion2video.evaluation.metrics.displacement` (N, K, T) when the caller has it already."""
+    (N, T, D), the multimodal ground truth drawn from all N windows -> name -> (N,)."""
     groups = M.multimodal_ground_truth(last_observed, threshold=threshold)
-    d = M.displacement(pred, gt) if displacements is None else displacements
-    best = M.best_of_k_displacements(d)
+    best = M.best_of_k_displacements(M.displacement(pred, gt))
     return {
         "ade": best["ade"],
         "fde": best["fde"],
@@ -188,19 +186,37 @@ def dlow_metrics(pred: np.ndarray, gt: np.ndarray, last_observed: np.ndarray, *,
     return {k: float(v.mean()) for k, v in per_window.items()}
 
 
-def liveliness_ratios(samples: np.ndarray, truth: np.ndarray, groups: dict[str, np.ndarray]
-                      ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
-    """How lively samples (N, K, T, F) are against the true futures (N, T, F), un-normalised features:
-    ``velocity_ratio`` and ``acceleration_ratio`` of their mean absolute velocity / acceleration
-    (:func:`motion2video.evaluation.metrics.liveliness`), over all windows and over each group of window indices
-    (name -> (M,)): (all, name -> ratios)."""
-    (v, a), (v_true, a_true) = M.liveliness_per_window(samples), M.liveliness_per_window(truth)
+def liveliness_ratios(samples: tuple[np.ndarray, np.ndarray], truth: tuple[np.ndarray, np.ndarray],
+                      groups: dict[str, np.ndarray]) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
+    """How lively samples are against the true futures: ``velocity_ratio`` and ``acceleration_ratio`` of their
+    mean absolute velocity / acceleration over all windows and over each group of window indices (name -> (M,)).
+
+    Args:
+        samples, truth: per window (N,) each, the mean absolute velocity and acceleration of the samples
+            (N, K, T, F) and of the true futures (N, T, F), un-normalised features
+            (:func:`motion2video.evaluation.metrics.liveliness_per_window`).
+    Returns:
+        (all windows' ratios, group name -> its ratios).
+    """
+    (v, a), (v_true, a_true) = samples, truth
 
     def ratios(idx) -> dict[str, float]:
         return {"velocity_ratio": float(v[idx].mean() / v_true[idx].mean()),
                 "acceleration_ratio": float(a[idx].mean() / a_true[idx].mean())}
 
     return ratios(slice(None)), {name: ratios(idx) for name, idx in groups.items()}
+
+
+# Windows scored at a time: a block's float64 samples stay under this many bytes. Arrays this small are reused from
+# the heap block after block, where whole-test-set arrays (300 MB at 301 windows x 50 samples) were fresh pages
+# every time: a third of evaluate's time went to the kernel, and its peak memory was several of them.
+BLOCK_BYTES = 16 << 20
+
+
+def window_blocks(n: int, row_bytes: int) -> list[slice]:
+    """``n`` windows in blocks of at most :data:`BLOCK_BYTES` at ``row_bytes`` a window (at least one each)."""
+    size = max(1, BLOCK_BYTES // max(1, row_bytes))
+    return [slice(i, min(n, i + size)) for i in range(0, n, size)]
 
 
 def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol: EvalProtocol,
@@ -228,6 +244,7 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
     last = metric_vectors(windows.raw[:, obs_len - 1], layout)  # (N, D)
     threshold = protocol.threshold(layout)
     groups = M.multimodal_ground_truth(last, threshold=threshold)
+    true_moves = M.liveliness_per_window(windows.raw[:, obs_len:])  # the true futures' (all features)
     actions = group_by_action(windows.labels)
     result = EvalResult(protocol={
         **dataclasses.asdict(protocol), "mm_threshold": threshold, "layout": layout.kind,
@@ -252,19 +269,11 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
 
         samples = sample_futures(bundle.model, renorm(windows.obs), num_samples=protocol.samples,
                                  horizon=horizon, seed=protocol.seed, batch_size=protocol.batch_size,
-                                 continue_motion=protocol.continue_motion)
-        pred = to_metric(samples)
-        if protocol.rigid_bones and layout.kind == "body3d":
-            pred = rigid_vectors(pred, last)
-        displacements = M.displacement(pred, gt)  # (N, K, T), once for ADE, FDE and ADE per frame
-        per_window = dlow_metrics_per_window(pred, gt, last, threshold=threshold, displacements=displacements)
-        bandwidth = None
+                                 continue_motion=protocol.continue_motion)  # (N, K, T, F) normalised
+        rec, bandwidth = None, None
         if extended:
-            per_window["s_mse"] = M.best_of_k_mse_per_window(pred, gt)
             rec = posterior_futures(bundle.model, renorm(windows.obs), renorm(windows.future), num_samples=protocol.samples,
                                     seed=protocol.seed, batch_size=protocol.batch_size)
-            if rec is not None:
-                per_window["r_mse"] = M.best_of_k_mse_per_window(to_metric(rec), gt)
             if val_windows is not None and len(val_windows) > 0:
                 val_pred = to_metric(sample_futures(bundle.model, renorm(val_windows.obs), num_samples=protocol.samples,
                                                     horizon=horizon, seed=protocol.seed + 1,
@@ -272,19 +281,40 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
                                                     continue_motion=protocol.continue_motion))
                 val_gt = metric_vectors(val_windows.raw[:, obs_len:], layout)
                 bandwidth = M.select_parzen_bandwidth(val_pred, val_gt)
-                per_window["cll"] = M.parzen_log_likelihood(pred, gt, bandwidth=bandwidth)
+        blocks: dict[str, list[np.ndarray]] = {}
+        per_frame = np.zeros(horizon)  # the best sample's displacement at each frame, summed over windows
+        for b in window_blocks(len(windows), 8 * samples[0].size):
+            lively = own.denormalize(samples[b])  # (n, K, T, F) un-normalised features, float64
+            pred = metric_vectors(lively, layout)
+            if protocol.rigid_bones and layout.kind == "body3d":
+                pred = rigid_vectors(pred, last[b])
+            best = M.best_of_k_displacements(M.displacement(pred, gt[b]))  # once for ADE, FDE and ADE per frame
+            per_frame += best["ade_per_frame"] * len(pred)
+            block = {"ade": best["ade"], "fde": best["fde"],
+                     "mmade": M.multimodal_per_window(pred, gt, groups[b], final=False),
+                     "mmfde": M.multimodal_per_window(pred, gt, groups[b], final=True),
+                     "apd": M.apd_per_window(pred)}
+            if extended:
+                block["s_mse"] = M.best_of_k_mse_per_window(pred, gt[b])
+                if rec is not None:
+                    block["r_mse"] = M.best_of_k_mse_per_window(to_metric(rec[b]), gt[b])
+                if bandwidth is not None:
+                    block["cll"] = M.parzen_log_likelihood(pred, gt[b], bandwidth=bandwidth)
+            # how lively the samples are (all features, root included; before rigid_bones)
+            block["velocity"], block["acceleration"] = M.liveliness_per_window(lively)
+            for name, values in block.items():
+                blocks.setdefault(name, []).append(values)
+        per_window = {name: np.concatenate(values) for name, values in blocks.items()}
+        moves = per_window.pop("velocity"), per_window.pop("acceleration")
         row = {k: float(v.mean()) for k, v in per_window.items()}
         if bandwidth is not None:
             row["parzen_bandwidth"] = bandwidth
         by_action = per_action_means(per_window, actions)
-        # how lively the samples are against the true futures (all features, root included; before rigid_bones)
-        lively, truth = own.denormalize(samples), windows.raw[:, obs_len:]
-        pooled, per_action = liveliness_ratios(lively, truth, actions)
+        pooled, per_action = liveliness_ratios(moves, true_moves, actions)
         row.update(pooled)
         for action, ratios in per_action.items():
             by_action[action].update(ratios)
-        per_frame = M.best_of_k_displacements(displacements)["ade_per_frame"]
-        result.ade_per_frame[bundle.label] = [float(v) for v in per_frame]
+        result.ade_per_frame[bundle.label] = [float(v) for v in per_frame / len(windows)]
         result.results[bundle.label] = {k: float(v) for k, v in row.items()}
         result.per_action[bundle.label] = by_action
         result.macro[bundle.label] = macro_average(by_action)

@@ -146,9 +146,13 @@ def multimodal_ground_truth(last_observed: np.ndarray, *, threshold: float) -> l
 
 def multimodal_per_window(pred: np.ndarray, futures: np.ndarray, groups: list[np.ndarray], *,
                           final: bool) -> np.ndarray:
-    """(N,) per window i: the mean over the futures j in ``groups[i]`` of the best-of-K ADE (``final``:
-    FDE) against future j. pred (N, K, T, D); futures (N, T, D); groups from :func:`multimodal_ground_truth`."""
-    pred, futures = _check_pred_gt(pred, futures)
+    """(n,) per window i: the mean over the futures j in ``groups[i]`` of the best-of-K ADE (``final``:
+    FDE) against future j. pred (n, K, T, D); futures (N, T, D) the ground-truth futures of all N windows, which
+    the groups index; groups from :func:`multimodal_ground_truth`, one per row of pred (pred may hold a block of
+    the N windows, with their groups)."""
+    pred, futures = _f64(pred), _f64(futures)
+    if pred.ndim != 4 or futures.ndim != 3 or pred.shape[2:] != futures.shape[1:]:
+        raise ValueError(f"need pred (n, K, T, D) and futures (N, T, D), got {pred.shape} and {futures.shape}")
     if len(groups) != pred.shape[0]:
         raise ValueError(f"need one group per window: {len(groups)} groups for {pred.shape[0]} windows")
     scores = np.empty(len(groups))
