@@ -160,10 +160,30 @@ def test_an_interrupt_swallowed_by_a_finaliser_is_delivered_again():
 
 
 
-def test_a_swallowed_interrupt_stops_the_next_video_chunk(tmp_path):
-    """Ctrl-C swallowed on its way (recorded as the CLI's handler records it): the video writer raises it at its
-    next chunk, and neither the video nor its temporary file is left; the re-sent signal a finaliser's drop started
-    is not sent any more (an interrupt was raised since)."""
+def _dropped_by_a_finaliser() -> None:
+    """What the CLI's handler records before it raises, the KeyboardInterrupt then lost in a ``__del__``."""
+    from motion2video.core import interrupts
+
+    interrupts.note(KeyboardInterrupt)
+
+
+def _dropped_by_a_library() -> None:
+    """The CLI's SIGINT handler raising inside a library's bare ``except:``, which drops it without a word (no
+    finaliser, so no unraisable hook and no re-sent signal)."""
+    from motion2video import cli
+
+    try:
+        cli._raise_interrupted(signal.SIGINT, None)
+    except BaseException:  # noqa: BLE001 - what the library does
+        pass
+
+
+@pytest.mark.parametrize("drop", [_dropped_by_a_finaliser, _dropped_by_a_library], ids=["finaliser", "library"])
+def test_a_dropped_interrupt_stops_the_next_video_chunk(drop, tmp_path):
+    """A Ctrl-C dropped on its way stays recorded: the video writer raises it at its next chunk, and neither the
+    video nor its temporary file is left; it counts as raised again, so the re-sent signal a finaliser's drop
+    started is not sent any more. Without the record, a command whose interrupt a library dropped ran on to the
+    end and exited 0 (a SIGINT'd mesh render, under load)."""
     from motion2video.core import interrupts
     from motion2video.formats.video import VideoWriter
 
@@ -173,36 +193,11 @@ def test_a_swallowed_interrupt_stops_the_next_video_chunk(tmp_path):
         with pytest.raises(KeyboardInterrupt):
             with VideoWriter(out, 25) as writer:
                 writer.write(frames)
-                interrupts.note(KeyboardInterrupt)  # what the handler records before it raises
+                drop()
                 dropped_at = interrupts.raised()
                 writer.write(frames)  # raised here
                 pytest.fail("the second chunk was encoded after the interrupt")
         assert interrupts.raised() == dropped_at + 1
-    finally:
-        interrupts.clear()
-    assert not out.exists() and _temporaries(tmp_path) == []
-
-
-def test_a_ctrl_c_a_library_drops_stops_the_command_at_the_next_chunk(tmp_path):
-    """The CLI's SIGINT handler raises inside a library's bare ``except:`` that drops the interrupt without a word
-    (no finaliser, so no re-sent signal): the interrupt stays recorded and the video writer raises it at its next
-    chunk. Without the record the command ran on to the end and exited 0 (a SIGINT'd mesh render, under load)."""
-    from motion2video import cli
-    from motion2video.core import interrupts
-    from motion2video.formats.video import VideoWriter
-
-    out = tmp_path / "clip.mp4"
-    frames = np.zeros((4, 32, 32, 3), np.uint8)
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            with VideoWriter(out, 25) as writer:
-                writer.write(frames)
-                try:
-                    cli._raise_interrupted(signal.SIGINT, None)
-                except BaseException:  # noqa: BLE001 - what the library does
-                    pass
-                writer.write(frames)
-                pytest.fail("the second chunk was encoded after the interrupt")
     finally:
         interrupts.clear()
     assert not out.exists() and _temporaries(tmp_path) == []
