@@ -169,12 +169,19 @@ def dlow_metrics_per_window(pred: np.ndarray, gt: np.ndarray, last_observed: np.
     """ADE, FDE, MMADE, MMFDE and APD of each window: metric-space samples pred (N, K, T, D) against gt
     (N, T, D), the multimodal ground truth drawn from all N windows -> name -> (N,)."""
     groups = M.multimodal_ground_truth(last_observed, threshold=threshold)
-    best = M.best_of_k_displacements(M.displacement(pred, gt))
+    return _dlow_block(pred, gt, groups, M.best_of_k_displacements(M.displacement(pred, gt)))
+
+
+def _dlow_block(pred: np.ndarray, futures: np.ndarray, groups: list[np.ndarray], best: dict[str, np.ndarray]
+                ) -> dict[str, np.ndarray]:
+    """ADE, FDE, MMADE, MMFDE and APD of a block of n windows: samples pred (n, K, T, D), the true futures of all
+    windows (N, T, D), the block's multimodal groups (n) and its :func:`~motion2video.evaluation.metrics.
+    best_of_k_displacements` -> name -> (n,)."""
     return {
         "ade": best["ade"],
         "fde": best["fde"],
-        "mmade": M.multimodal_per_window(pred, gt, groups, final=False),
-        "mmfde": M.multimodal_per_window(pred, gt, groups, final=True),
+        "mmade": M.multimodal_per_window(pred, futures, groups, final=False),
+        "mmfde": M.multimodal_per_window(pred, futures, groups, final=True),
         "apd": M.apd_per_window(pred),
     }
 
@@ -290,10 +297,7 @@ def evaluate_bundles(bundles: list[ModelBundle], windows: WindowSet, *, protocol
                 pred = rigid_vectors(pred, last[b])
             best = M.best_of_k_displacements(M.displacement(pred, gt[b]))  # once for ADE, FDE and ADE per frame
             per_frame += best["ade_per_frame"] * len(pred)
-            block = {"ade": best["ade"], "fde": best["fde"],
-                     "mmade": M.multimodal_per_window(pred, gt, groups[b], final=False),
-                     "mmfde": M.multimodal_per_window(pred, gt, groups[b], final=True),
-                     "apd": M.apd_per_window(pred)}
+            block = _dlow_block(pred, gt, groups[b], best)
             if extended:
                 block["s_mse"] = M.best_of_k_mse_per_window(pred, gt[b])
                 if rec is not None:
