@@ -459,7 +459,8 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
     if len(shown) < 2:
         return out
     points = np.asarray(uv, np.float64)[shown]
-    # float32, one coordinate at a time: this runs on every target frame, over about 150,000 pairs
+    # float32, one coordinate at a time: this runs on every target frame, over 150,000-900,000 pairs (Anny's face
+    # and hands are dense in vertices)
     at_rest = np.ascontiguousarray(np.asarray(rest, np.float32)[shown].T)  # (3, S)
 
     def apart(i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -478,9 +479,10 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
         return out
     depth = np.asarray(behind, np.float64)[shown]
     judged = np.unique(meet)  # the vertices where two surfaces meet
-    around = tree.query_ball_point(points[judged], TOUCH_SMOOTH_PX)  # each holds the vertex itself
-    centre = np.repeat(np.arange(len(judged)), [len(n) for n in around])
-    near = np.concatenate(around).astype(np.int64)
+    # each judged vertex with every shown vertex within TOUCH_SMOOTH_PX (itself included), as arrays from one query
+    # between two trees: a list per vertex (query_ball_point) took twice as long, hundreds of neighbours each
+    around = cKDTree(points[judged]).sparse_distance_matrix(tree, TOUCH_SMOOTH_PX, output_type="ndarray")
+    centre, near = around["i"].astype(np.int64), around["j"].astype(np.int64)
     own = ~apart(near, judged[centre])
     mean = np.zeros(len(shown))
     mean[judged] = (np.bincount(centre[own], weights=depth[near[own]], minlength=len(judged))
