@@ -205,6 +205,24 @@ def test_resume_continues_an_interrupted_run_exactly(tmp_path, monkeypatch):
         torch.testing.assert_close(a[key], b[key], rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.parametrize("points", [17, 470], ids=["body joints", "face landmarks"])
+def test_limb_warp_is_scikit_images_piecewise_affine_warp(points):
+    """The same pixels as scikit-image's PiecewiseAffineTransform and warp (bilinear, the border's pixels beyond
+    it) over the same control points: the body's 17 joints, a tracked face's 470 landmarks."""
+    from skimage.transform import PiecewiseAffineTransform, warp
+
+    from motion2video.generator.image_baselines import _select_points
+
+    rng = np.random.default_rng(points)
+    img = (rng.random((96, 96, 3)) * 255).astype(np.uint8)
+    ref = rng.uniform(4, 92, (points, 2))
+    tgt = ref + rng.normal(0, 3, ref.shape)
+    src_ref, src_tgt = _select_points(ref, tgt, border_anchors(96, 96), width=96, height=96)
+    tform = PiecewiseAffineTransform.from_estimate(src_tgt - 0.5, src_ref - 0.5)
+    expected = np.clip(np.rint(warp(img, tform, order=1, mode="edge", preserve_range=True)), 0, 255).astype(np.uint8)
+    np.testing.assert_array_equal(limb_warp(img, ref, tgt), expected)
+
+
 def test_copy_reference_and_limb_warp_geometry():
     rng = np.random.default_rng(0)
     img = (rng.random((48, 48, 3)) * 255).astype(np.uint8)

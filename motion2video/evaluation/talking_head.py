@@ -29,8 +29,8 @@ Per method (the generator, ``copy-reference``, ``landmark-warp`` and named basel
   are found; ``landmark_missing``: the share of generated frames where no face is found.
 
 ``landmark-warp``: a piecewise-affine warp of the reference taking its tracked landmarks to the target's
-(scikit-image, :func:`motion2video.generator.image_baselines.limb_warp`, with the 470 tracked points as the
-control points).
+(:func:`motion2video.generator.image_baselines.limb_warp`, scikit-image's piecewise-affine map, with the 470
+tracked points as the control points).
 """
 
 from __future__ import annotations
