@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -207,37 +208,47 @@ def test_evaluate_frames_poses_refuses_bad_input(tmp_path, capsys):
     face = save_frame_model(FrameGenerator(FrameGeneratorConfig(domain="face", structure_channels=1, image_size=32,
                                                                 channels=(8, 12, 16))),
                             tmp_path / "face.safetensors", step=0)
-    for flags in (["--poses", str(WALK)], ["--head"]):
-        assert main(["evaluate-frames", "--model", str(face), *flags, "--no-progress"]) == 2
-        err = capsys.readouterr().err
-        assert err.count("\n") == 1 and "needs a body frame model" in err and "face.safetensors" in err
+    assert main(["evaluate-frames", "--model", str(face), "--poses", str(WALK), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "needs a body frame model" in err and "face.safetensors" in err
 
 
 @pytest.mark.slow
-def test_held_out_split_with_heads_renders_the_cached_frames(tmp_path):
-    """The head masks of the held-out pairs come from rendering the split again: the same frames as its
-    cached shards, with the heads inside the silhouettes."""
-    from motion2video.generator.render_data import render_body_split_with_heads
+def test_head_masks_are_kept_beside_the_body_test_shards(tmp_path):
+    """A body test split keeps the visible head of every frame beside its shards: inside the silhouettes, read
+    back without rendering, and a shard without them (a cache written before they were kept) rendered again
+    with the same frames; a training split keeps none unless asked."""
+    from motion2video.generator.data import heads_file, load_or_generate_with_heads
 
     spec = tiny_spec("body", "test")
-    cached = load_or_generate(spec, cache_dir=tmp_path, progress=False)
-    rendered = render_body_split_with_heads(spec)
-    seqs, heads = rendered.sequences, rendered.head_masks
-    np.testing.assert_array_equal(seqs.images, cached.images)
-    np.testing.assert_array_equal(seqs.masks, cached.masks)
-    np.testing.assert_array_equal(seqs.points, cached.points)
+    seqs = load_or_generate(spec, cache_dir=tmp_path, progress=False)
+    shards = sorted(cache_folder(tmp_path, spec).glob("shard-*.npz"))
+    assert len(shards) == 2 and all(heads_file(p).is_file() for p in shards)
+    rendered = load_or_generate_with_heads(spec, cache_dir=tmp_path, progress=False)
+    heads = rendered.head_masks
+    np.testing.assert_array_equal(rendered.sequences.images, seqs.images)
     assert heads.shape == seqs.masks.shape and heads.any(axis=(2, 3)).all() and not np.any(heads & ~seqs.masks)
+    heads_file(shards[0]).unlink()
+    kept = shards[1].stat().st_mtime_ns
+    again = load_or_generate_with_heads(spec, cache_dir=tmp_path, progress=False)
+    np.testing.assert_array_equal(again.sequences.images, seqs.images)
+    np.testing.assert_array_equal(again.sequences.masks, seqs.masks)
+    np.testing.assert_array_equal(again.head_masks, heads)
+    assert heads_file(shards[0]).is_file() and shards[1].stat().st_mtime_ns == kept
+    train = replace(spec, split="train", num_sequences=1)
+    load_or_generate(train, cache_dir=tmp_path, progress=False)
+    assert not list(cache_folder(tmp_path, train).glob("heads-*.npz"))
 
 
 @pytest.mark.slow
-def test_evaluate_frames_head_on_held_out_pairs(tmp_path):
+def test_evaluate_frames_reports_the_head_on_held_out_body_pairs(tmp_path):
     from motion2video.generator.checkpoint import save_frame_model
     from motion2video.generator.warp import WarpGenerator, WarpGeneratorConfig
 
     ckpt = save_frame_model(WarpGenerator(WarpGeneratorConfig(image_size=64)), tmp_path / "warp.safetensors", step=0)
     out = tmp_path / "eval.json"
-    assert main(["evaluate-frames", "--model", str(ckpt), "--test-sequences", "1", "--head", "--json", str(out),
-                 "--no-progress"]) == 0
+    assert main(["evaluate-frames", "--model", str(ckpt), "--test-sequences", "1", "--json", str(out),
+                 "--cache", str(tmp_path / "cache"), "--no-progress"]) == 0
     payload = json.loads(out.read_text())
     assert payload["pairs"] == "held-out" and payload["num_pairs"] == 8
     for scores in payload["results"].values():

@@ -12,8 +12,9 @@ from motion2video.evaluation.frame_generators import FrameEvalSettings, evaluate
 DESCRIPTION = """\
 Render (or reuse from the cache) the held-out split (held-out identities and clips) for the model's domain and
 size, and report whole-frame PSNR and SSIM (scikit-image) and person metrics (PSNR, SSIM and sharpness ratio
-inside the target's silhouette, PSNR and sharpness where the person moved) for the generator, copy-reference,
-limb-warp and the previous generator on the same pairs. With --video V (body models): the reconstruction
+inside the target's silhouette, PSNR and sharpness where the person moved; for bodies head PSNR and SSIM over
+the target's visible head, kept in the cache beside the frames) for the generator, copy-reference, limb-warp
+and the previous generator on the same pairs. With --video V (body models): the reconstruction
 protocol of FOMM / TPSMM on a real video instead: frame 0 is the reference, the later frames' estimated poses
 (BlazePose) drive the generator, the real frames are the truth, all cut to one square around the person; per
 method l1 (mean absolute error in [0, 1]), PSNR, SSIM, person PSNR / SSIM / sharpness inside BlazePose's
@@ -37,7 +38,7 @@ real motion instead: the frame test split's held-out identities, posed by window
 (--windows per clip, the test split's 9 frames over 1.2 s each), rendered with the Anny body renderer as the
 training data is; frame 0 of a window is the reference, every later frame a target whose truth is its render.
 These runs also report head_psnr and head_ssim over the target's visible head (the silhouette of Anny's head
-vertices); on the held-out pairs, --head adds them (the split is rendered again with head masks). A named baseline still trained on the previous canonical skeleton is left out, with a note.
+vertices). A named baseline still trained on the previous canonical skeleton is left out, with a note.
 """
 
 EXAMPLES = """\
@@ -81,12 +82,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "the part train-frames --video leaves out); frame 0 stays the reference (default 0)")
     p.add_argument("--poses", default=None, metavar="PATH",
                    help="pose the held-out identities by the body motion file(s) at PATH (a file or a folder) "
-                   "instead of the held-out pairs; adds head_psnr / head_ssim")
+                   "instead of the held-out pairs")
     p.add_argument("--windows", type=int, default=4,
                    help="with --poses: windows per clip, spread evenly over it (default 4, 8 pairs each)")
-    p.add_argument("--head", action="store_true",
-                   help="body models on the held-out pairs: also report head_psnr / head_ssim (renders the held-out "
-                   "split again with head masks, bypassing the cache: as long as rendering it, a few minutes)")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
@@ -104,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     settings = FrameEvalSettings(
         model=args.model, json=args.json, contact_sheet=args.contact_sheet, baseline_models=baselines,
         cache=args.cache, data_root=args.data_root, pairs=args.pairs, test_sequences=args.test_sequences,
-        head=args.head, poses=args.poses, windows=args.windows, video=args.video, video_frames=args.video_frames,
+        poses=args.poses, windows=args.windows, video=args.video, video_frames=args.video_frames,
         video_stride=args.video_stride, video_start_fraction=args.video_start_fraction,
         progress=not args.no_progress)
     result = evaluate_frame_generator(settings, note=lambda line: print(f"note: {line}", file=sys.stderr))

@@ -16,13 +16,12 @@ from motion2video.core.errors import InputError
 from motion2video.evaluation.reconstruction import evaluate_video
 from motion2video.evaluation.talking_head import evaluate_face_video
 from motion2video.generator.checkpoint import load_frame_model
-from motion2video.generator.data import default_cache_dir, load_or_generate
+from motion2video.generator.data import default_cache_dir, load_or_generate, load_or_generate_with_heads
 from motion2video.generator.scores import (FrameEvaluation, evaluate_sequences, evaluation_contact_sheet,
                                           face_region_masks, json_payload)
 from motion2video.generator.scores import write_json as write_evaluation_json
 from motion2video.generator.poses import PoseEvalSpec, load_body_clips, render_posed_sequences
-from motion2video.generator.render_data import SequencesWithHeads, render_body_split_with_heads
-from motion2video.generator.specs import default_spec
+from motion2video.generator.specs import SequencesWithHeads, default_spec
 
 # The previous generator, scored next to every new one: the keypoint warp next to the body mesh generator, the
 # feature-analogy face generator next to the face mesh generator, the feature-analogy body generator next to the
@@ -44,7 +43,6 @@ class FrameEvalSettings:
         data_root: folder with mocap/ and face/ captures (None: ../shared/data beside the repository).
         pairs: score only the first N pairs (None: all).
         test_sequences: render only this many held-out sequences (None: the spec's).
-        head: body models on the held-out pairs: also head_psnr / head_ssim (renders the split again).
         poses: pose the held-out identities by the body motion file(s) here instead of the held-out pairs.
         windows: with ``poses``: windows per clip.
         video: a real video of one person: the reconstruction protocol instead (body models; for face models the
@@ -62,7 +60,6 @@ class FrameEvalSettings:
     data_root: str | Path | None = None
     pairs: int | None = None
     test_sequences: int | None = None
-    head: bool = False
     poses: str | Path | None = None
     windows: int = 4
     video: str | Path | None = None
@@ -151,24 +148,22 @@ def evaluate_posed(model, clips: list, *, poses_path: str | Path, windows: int, 
 
 
 def _held_out(s: FrameEvalSettings, loaded, baselines: dict) -> FrameEvaluation:
-    """The held-out synthetic pairs of the model's domain and size (rendered again with head masks for
-    ``head``)."""
+    """The held-out synthetic pairs of the model's domain and size, from the cache; body pairs with the visible
+    head of every target (head_psnr / head_ssim)."""
     cfg = loaded.config
     spec = default_spec(cfg.domain, "test", cfg.image_size)
     if loaded.kind == "mesh" or cfg.domain == "face":  # the mesh correspondence; the faces' colour regions
         spec = replace(spec, vertices=True)
     if s.test_sequences is not None:
         spec = replace(spec, num_sequences=s.test_sequences, num_identities=min(spec.num_identities, s.test_sequences))
-    heads = None
-    if s.head:
-        with tqdm(total=spec.num_sequences, desc="rendering held-out sequences with heads", unit="seq",
-                  disable=not s.progress, leave=False) as bar:
-            rendered = render_body_split_with_heads(spec, data_root=s.data_root, on_sequence=bar.update)
+    cache = Path(s.cache) if s.cache else default_cache_dir()
+    heads = regions = None
+    if cfg.domain == "body":
+        rendered = load_or_generate_with_heads(spec, cache_dir=cache, data_root=s.data_root, progress=s.progress)
         seqs, heads = rendered.sequences, rendered.head_masks
     else:
-        cache = Path(s.cache) if s.cache else default_cache_dir()
         seqs = load_or_generate(spec, cache_dir=cache, data_root=s.data_root, progress=s.progress)
-    regions = face_region_masks(seqs) if cfg.domain == "face" else None  # hair_colour_de, skin_colour_de
+        regions = face_region_masks(seqs)  # hair_colour_de, skin_colour_de
     return evaluate_sequences(loaded.model, seqs, max_pairs=s.pairs, baseline_models=baselines, head_masks=heads,
                               region_masks=regions)
 
@@ -189,7 +184,7 @@ def evaluate_frame_generator(settings: FrameEvalSettings, *,
 
     Raises:
         InputError: a video that is not a file, a start fraction outside [0, 1), without a video or with a face
-            model, a face model with ``poses`` or ``head``, a face video without a face, an unusable explicit
+            model, a face model with ``poses``, a face video without a face, an unusable explicit
             baseline.
     """
     s = settings
@@ -205,8 +200,8 @@ def evaluate_frame_generator(settings: FrameEvalSettings, *,
     if s.video is not None and cfg.domain == "face" and s.video_start_fraction:
         raise InputError("--video-start-fraction goes with body frame models (a face model is scored on the whole "
                          "face video)", loaded.path)
-    if cfg.domain != "body" and (s.poses is not None or s.head):
-        raise InputError(f"{'--poses' if s.poses is not None else '--head'} needs a body frame model", loaded.path)
+    if cfg.domain != "body" and s.poses is not None:
+        raise InputError("--poses needs a body frame model", loaded.path)
     clips = None
     if s.poses is not None:
         clips = load_body_clips(s.poses, on_skip=lambda file, why: note(f"skipped {why}"))

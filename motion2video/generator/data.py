@@ -17,8 +17,8 @@ Splits: held-out identities (drawn from a different seed stream) and held-out cl
 file name, :func:`is_test_clip`) form the test split.
 
 Sequences are generated into a cache directory the user chooses, as npz shards (never committed):
-``CACHE/<domain>-<size>-<split>-<hash>/shard-00000.npz`` + ``spec.json``; an interrupted generation resumes
-at the first missing shard.
+``CACHE/<domain>-<size>-<split>-<hash>/shard-00000.npz`` + ``spec.json`` (body test splits: + ``heads-00000.npz``,
+the visible head of every frame); an interrupted generation resumes at the first missing shard.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from motion2video.generator.specs import (
     DATA_VERSION,
     DatasetSpec,
     FrameSequences,
+    SequencesWithHeads,
     background_crop,
     background_images,
     sample_identity,
@@ -330,6 +331,60 @@ def cache_folder(cache_dir: str | Path, spec: DatasetSpec) -> Path:
     return Path(cache_dir) / spec.key()
 
 
+def heads_file(shard: Path) -> Path:
+    """The head masks cached beside a body shard: ``shard-00000.npz`` -> ``heads-00000.npz``."""
+    return shard.with_name("heads-" + shard.name.removeprefix("shard-"))
+
+
+def load_heads(path: Path) -> np.ndarray:
+    """(N, T, S, S) bool head masks of one shard (:func:`heads_file`)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return z["head_masks"]
+    except (OSError, KeyError, ValueError, zlib.error) as err:
+        raise InputError(f"unreadable cache file ({type(err).__name__}: {err}); delete it to regenerate",
+                         path) from err
+
+
+def _ready_shards(spec: DatasetSpec, cache_dir: str | Path, data_root: str | Path | None, progress: bool, *,
+                  heads: bool) -> list[Path]:
+    """The shard files of ``spec`` in the cache, rendering the missing ones first. Body splits of the test
+    split keep the visible head of every frame beside each shard (:func:`heads_file`), as ``heads`` asks of any
+    body split; a shard without them (a cache written before they were kept) is rendered again with them."""
+    folder = cache_folder(cache_dir, spec)
+    folder.mkdir(parents=True, exist_ok=True)
+    spec_file = folder / "spec.json"
+    if not spec_file.exists():
+        # atomically: test workers and training runs may fill one cache side by side
+        write_text(spec_file, json.dumps({**asdict(spec), "version": DATA_VERSION}, indent=1, sort_keys=True))
+    shards = [folder / f"shard-{k:05d}.npz" for k in range(spec.num_shards)]
+    with_heads = spec.domain == "body" and (heads or spec.split == "test")
+    missing = [k for k, p in enumerate(shards) if not p.is_file() or (with_heads and not heads_file(p).is_file())]
+    if not missing:
+        return shards
+    from motion2video.generator.render_data import render_shard, SequenceSource
+
+    source = SequenceSource.create(spec, data_root=data_root)
+    bar = None
+    try:
+        if progress:
+            from tqdm import tqdm
+
+            todo = sum(min(spec.sequences_per_shard, spec.num_sequences - k * spec.sequences_per_shard)
+                       for k in missing)
+            bar = tqdm(total=todo, desc=f"rendering {spec.domain} {spec.split} sequences", unit="seq")
+        for k in missing:
+            seqs, head_masks = render_shard(source, k, heads=with_heads, on_sequence=bar.update if bar else None)
+            if head_masks is not None:  # before the shard: a shard on disk without its heads is rendered again
+                save_npz(heads_file(shards[k]), {"head_masks": head_masks}, compressed=True)
+            save_shard(shards[k], seqs)
+    finally:
+        if bar is not None:
+            bar.close()
+        source.close()
+    return shards
+
+
 def load_or_generate(spec: DatasetSpec, *, cache_dir: str | Path, data_root: str | Path | None = None,
                      progress: bool = True) -> FrameSequences:
     """The split described by ``spec``, from the cache, rendering the missing shards first.
@@ -340,33 +395,20 @@ def load_or_generate(spec: DatasetSpec, *, cache_dir: str | Path, data_root: str
         data_root: folder holding ``mocap/`` and ``face/`` (default :func:`default_data_root`).
         progress: show a progress bar while rendering.
     """
-    folder = cache_folder(cache_dir, spec)
-    folder.mkdir(parents=True, exist_ok=True)
-    spec_file = folder / "spec.json"
-    if not spec_file.exists():
-        # atomically: test workers and training runs may fill one cache side by side
-        write_text(spec_file, json.dumps({**asdict(spec), "version": DATA_VERSION}, indent=1, sort_keys=True))
-    shards = [folder / f"shard-{k:05d}.npz" for k in range(spec.num_shards)]
-    missing = [k for k, p in enumerate(shards) if not p.is_file()]
-    if missing:
-        from motion2video.generator.render_data import render_shard, SequenceSource
-
-        source = SequenceSource.create(spec, data_root=data_root)
-        try:
-            bar = None
-            if progress:
-                from tqdm import tqdm
-
-                todo = sum(min(spec.sequences_per_shard, spec.num_sequences - k * spec.sequences_per_shard)
-                           for k in missing)
-                bar = tqdm(total=todo, desc=f"rendering {spec.domain} {spec.split} sequences", unit="seq")
-            for k in missing:
-                save_shard(shards[k], render_shard(source, k, on_sequence=bar.update if bar else None))
-            if bar is not None:
-                bar.close()
-        finally:
-            source.close()
+    shards = _ready_shards(spec, cache_dir, data_root, progress, heads=False)
     return FrameSequences.concatenate([load_shard(p) for p in shards])
+
+
+def load_or_generate_with_heads(spec: DatasetSpec, *, cache_dir: str | Path, data_root: str | Path | None = None,
+                                progress: bool = True) -> SequencesWithHeads:
+    """A body split (:func:`load_or_generate`) and the visible head of every frame, (N, T, S, S) bool: the
+    pixels where Anny's head vertices are the front surface. Both come from the cache; shards without head
+    masks are rendered again with them, once."""
+    if spec.domain != "body":
+        raise ValueError("head masks are rendered for body splits only")
+    shards = _ready_shards(spec, cache_dir, data_root, progress, heads=True)
+    return SequencesWithHeads(FrameSequences.concatenate([load_shard(p) for p in shards]),
+                              np.concatenate([load_heads(heads_file(p)) for p in shards]))
 
 
 # --- a toy dataset for unit tests (no renderer) -----------------------------------------------------------

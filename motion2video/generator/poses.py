@@ -15,16 +15,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 
 from motion2video.core.errors import InputError
 from motion2video.core.motion import FaceMotion, Motion
-from motion2video.generator.specs import FrameSequences, background_images, default_spec, identities
-
-if TYPE_CHECKING:  # pragma: no cover
-    from motion2video.generator.render_data import SequencesWithHeads
+from motion2video.generator.specs import (FrameSequences, SequencesWithHeads, background_images, default_spec,
+                                          identities)
 
 # Files a --poses folder may hold (body motions); other files (manifest.csv, READMEs, face captures) are
 # passed over.
@@ -128,11 +126,11 @@ def window_frames(num_frames: int, fps: float, spec: PoseEvalSpec) -> np.ndarray
 
 
 def render_posed_sequences(clips: list[tuple[str, Motion]], spec: PoseEvalSpec, *,
-                           on_window: Callable[[int], object] | None = None) -> "SequencesWithHeads":
+                           on_window: Callable[[int], object] | None = None) -> SequencesWithHeads:
     """Render every window of every clip (:func:`window_frames`) as the held-out identities in turn; window
     ``i`` draws its look from ``np.random.default_rng([spec.seed, 3, i])``. The sequences' ``clip`` holds the
     clip names, ``start`` each window's first source frame."""
-    from motion2video.generator.render_data import SequencesWithHeads, render_body_window
+    from motion2video.generator.render_data import render_body_window
 
     people = identities("test", spec.num_identities, seed=spec.seed)
     pool = background_images()

@@ -142,16 +142,10 @@ def identity_vertex_colors(identity: Identity, palette: np.ndarray) -> np.ndarra
     return np.clip(colours, 0.0, 1.0)
 
 
-def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity):
-    """One body sequence: returns (a :class:`BodyWindow`, with the mesh vertices when the spec asks for them,
-    clip index, start)."""
-    return _body_sequence(source, rng, identity, vertices=source.spec.vertices)
-
-
-def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity, *,
-                   head: bool = False, vertices: bool = False) -> tuple["BodyWindow", int, int]:
-    """One body sequence as a :class:`BodyWindow` (with head masks when ``head``, mesh vertices when
-    ``vertices``), its clip index and start."""
+def render_body_sequence(source: SequenceSource, rng: np.random.Generator, identity: Identity, *,
+                         head: bool = False) -> tuple["BodyWindow", int, int]:
+    """One body sequence as a :class:`BodyWindow` (with the mesh vertices when the spec asks for them, the head
+    masks when ``head``), its clip index and start."""
     from motion2video.core.motion import Motion
 
     spec = source.spec
@@ -161,45 +155,8 @@ def _body_sequence(source: SequenceSource, rng: np.random.Generator, identity: I
                          seconds=spec.window_seconds)
     motion = Motion(clip.joints[times], clip.fps, source=clip.source)
     window = render_body_window(motion, identity, rng, source.backgrounds, spec.image_size, head=head,
-                                vertices=vertices)
+                                vertices=spec.vertices)
     return window, ci, int(times[0])
-
-
-@dataclass
-class SequencesWithHeads:
-    """Rendered body sequences and the visible head of every frame: ``head_masks`` (N, T, S, S) bool, the pixels
-    where Anny's head vertices are the front surface (:meth:`renderers.body.BodyRenderer.render_with_masks`)."""
-
-    sequences: FrameSequences
-    head_masks: np.ndarray
-
-
-def render_body_split_with_heads(spec: DatasetSpec, *, data_root: str | Path | None = None,
-                                 on_sequence: Callable[[int], object] | None = None) -> SequencesWithHeads:
-    """Every sequence of a body split rendered as its shards are (the same frames as :func:`render_shard`),
-    with the visible head masks. Nothing is cached: it takes as long as rendering the split."""
-    if spec.domain != "body":
-        raise ValueError("head masks are rendered for body splits only")
-    source = SequenceSource.create(spec, data_root=data_root)
-    parts, heads = [], []
-    try:
-        for i in range(spec.num_sequences):
-            rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
-            ident_index = i % spec.num_identities
-            out, ci, start = _body_sequence(source, rng, source.identities[ident_index], head=True,
-                                            vertices=spec.vertices)
-            mesh = {} if not spec.vertices else dict(vertex_uv=out.vertex_uv[None].astype(np.float16),
-                                                     vertex_visible=out.vertex_visible[None])
-            parts.append(FrameSequences(domain="body", images=out.images[None], points=out.points[None],
-                                        structure_images=None, identity=np.asarray([ident_index], np.int64),
-                                        clip=np.asarray([source.clip_names[ci]]),
-                                        start=np.asarray([start], np.int64), masks=out.masks[None], **mesh))
-            heads.append(out.head_masks)
-            if on_sequence is not None:
-                on_sequence(1)
-    finally:
-        source.close()
-    return SequencesWithHeads(FrameSequences.concatenate(parts), np.stack(heads))
 
 
 @dataclass
@@ -243,25 +200,31 @@ def render_body_window(motion, identity: Identity, rng: np.random.Generator, bac
     return BodyWindow(images, points, out.masks, out.head_masks, out.vertex_uv, out.vertex_visible)
 
 
-def render_shard(source: SequenceSource, shard: int, *,
-                 on_sequence: Callable[[int], object] | None = None) -> FrameSequences:
-    """Render the sequences of shard ``shard`` of ``source.spec``."""
+def render_shard(source: SequenceSource, shard: int, *, heads: bool = False,
+                 on_sequence: Callable[[int], object] | None = None) -> tuple[FrameSequences, np.ndarray | None]:
+    """Render the sequences of shard ``shard`` of ``source.spec``: the sequences, and with ``heads`` (body
+    splits) the visible head of every frame, (N, T, S, S) bool (else None). The frames are the same either
+    way: the head masks come from a second, depth-only pass."""
     spec = source.spec
+    if heads and spec.domain != "body":
+        raise ValueError("head masks are rendered for body splits only")
     first = shard * spec.sequences_per_shard
     last = min(spec.num_sequences, first + spec.sequences_per_shard)
     if first >= last:
         raise ValueError(f"shard {shard} is past the end of the split ({spec.num_shards} shards)")
-    images, points, structs, ident, clips, starts, masks, uvs, seen = [], [], [], [], [], [], [], [], []
+    images, points, structs, ident, clips, starts, masks, uvs, seen, head_masks = ([] for _ in range(10))
     for i in range(first, last):
         rng = np.random.default_rng([spec.seed, 1 + ("train", "test").index(spec.split), i])
         ident_index = i % spec.num_identities
         identity = source.identities[ident_index]
         if spec.domain == "body":
-            window, ci, start = render_body_sequence(source, rng, identity)
+            window, ci, start = render_body_sequence(source, rng, identity, head=heads)
             im, pts, mk = window.images, window.points, window.masks
             if spec.vertices:
                 uvs.append(window.vertex_uv.astype(np.float16))
                 seen.append(window.vertex_visible)
+            if heads:
+                head_masks.append(window.head_masks)
         else:
             im, pts, st, mk, ci, start, mesh = render_face_sequence(source, rng, identity)
             structs.append(st)
@@ -276,13 +239,14 @@ def render_shard(source: SequenceSource, shard: int, *,
         starts.append(start)
         if on_sequence is not None:
             on_sequence(1)
-    return FrameSequences(
+    seqs = FrameSequences(
         domain=spec.domain, images=np.stack(images), points=np.stack(points),
         structure_images=np.stack(structs) if structs else None,
         identity=np.asarray(ident, np.int64), clip=np.asarray(clips), start=np.asarray(starts, np.int64),
         masks=np.stack(masks),
         vertex_uv=np.stack(uvs) if uvs else None, vertex_visible=np.stack(seen) if seen else None,
     )
+    return seqs, np.stack(head_masks) if heads else None
 
 
 def farthest_point_subset(points: np.ndarray, count: int) -> np.ndarray:

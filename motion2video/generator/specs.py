@@ -123,6 +123,15 @@ class FrameSequences:
         )
 
 
+
+@dataclass
+class SequencesWithHeads:
+    """Rendered body sequences and the visible head of every frame: ``head_masks`` (N, T, S, S) bool, the pixels
+    where Anny's head vertices are the front surface (:meth:`renderers.body.BodyRenderer.render_with_masks`)."""
+
+    sequences: FrameSequences
+    head_masks: np.ndarray
+
 # --- splits, identities, backgrounds ---------------------------------------------------------------------
 
 def is_test_clip(name: str) -> bool:
