@@ -50,13 +50,18 @@ def frame_metrics(pred: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.
     Returns:
         psnr (N,) float64, ssim (N,) float64.
     """
-    if pred.shape != target.shape or pred.dtype != np.uint8 or target.dtype != np.uint8:
-        raise ValueError(f"pred and target must be uint8 of one shape, got {pred.shape} {pred.dtype} and "
-                         f"{target.shape} {target.dtype}")
-    psnr = np.array([peak_signal_noise_ratio(t, p, data_range=255) for p, t in zip(pred, target)], np.float64)
+    psnr = frame_psnr(pred, target)
     ssim = np.array([structural_similarity(t, p, channel_axis=-1, data_range=255) for p, t in zip(pred, target)],
                     np.float64)
     return psnr, ssim
+
+
+def frame_psnr(pred: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Per-frame PSNR (dB) of (N, H, W, 3) uint8 frames: (N,) float64."""
+    if pred.shape != target.shape or pred.dtype != np.uint8 or target.dtype != np.uint8:
+        raise ValueError(f"pred and target must be uint8 of one shape, got {pred.shape} {pred.dtype} and "
+                         f"{target.shape} {target.dtype}")
+    return np.array([peak_signal_noise_ratio(t, p, data_range=255) for p, t in zip(pred, target)], np.float64)
 
 
 def gradient_energy(image: np.ndarray) -> np.ndarray:
@@ -172,12 +177,21 @@ def person_metrics(pred: np.ndarray, target: np.ndarray, ref: np.ndarray, ref_ma
     Returns:
         metric name -> (N,) float64 (NaN where a region is empty).
     """
+    return _person_metrics_and_ssim(pred, target, ref, ref_masks, tgt_masks, tgt_head_masks, tgt_regions)[0]
+
+
+def _person_metrics_and_ssim(pred: np.ndarray, target: np.ndarray, ref: np.ndarray, ref_masks: np.ndarray,
+                             tgt_masks: np.ndarray, tgt_head_masks: np.ndarray | None,
+                             tgt_regions: dict[str, np.ndarray] | None) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`person_metrics` and the whole-frame SSIM of every pair (N,), from the one SSIM map each pair needs
+    (scikit-image's whole-frame SSIM is the mean of that map inside its border)."""
     regions = tgt_regions or {}
     keys = PERSON_METRICS + (HEAD_METRICS if tgt_head_masks is not None else ()) + \
         tuple(f"{name}_colour_de" for name in regions)
     out = {k: np.empty(len(pred)) for k in keys}
+    whole = np.empty(len(pred))
     for i, (p, t, r, mr, mt) in enumerate(zip(pred, target, ref, ref_masks, tgt_masks)):
-        _, smap = structural_similarity(t, p, channel_axis=-1, data_range=255, full=True)
+        whole[i], smap = structural_similarity(t, p, channel_axis=-1, data_range=255, full=True)
         moving = moving_region(r, t, mr, mt)
         out["person_psnr"][i] = region_psnr(p, t, mt)
         out["person_ssim"][i] = region_ssim(smap, mt)
@@ -189,7 +203,7 @@ def person_metrics(pred: np.ndarray, target: np.ndarray, ref: np.ndarray, ref_ma
             out["head_ssim"][i] = region_ssim(smap, tgt_head_masks[i])
         for name, region in regions.items():
             out[f"{name}_colour_de"][i] = mean_colour_difference(p, t, region[i])
-    return out
+    return out, whole
 
 
 @dataclass
@@ -212,10 +226,11 @@ class MethodScores:
                     ref_masks: np.ndarray | None = None, tgt_masks: np.ndarray | None = None,
                     tgt_head_masks: np.ndarray | None = None,
                     tgt_regions: dict[str, np.ndarray] | None = None) -> "MethodScores":
-        psnr, ssim = frame_metrics(pred, target)
-        per: dict[str, np.ndarray] = {}
-        if ref is not None and ref_masks is not None and tgt_masks is not None:
-            per = person_metrics(pred, target, ref, ref_masks, tgt_masks, tgt_head_masks, tgt_regions)
+        if ref is None or ref_masks is None or tgt_masks is None:
+            psnr, ssim = frame_metrics(pred, target)
+            return MethodScores.from_per_pair(psnr, ssim, {})
+        psnr = frame_psnr(pred, target)
+        per, ssim = _person_metrics_and_ssim(pred, target, ref, ref_masks, tgt_masks, tgt_head_masks, tgt_regions)
         return MethodScores.from_per_pair(psnr, ssim, per)
 
     @staticmethod
