@@ -459,31 +459,17 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
     if len(shown) < 2:
         return out
     points = np.asarray(uv, np.float64)[shown]
-    # float32, one coordinate at a time: this runs on every target frame, over 150,000-900,000 pairs (Anny's face
-    # and hands are dense in vertices)
     at_rest = np.ascontiguousarray(np.asarray(rest, np.float32)[shown].T)  # (3, S)
-
-    def apart(i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        squared = np.zeros(len(i), np.float32)
-        for coordinate in at_rest:
-            step = coordinate.take(i) - coordinate.take(j)
-            squared += step * step
-        return squared > TOUCH_APART_M ** 2
-
-    tree = cKDTree(points)
-    pairs = tree.query_pairs(TOUCH_PX, output_type="ndarray")  # (P, 2) indices into shown
-    if len(pairs) == 0:
-        return out
-    meet = pairs[apart(pairs[:, 0], pairs[:, 1])]
+    meet = meeting_pairs(points, at_rest)
     if len(meet) == 0:
         return out
     depth = np.asarray(behind, np.float64)[shown]
     judged = np.unique(meet)  # the vertices where two surfaces meet
     # each judged vertex with every shown vertex within TOUCH_SMOOTH_PX (itself included), as arrays from one query
     # between two trees: a list per vertex (query_ball_point) took twice as long, hundreds of neighbours each
-    around = cKDTree(points[judged]).sparse_distance_matrix(tree, TOUCH_SMOOTH_PX, output_type="ndarray")
+    around = cKDTree(points[judged]).sparse_distance_matrix(cKDTree(points), TOUCH_SMOOTH_PX, output_type="ndarray")
     centre, near = around["i"].astype(np.int64), around["j"].astype(np.int64)
-    own = ~apart(near, judged[centre])
+    own = ~apart_at_rest(at_rest, near, judged[centre])
     mean = np.zeros(len(shown))
     mean[judged] = (np.bincount(centre[own], weights=depth[near[own]], minlength=len(judged))
                     / np.bincount(centre[own], minlength=len(judged)))
@@ -491,6 +477,70 @@ def behind_a_touching_surface(uv: np.ndarray, seen: np.ndarray, behind: np.ndarr
     out[shown[a[mean[a] > mean[b] + TOUCH_MARGIN_M]]] = True
     out[shown[b[mean[b] > mean[a] + TOUCH_MARGIN_M]]] = True
     return out
+
+
+def apart_at_rest(at_rest: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """(P,) bool: points ``i`` and ``j`` (P,) lie more than TOUCH_APART_M apart at rest; ``at_rest`` (3, S) float32,
+    one row per coordinate (float32, a coordinate at a time: this runs over up to a million pairs per frame)."""
+    squared = np.zeros(len(i), np.float32)
+    for coordinate in at_rest:
+        step = coordinate.take(i) - coordinate.take(j)
+        squared += step * step
+    return squared > TOUCH_APART_M ** 2
+
+
+# :func:`meeting_pairs` looks for pixel pairs closer than TOUCH_PX in square cells of that side: such a pair lies in
+# one cell or in two touching ones, and two cells whose points all lie within TOUCH_APART_M of each other at rest (as
+# their bounding boxes at rest show) hold no meeting pair. Most close pairs in a picture are neighbours on one surface
+# (Anny's face and hands hold thousands of vertices in a few pixels), so few cells are left to search point by point.
+CELL_NEIGHBOURS = ((0, 0), (1, -1), (1, 0), (1, 1), (0, 1))  # each unordered pair of touching cells once
+
+
+def meeting_pairs(points: np.ndarray, at_rest: np.ndarray) -> np.ndarray:
+    """Pairs of points within TOUCH_PX of each other in the picture and more than TOUCH_APART_M apart at rest
+    (:func:`apart_at_rest`): where two surfaces of the body meet.
+
+    Args:
+        points: (S, 2) pixels; at_rest: (3, S) float32 the same points on the body at rest (metres).
+    Returns:
+        (P, 2) int64 indices into ``points``, each pair once, in no particular order.
+    """
+    cell = np.floor(np.asarray(points, np.float64) / TOUCH_PX).astype(np.int64)
+    cell -= cell.min(axis=0) - 1  # columns and rows from 1, so a neighbour's key never wraps
+    rows = int(cell[:, 1].max()) + 2
+    key = cell[:, 0] * rows + cell[:, 1]
+    order = np.argsort(key, kind="stable")
+    keys, starts, counts = np.unique(key[order], return_index=True, return_counts=True)
+    rest = at_rest.T.astype(np.float64)[order]  # (S, 3) in cell order
+    low, high = np.minimum.reduceat(rest, starts), np.maximum.reduceat(rest, starts)  # (C, 3) boxes at rest
+    first, second = [], []
+    for dx, dy in CELL_NEIGHBOURS:
+        other = keys + dx * rows + dy
+        at = np.minimum(np.searchsorted(keys, other), len(keys) - 1)
+        found = keys[at] == other
+        first.append(np.flatnonzero(found))
+        second.append(at[found])
+    ca, cb = np.concatenate(first), np.concatenate(second)
+    span = np.maximum(high[ca] - low[cb], high[cb] - low[ca])  # the farthest two of their points can lie per axis
+    # a hair under the threshold: the boxes are bounds in float64, the pairs' own test runs in float32
+    far = (span * span).sum(axis=1) > TOUCH_APART_M ** 2 * (1.0 - 1e-4)
+    ca, cb = ca[far], cb[far]
+    if len(ca) == 0:
+        return np.zeros((0, 2), np.int64)
+    # every point of cell ca[k] with every point of cell cb[k]
+    na, nb = counts[ca], counts[cb]
+    total = na * nb
+    which = np.repeat(np.arange(len(ca)), total)
+    k = np.arange(int(total.sum())) - np.repeat(np.cumsum(total) - total, total)
+    i = order[starts[ca][which] + k // nb[which]]
+    j = order[starts[cb][which] + k % nb[which]]
+    once = (ca[which] != cb[which]) | (i < j)
+    i, j = i[once], j[once]
+    step = points[i] - points[j]
+    close = (step * step).sum(axis=1) <= TOUCH_PX ** 2
+    i, j = i[close], j[close]
+    meet = apart_at_rest(at_rest, i, j)
+    return np.stack([i[meet], j[meet]], axis=1)
 
 
 def vertex_visibility(uvz: np.ndarray, depth: np.ndarray, *, tolerance: float | np.ndarray = VISIBILITY_TOLERANCE_M,

@@ -339,3 +339,24 @@ def test_released_renderers_are_recreated_on_demand(rest, body_renderer):
     after = body_renderer.offscreen
     assert after is not before
     np.testing.assert_array_equal(body_renderer.render(_rest_motion(rest)), frame)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_meeting_pairs_are_the_close_pairs_far_apart_at_rest(seed):
+    """The cell search finds exactly the pairs a KD-tree finds within TOUCH_PX and TOUCH_APART_M filters: dense
+    clusters of one surface (as a face's vertices lie) beside clusters of another, on and off the cells' edges."""
+    from scipy.spatial import cKDTree
+
+    from renderers.mesh import TOUCH_PX, apart_at_rest, meeting_pairs
+
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(0, 40, (12, 2))
+    points = np.concatenate([c + rng.normal(0, rng.uniform(0.3, 3.0), (150, 2)) for c in centres])
+    points[::7] = np.round(points[::7] / TOUCH_PX) * TOUCH_PX  # some exactly on cell edges
+    surface = np.repeat(rng.uniform(-0.5, 0.5, (12, 3)), 150, axis=0)  # each cluster a place on the body
+    at_rest = np.ascontiguousarray((surface + rng.normal(0, 0.03, surface.shape)).T.astype(np.float32))
+    close = cKDTree(points).query_pairs(TOUCH_PX, output_type="ndarray")
+    expected = close[apart_at_rest(at_rest, close[:, 0], close[:, 1])]
+    found = meeting_pairs(points, at_rest)
+    assert len(expected) > 0 and len(found) == len(expected)
+    assert set(map(tuple, np.sort(found, axis=1).tolist())) == set(map(tuple, np.sort(expected, axis=1).tolist()))

@@ -63,7 +63,8 @@ def train_behavior_model(folder: Path) -> Path:
     """A 2-step behaviour model (root-trajectory decoder) on the body clips already linked by
     :func:`train_body_motion_model`, trained through the CLI (the demo's transfer)."""
     out = folder / "behavior.safetensors"
-    config = '{"model": {"hidden_dim": 16, "latent_dim": 4, "regressor_dim": 16, "root_trajectory": true}}'
+    config = ('{"model": {"hidden_dim": 16, "latent_dim": 4, "regressor_dim": 16, "root_trajectory": true}, '
+              '"train": {"flow_steps": 5, "flow_windows": 16}}')
     assert main(["train", "--model", "behavior", "--data", str(folder / "mocap"), "-o", str(out), "--steps", "2",
                  "--config", config, "--no-progress"]) == 0
     return out
