@@ -236,8 +236,14 @@ def test_head_masks_are_kept_beside_the_body_test_shards(tmp_path):
     np.testing.assert_array_equal(again.head_masks, heads)
     assert heads_file(shards[0]).is_file() and shards[1].stat().st_mtime_ns == kept
     train = replace(spec, split="train", num_sequences=1)
-    load_or_generate(train, cache_dir=tmp_path, progress=False)
+    plain = load_or_generate(train, cache_dir=tmp_path, progress=False)
     assert not list(cache_folder(tmp_path, train).glob("heads-*.npz"))
+    # the head masks' depth pass changes nothing of the frames
+    with_heads = load_or_generate_with_heads(train, cache_dir=tmp_path / "with-heads", progress=False)
+    np.testing.assert_array_equal(with_heads.sequences.images, plain.images)
+    np.testing.assert_array_equal(with_heads.sequences.masks, plain.masks)
+    np.testing.assert_array_equal(with_heads.sequences.points, plain.points)
+    assert with_heads.head_masks.any() and not np.any(with_heads.head_masks & ~plain.masks)
 
 
 @pytest.mark.slow

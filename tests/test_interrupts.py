@@ -159,7 +159,6 @@ def test_an_interrupt_swallowed_by_a_finaliser_is_delivered_again():
         interrupts.clear()  # what main does once the interrupt has stopped the command
 
 
-
 def _dropped_by_a_finaliser() -> None:
     """What the CLI's handler records before it raises, the KeyboardInterrupt then lost in a ``__del__``."""
     from motion2video.core import interrupts

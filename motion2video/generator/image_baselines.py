@@ -96,11 +96,12 @@ def piecewise_affine_source(tgt_points: np.ndarray, ref_points: np.ndarray, *, w
     pixels = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float64)  # (P, 2)
     simplex = tri.find_simplex(pixels)
     covered = simplex >= 0
-    affine = tri.transform[simplex[covered]]  # (C, 3, 2): inverse of the triangle's edge matrix, its last corner
+    inside = simplex[covered]  # (C,) the triangle of each covered pixel
+    affine = tri.transform[inside]  # (C, 3, 2): inverse of the triangle's edge matrix, its last corner
     first = np.einsum("cij,cj->ci", affine[:, :2], pixels[covered] - affine[:, 2])  # (C, 2) barycentric
     weights = np.concatenate([first, 1.0 - first.sum(axis=1, keepdims=True)], axis=1)  # (C, 3)
     source = np.full((len(pixels), 2), -1.0)
-    source[covered] = np.einsum("ck,ckd->cd", weights, ref[tri.simplices[simplex[covered]]])
+    source[covered] = np.einsum("ck,ckd->cd", weights, ref[tri.simplices[inside]])
     return source.reshape(height, width, 2)
 
 

@@ -296,7 +296,6 @@ def render_face_sequence(source: SequenceSource, rng: np.random.Generator, ident
     """
     from motion2video.data.face_dynamics import head_pose_track
     from motion2video.core.motion import NUM_EXPRESSIONS, FaceMotion
-    from renderers.body import BodyStyle
     from renderers.registry import renderer_for
 
     spec = source.spec

@@ -123,7 +123,6 @@ class FrameSequences:
         )
 
 
-
 @dataclass
 class SequencesWithHeads:
     """Rendered body sequences and the visible head of every frame: ``head_masks`` (N, T, S, S) bool, the pixels
@@ -131,6 +130,7 @@ class SequencesWithHeads:
 
     sequences: FrameSequences
     head_masks: np.ndarray
+
 
 # --- splits, identities, backgrounds ---------------------------------------------------------------------
 

@@ -127,8 +127,8 @@ def adapt_to_sources(model: BehaviorModel, sources: np.ndarray, z: np.ndarray, *
     Several decoders are fitted side by side: their weights stacked, one step of all N run by ``torch.func.vmap``
     (3.2x faster per source than one at a time on one CPU thread over 8 sources, ``scripts/bench.py
     transfer-fit``). Each copy's loss depends on its own weights only and Adam updates every weight from its own
-    gradient, so each copy takes the steps it would take alone. Only the stacked arithmetic rounds differently, and 300 Adam steps carry
-    that some way, as they would a change of thread count: over 8 held-out pairs the re-enacted joints lay 2 mm
+    gradient, so each copy takes the steps it would take alone. Only the stacked arithmetic rounds differently, and
+    300 Adam steps carry that some way, as they would a change of thread count: over 8 held-out pairs the re-enacted joints lay 2 mm
     from those of fits alone on average, 8 cm at the worst joint and frame. One source is fitted alone.
 
     Args:
