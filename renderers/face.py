@@ -286,8 +286,13 @@ class FaceRenderer(RendererBase):
         """A fixed close-up camera in front of the face at the clip's mean head translation."""
         return close_up_camera(self._head_mesh(face).rest, self.style, face.head_translation.mean(axis=0))
 
-    def vertices(self, face: FaceMotion):
-        """Yield ``(start, vertices)`` chunks: (b, K, 3) float32 world positions of the drawn sub-mesh."""
+    def vertices(self, face: FaceMotion, shape: np.ndarray | None = None):
+        """Yield ``(start, vertices)`` chunks: (b, K, 3) float32 world positions of the drawn sub-mesh.
+
+        Args:
+            shape: (V, 3) a person's face as offsets of Anny's vertices, metres in the head's rest frame
+                (:func:`motion2video.pose.face_shape.head_shape`), turned with the head in every frame; None: Anny's.
+        """
         import torch
 
         head = self._head_mesh(face)
@@ -301,10 +306,15 @@ class FaceRenderer(RendererBase):
                 out = model(torch.as_tensor(poses[start:stop], dtype=model.dtype), phenotype_kwargs=pheno,
                             facial_actions=torch.as_tensor(face.expressions[start:stop], dtype=model.dtype),
                             pose_parameterization="world")
-            yield start, out["vertices"][:, ids].cpu().numpy().astype(np.float32)
+            verts = out["vertices"][:, ids].cpu().numpy().astype(np.float32)
+            if shape is not None:  # the face's vertices follow the head bone: R v + c(R) + T, so R offset
+                turn = axis_angle_to_matrix(np.asarray(face.head_rotation[start:stop], np.float64))  # (b, 3, 3)
+                verts += np.einsum("bij,kj->bki", turn, np.asarray(shape, np.float64)[head.vertex_ids])
+            yield start, verts
 
     def render_with_masks(self, face: FaceMotion, *, camera: PinholeCamera | None = None,
-                          progress: Callable[[int], object] | None = None, vertices: bool = False) -> FaceFrames:
+                          progress: Callable[[int], object] | None = None, vertices: bool = False,
+                          shape: np.ndarray | None = None) -> FaceFrames:
         """Render every frame of ``face``; see :class:`FaceFrames`.
 
         Args:
@@ -312,6 +322,7 @@ class FaceRenderer(RendererBase):
             camera: the camera; None places the close-up camera of :meth:`camera_for`.
             progress: called with the number of frames rendered after each batch.
             vertices: also keep every vertex's pixel and front-surface flag (``vertex_uv``, ``vertex_visible``).
+            shape: (V, 3) the person's face on Anny's head (:meth:`vertices`), or None.
         """
         if not isinstance(face, FaceMotion):
             raise InputError(f"the face renderer needs a FaceMotion, got {type(face).__name__}")
@@ -328,7 +339,7 @@ class FaceRenderer(RendererBase):
             count = len(head.rest.vertices)
             vertex_uv = np.zeros((face.num_frames, count, 2), np.float32)
             vertex_visible = np.zeros((face.num_frames, count), bool)
-        for start, verts in self.vertices(face):
+        for start, verts in self.vertices(face, shape):
             landmarks[start:start + len(verts)] = camera.project(verts[:, head.landmarks])[..., :2]
             for k, v in enumerate(verts):
                 out = self._mesh.render_mesh(v, head.faces, vertex_colors=head.colors, camera=camera,

@@ -1,4 +1,5 @@
-"""Build ``motion2video/pose/data/face_anny_landmarks.npz``: the tracked face points on Anny's head.
+"""Build ``motion2video/pose/data/face_anny_landmarks.npz``: the tracked face points on Anny's head (and, with
+``--shapes``, ``face_shape_targets.npz``: the face shape targets of :mod:`motion2video.pose.face_shape`).
 
 The neutral default head is rendered frontally at 512 x 512 with the face renderer's close-up camera; the face
 mesh runs on the render (detector, then the landmark model twice, the second time on the ROI of its own
@@ -8,6 +9,10 @@ vertices. Writes the table and a picture of the landmarks on the
 render (``--picture``) to check it.
 
     PYOPENGL_PLATFORM=osmesa python scripts/make_face_correspondence.py [--picture out/face_anny_landmarks.png]
+    python scripts/make_face_correspondence.py --shapes
+
+``--shapes`` builds Anny once with its local changes (MakeHuman's MPFB2 targets, CC0) and keeps the targets named by
+:data:`motion2video.pose.face_shape.SHAPE_PAIRS`, a left and a right target summed where the name starts with "*".
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import numpy as np
 from motion2video.core.atomic import save_npz
 from motion2video.core.motion import FACE_DIM, FaceMotion
 from motion2video.pose.face_anny import CORRESPONDENCE_FILE, skin_triangles, surface_points
+from motion2video.pose.face_shape import SHAPE_FILE, SHAPE_PAIRS, target_names
 from motion2video.pose.facemesh import FaceMesh, detection_roi
 from renderers import anny_model
 from renderers.face import FaceRenderer, FaceStyle, face_landmark_vertices
@@ -31,7 +37,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--output", default=str(CORRESPONDENCE_FILE))
     parser.add_argument("--picture", default=None, help="also write the landmarks drawn on the render (.png)")
+    parser.add_argument("--shapes", action="store_true", help=f"build {SHAPE_FILE.name} instead")
     args = parser.parse_args(argv)
+    if args.shapes:
+        return write_shape_targets(SHAPE_FILE)
 
     renderer = FaceRenderer(FaceStyle(size=(SIZE, SIZE), background=(200, 200, 200)))
     face = FaceMotion(np.zeros((1, FACE_DIM)), 30.0)
@@ -66,6 +75,27 @@ def main(argv: list[str] | None = None) -> int:
             cv2.circle(drawn, (int(q[0]), int(q[1])), 1, (0, 0, 255), -1)
         cv2.imwrite(args.picture, drawn)
         print(f"wrote {args.picture}")
+    return 0
+
+
+def write_shape_targets(path) -> int:
+    """Write the face shape targets (see the module docstring) to ``path``."""
+    import anny
+    import torch
+
+    with torch.no_grad():
+        model = anny.Anny(facial_actions="none", local_changes="default")
+    labels = list(model.blendshape_labels)
+    shapes = model.blendshapes.double().cpu().numpy()  # (S, V, 3)
+
+    def target(name: str) -> np.ndarray:
+        if name.startswith("*"):
+            return sum(shapes[labels.index(f"local_change:{side}-{name[1:]}")] for side in "lr")
+        return shapes[labels.index(f"local_change:{name}")]
+
+    table = np.stack([target(name) for pair in SHAPE_PAIRS for name in pair]).astype(np.float32)  # (K, V, 3)
+    save_npz(path, {"names": np.array(target_names()), "shapes": table}, compressed=True)
+    print(f"wrote {path}: {len(table)} targets, largest displacement {1000 * np.abs(table).max():.1f} mm")
     return 0
 
 

@@ -69,7 +69,9 @@ def test_the_head_is_fitted_to_a_painted_face_and_framed_where_the_renderer_draw
     """The framed picture's landmarks fall on the fitted head as the reference structure's camera renders it: inside
     its silhouette, the pictured irises on the head's pupils."""
     from motion2video.pose.face_anny import posed_landmarks
+    from motion2video.core.rotations import axis_angle_to_matrix
     from motion2video.pose.face_portrait import fit_portrait, portrait_framing
+    from motion2video.pose.face_shape import head_shape, shape_points
     from motion2video.stages.reference import load_reference, read_reference_image
     from renderers.registry import renderer_for
 
@@ -85,15 +87,19 @@ def test_the_head_is_fitted_to_a_painted_face_and_framed_where_the_renderer_draw
     assert portrait.relative_error() < 0.03 and portrait.faces == 1
     framing = portrait_framing(portrait, size)
     moved = portrait.landmarks * framing.scale + framing.offset  # (470, 2) in the reference's pixels
+    assert ref.pose.face_shape is not None and np.allclose(ref.pose.face_shape, portrait.shape)
     with renderer_for("face", "structure", size=size) as renderer:
-        out = renderer.renderer.render_with_masks(FaceMotion(ref.pose.face[None], 25.0), camera=ref.pose.camera)
+        out = renderer.renderer.render_with_masks(FaceMotion(ref.pose.face[None], 25.0), camera=ref.pose.camera,
+                                                  shape=head_shape(ref.pose.face_shape))
     pixel = np.clip(moved.astype(int), 0, size - 1)
     inside = out.masks[0][pixel[:, 1], pixel[:, 0]]
     near = cv2.dilate(out.masks[0].astype(np.uint8), np.ones((5, 5), np.uint8))[pixel[:, 1], pixel[:, 0]]
     assert inside.mean() > 0.93 and near.all()  # the outline's points on the silhouette's edge, within 2 px
     p = ref.pose.face[None].astype(np.float64)
     e = NUM_EXPRESSIONS
-    pupils = ref.pose.camera.project(posed_landmarks(p[:, :e], p[:, e:e + 3], p[:, e + 3:])[0][-2:])[:, :2]
+    points = posed_landmarks(p[:, :e], p[:, e:e + 3], p[:, e + 3:])[0]
+    points = points + shape_points(ref.pose.face_shape) @ axis_angle_to_matrix(p[0, e:e + 3]).T
+    pupils = ref.pose.camera.project(points[-2:])[:, :2]
     face = np.max(moved.max(axis=0) - moved.min(axis=0))
     # within 5% of the face size: the fit's own residual at the far iris of a turned head (Vermeer's girl, turned 35
     # degrees: 4.6% there, Anny's default face against hers; the near one 2.1%)
@@ -132,7 +138,8 @@ def test_a_small_face_in_a_full_length_photo_is_found_in_squares_of_it(photos_di
     framing = portrait_framing(portrait, 128)
     moved = portrait.landmarks * framing.scale + framing.offset
     assert 0.4 * 128 < np.max(moved.max(axis=0) - moved.min(axis=0)) < 0.8 * 128 and framing.error < 0.03
-    assert np.all(np.abs(moved.mean(axis=0) - 64) < 20)  # the face in the middle of the square
+    # the face in the middle half of the square (below its centre: the close-up frames the head chin to crown)
+    assert np.all(np.abs(moved.mean(axis=0) - 64) < 32)
 
 
 def _no_face_pictures(photos_dir: Path, folder: Path) -> list[Path]:

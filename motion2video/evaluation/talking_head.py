@@ -149,6 +149,7 @@ def face_video_frames(path: str | Path, track: FaceTrack, *, size: int, targets:
         InputError: fewer than two frames, or the video ends before a tracked frame.
     """
     from motion2video.core.motion import FaceMotion
+    from motion2video.pose.face_shape import fit_shape_to_offsets, head_shape
     from renderers.registry import renderer_for
 
     rows = np.array(protocol_frames(track.num_frames, targets=targets, stride=stride), np.int64)
@@ -172,7 +173,9 @@ def face_video_frames(path: str | Path, track: FaceTrack, *, size: int, targets:
     landmarks = ((track.landmarks2d[rows] - np.array([x0, y0])) * size / side).astype(np.float32)
     params, camera = crop_face_motion(track, rows, box, size)
     with renderer_for("face", "structure", size=size) as drawer:
-        out = drawer.renderer.render_with_masks(FaceMotion(params, track.motion.fps), camera=camera, vertices=True)
+        shape = head_shape(fit_shape_to_offsets(track.neutral_offsets))  # the person's face shape, every frame
+        out = drawer.renderer.render_with_masks(FaceMotion(params, track.motion.fps), camera=camera, vertices=True,
+                                                shape=shape)
     grey = np.rint(out.frames.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # as the training data
     mesh = MeshTrack(uv=out.vertex_uv, visible=out.vertex_visible, masks=out.masks)
     return FaceVideoFrames(images, landmarks, grey, mesh, video_rows, float(track.motion.fps), box)

@@ -5,7 +5,8 @@ the face in one image, and the square of the image framed as the face renderer's
   finds none in the whole, :func:`face_candidates`; its ROI taken twice: from the detection, then from the first
   landmarks, as the tracker's second frame would), then the head's pose and 52 ARKit coefficients fitted
   to the 470 points (:func:`.face_fit.fit_frame`) with a ridge that keeps the person's own face shape out of the
-  coefficients (:data:`PORTRAIT_RIDGE`).
+  coefficients (:data:`PORTRAIT_RIDGE`), and the face's shape (:mod:`.face_shape`'s targets: where the eyes, brows,
+  nose and mouth sit and how large they are), the two fitted in turn.
 - :func:`portrait_framing`: the similarity (scale, shift; no turn: the head's roll is in its pose) that takes the
   image's landmarks onto the fitted head's landmarks as the close-up camera sees them
   (:func:`renderers.face.close_up_camera`, the camera of the face generators' training frames), the head at no
@@ -13,12 +14,10 @@ the face in one image, and the square of the image framed as the face renderer's
 - :func:`frame_portrait`: the image moved by that similarity into the generator's square (down-sampled by area
   first, its border replicated), and which of its pixels come from the image.
 
-The head keeps Anny's default identity: letting the six phenotype values vary (a coordinate search over 0, 0.25,
-..., 1) lowered the mean re-projection error only from 1.66% to 1.55% of the face size on
-``portrait_mona_lisa.jpg`` and from 2.40% to 2.37% on ``portrait_pearl_earring.jpg``, and took the oldest age for
-both. Nor does it take the person's own face as offsets of its vertices (the points' residual after the fit, spread
-over the head): the landmarks came within 0.2-0.3% of the face size, but the talking-head protocol's L1 and face PSNR
-got worse on both shared videos (docs/experiments.md).
+The head keeps Anny's default phenotype: letting the six phenotype values vary (a coordinate search over 0, 0.25,
+..., 1) lowered the mean re-projection error only from 1.66% to 1.55% of the face size on ``portrait_mona_lisa.jpg``
+and from 2.40% to 2.37% on ``portrait_pearl_earring.jpg``, and took the oldest age for both. The face targets lower
+the median error from 1.31% to 1.09% and from 1.97% to 1.75%.
 """
 
 from __future__ import annotations
@@ -31,8 +30,10 @@ import numpy as np
 
 from motion2video.core.camera import PinholeCamera
 from motion2video.core.motion import FACE_DIM, NUM_EXPRESSIONS
+from motion2video.core.rotations import axis_angle_to_matrix
 from motion2video.pose.face_anny import head_basis, posed_landmarks
 from motion2video.pose.face_fit import FitConfig, FrameFit, fit_frame
+from motion2video.pose.face_shape import fit_shape, shape_points, target_names
 from motion2video.pose.blazepose import weighted_nms
 from motion2video.pose.facemesh import (MIN_PRESENCE, NMS_MIN_IOU, FaceDetection, FaceLandmarks, FaceMesh,
                                         detection_roi, shared_face_mesh)
@@ -47,6 +48,7 @@ PORTRAIT_FIT = FitConfig(ridge=PORTRAIT_RIDGE, first_iterations=6)
 # face over about a 40th of it: a standing person's head in a full-length photo) and no smaller than 96 px
 TILE_LEVELS = 2
 SMALLEST_TILE = 96
+SHAPE_ROUNDS = 2  # the face's shape, then its pose and expression again (_fit)
 
 
 @dataclass(frozen=True)
@@ -58,12 +60,17 @@ class PortraitFit:
         score: the face-presence score in [0, 1].
         fit: the fitted weak-perspective pose and coefficients (:class:`.face_fit.FrameFit`, the picture's pixels).
         faces: how many faces the detector found.
+        shape: (K,) the pictured face's shape, the coefficients of :mod:`.face_shape`'s targets in [0, 1] (``fit``
+            is the pose and expression of the head with that shape).
+        plain_fit: the pose and expression fitted to Anny's own face, without a shape.
     """
 
     landmarks: np.ndarray
     score: float
     fit: FrameFit
     faces: int
+    shape: np.ndarray
+    plain_fit: FrameFit
 
     @property
     def size(self) -> float:
@@ -78,8 +85,12 @@ class PortraitFit:
         return out
 
     def relative_error(self) -> float:
-        """The median distance of the landmarks from the fitted head's, in face sizes."""
+        """The median distance of the landmarks from the fitted head's (Anny's face), in face sizes."""
         return float(np.median(self.fit.residual) / self.size)
+
+    def plain_error(self) -> float:
+        """The median distance of the landmarks from Anny's own head fitted to them, in face sizes."""
+        return float(np.median(self.plain_fit.residual) / self.size)
 
 
 def face_candidates(image: np.ndarray, model: FaceMesh, *, levels: int = TILE_LEVELS) -> Iterator[list[FaceDetection]]:
@@ -133,11 +144,17 @@ def fit_portrait(image: np.ndarray, *, model: FaceMesh | None = None) -> Portrai
 
 
 def _fit(lm: FaceLandmarks, faces: int) -> PortraitFit:
-    """The head fitted to one face's landmarks (:data:`PORTRAIT_FIT`); ``faces`` found beside it."""
+    """The head fitted to one face's landmarks (:data:`PORTRAIT_FIT`); ``faces`` found beside it. The shape and
+    the pose with the expression are fitted in turn (:data:`SHAPE_ROUNDS` times), each holding the other."""
     xy = lm.points()
     basis = head_basis()
-    fit = fit_frame(basis.neutral, basis.basis, xy, PORTRAIT_FIT, None, PORTRAIT_FIT.weights())
-    return PortraitFit(xy, lm.score, fit, faces)
+    weights = PORTRAIT_FIT.weights()
+    plain = fit = fit_frame(basis.neutral, basis.basis, xy, PORTRAIT_FIT, None, weights)
+    shape = np.zeros(len(target_names()))
+    for _ in range(SHAPE_ROUNDS):
+        shape = fit_shape(basis.neutral + np.tensordot(fit.expressions, basis.basis, axes=1), xy, fit, weights)
+        fit = fit_frame(basis.neutral + shape_points(shape), basis.basis, xy, PORTRAIT_FIT, fit, weights)
+    return PortraitFit(xy, lm.score, fit, faces, shape, plain)
 
 
 @dataclass(frozen=True)
@@ -184,6 +201,8 @@ def portrait_framing(portrait: PortraitFit, size: int) -> PortraitFraming:
     params = portrait.params()[None].astype(np.float64)  # (1, 58)
     e = NUM_EXPRESSIONS
     points = posed_landmarks(params[:, :e], params[:, e:e + 3], params[:, e + 3:])[0]  # (470, 3)
+    # the pictured face's shape on the head, turned with it
+    points = points + shape_points(portrait.shape) @ axis_angle_to_matrix(params[0, e:e + 3]).T
     seen = camera.project(points)[:, :2]  # (470, 2) the head's landmarks in the close-up
     scale, offset = similarity_fit(portrait.landmarks, seen)
     moved = portrait.landmarks * scale + offset

@@ -58,6 +58,8 @@ class ReferencePose:
         face: face: (58,) face parameters of the picture; body: None.
         identity: face: Anny phenotype values of the pictured face ({} = Anny's defaults).
         camera: face: the camera that rendered the picture (its size = width x height); body: None.
+        face_shape: face, optional: (K,) the pictured face's shape, the coefficients of
+            :mod:`motion2video.pose.face_shape`'s targets in [0, 1]: the head is drawn with it in every frame.
         camera_joints: body, optional: (17, 3) the pictured pose in 3D, in the picture camera's axes (metres; x
             right, y up, z away from the camera; any origin): BlazePose's world landmarks for a photo, the known
             pose for a render. The mesh generator's body fit takes its bone lengths and depth from it
@@ -72,6 +74,7 @@ class ReferencePose:
     identity: dict = field(default_factory=dict)
     camera: object | None = None  # motion2video.core.camera.PinholeCamera
     camera_joints: np.ndarray | None = None
+    face_shape: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in ("body", "face"):
@@ -100,12 +103,15 @@ def save_reference_pose(path: str | Path, pose: ReferencePose) -> Path:
         arrays.update(face=np.asarray(pose.face, np.float32), identity=np.str_(json.dumps(pose.identity)),
                       camera_position=np.asarray(cam.position, np.float64),
                       camera_target=np.asarray(cam.target, np.float64), camera_yfov=np.float64(cam.yfov))
+        if pose.face_shape is not None:
+            arrays["face_shape"] = np.asarray(pose.face_shape, np.float64)
     return save_npz(path, arrays)
 
 
 def load_reference_pose(path: str | Path) -> ReferencePose:
     """Read a reference pose file; InputError (naming it) when it is missing or malformed."""
     from motion2video.core.camera import PinholeCamera
+    from motion2video.pose.face_shape import target_names
 
     path = Path(path)
     if not path.is_file():
@@ -122,8 +128,11 @@ def load_reference_pose(path: str | Path) -> ReferencePose:
             camera = PinholeCamera(tuple(float(v) for v in data["camera_position"]),
                                    tuple(float(v) for v in data["camera_target"]), float(data["camera_yfov"]),
                                    width, height)
+            shape = data["face_shape"].astype(np.float64) if "face_shape" in data else None
+            if shape is not None and (shape.shape != (len(target_names()),) or not np.all((shape >= 0) & (shape <= 1))):
+                raise ValueError(f"face_shape must be {len(target_names())} values in [0, 1], got shape {shape.shape}")
             return ReferencePose(kind, width, height, face=data["face"].astype(np.float32),
-                                 identity=json.loads(str(data["identity"])), camera=camera)
+                                 identity=json.loads(str(data["identity"])), camera=camera, face_shape=shape)
         raise ValueError(f"unknown kind {kind!r}")
     except (OSError, KeyError, ValueError, TypeError, json.JSONDecodeError) as err:
         raise InputError(f"not a valid reference pose file ({err})", path) from None
@@ -506,7 +515,8 @@ def portrait_reference(image: np.ndarray, path: Path, *, size: int, notes: tuple
                          "its pose with --reference-pose", path)
     framing = portrait_framing(portrait, size)
     framed, picture = frame_portrait(image, framing)
-    pose = ReferencePose("face", size, size, face=portrait.params(), identity={}, camera=framing.camera)
+    pose = ReferencePose("face", size, size, face=portrait.params(), identity={}, camera=framing.camera,
+                         face_shape=portrait.shape)
     x0, y0, side = framing.box()
     h, w = image.shape[:2]
     looked = f" ({pose_path.name})" if pose_path is not None else ""

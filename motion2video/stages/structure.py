@@ -341,13 +341,18 @@ def _render_face_structures(forecast, size: int, reference: Reference):
     if reference.relative_head and pose is not None:
         motion = relative_head_pose(motion, forecast.observed[0], ref_params)
     params = np.concatenate([np.asarray(ref_params, np.float32)[None], motion]).astype(np.float32)
+    shape = None
+    if pose is not None and pose.face_shape is not None:  # the pictured face's shape, every frame
+        from motion2video.pose.face_shape import head_shape
+
+        shape = head_shape(pose.face_shape)
     with renderer_for("face", "structure", size=size) as renderer:
         if pose is not None:
             camera = pose.camera
         else:  # the close-up camera a single-frame render of the first observed frame uses
             camera = renderer.renderer.camera_for(FaceMotion(params[1:2], forecast.fps, identity=identity))
         out = renderer.renderer.render_with_masks(FaceMotion(params, forecast.fps, identity=identity), camera=camera,
-                                                  vertices=True)
+                                                  vertices=True, shape=shape)
     grey = np.rint(out.frames.astype(np.float32).mean(axis=-1)).astype(np.uint8)  # as the training data
     return grey, MeshTrack(uv=out.vertex_uv, visible=out.vertex_visible, masks=out.masks)
 
