@@ -1953,7 +1953,7 @@ FACE_SHEET_DOC = """The photo's face over the generated heads: photos driven by 
 
 For each photo (a body reference, its pose estimated), the clip's observed frames drive the mesh frame generator
 (``synthesize``'s path: the motion model only supplies the structures of the observed frames, which are the clip's
-own) and each picked frame is drawn twice: the generator's own head, and with the photo's face laid over it
+own; ``--frame-model frames-body-128``: the keypoint warp) and each picked frame is drawn twice: the generator's own head, and with the photo's face laid over it
 (:mod:`motion2video.generator.head_paste`). The sheet shows the whole frame and a close-up of the head (nearest
 neighbour, so the pixels are the frame's); ``--json`` records, per photo, how much of the face each frame took and
 in what share of all the frames a face detector finds a face on the head, either way.
@@ -2008,12 +2008,14 @@ def detected_share(frames: np.ndarray, points: np.ndarray) -> float:
 def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, columns: int, crop_person: bool
                ) -> tuple[list[np.ndarray], dict]:
     """Two rows (the generator's head, the photo's face) for one photo; the paste weights of the picked frames and
-    the share of all the frames where a face detector finds the face (:func:`detected_share`), either way."""
+    the share of all the frames where a face detector finds the face (:func:`detected_share`), either way. ``net``
+    is a mesh generator or the keypoint warp."""
     from dataclasses import replace
+    from types import SimpleNamespace
 
     import cv2
 
-    from motion2video.stages.generation import mesh_frames, mesh_setup
+    from motion2video.stages.generation import is_warp, mesh_frames, mesh_setup, paste_faces, warp_face
     from motion2video.stages.reference import load_reference
     from motion2video.stages.sampling import sample_forecast
     from motion2video.stages.structure import render_structures
@@ -2021,10 +2023,18 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
     ref = load_reference(photo, size=size, domain="body", crop_person=crop_person)
     fc = sample_forecast(bundle, clip, samples=1, observed=frames, horizon=1, start=0, seed=0)
     structures = render_structures(fc, domain="body", size=size, reference=ref)
-    video = mesh_setup(net, ref, structures)
     every = np.arange(frames)
-    all_after = mesh_frames(net, ref, structures, video, every)
-    all_before = mesh_frames(net, ref, structures, replace(video, face=None), every)
+    if is_warp(net):  # the keypoint warp: its own frames, then the face moved as it moves the head
+        pasted = warp_face(ref, structures)
+        all_before = net.decode(net.encode_reference(ref.image, structures.points[0], path=ref.path),
+                                structures.points[1:1 + frames])
+        all_after = paste_faces(all_before, every, pasted)
+        video = SimpleNamespace(face=None if pasted is None else pasted[0],
+                                head_weights=None if pasted is None else pasted[2])
+    else:
+        video = mesh_setup(net, ref, structures)
+        all_after = mesh_frames(net, ref, structures, video, every)
+        all_before = mesh_frames(net, ref, structures, replace(video, face=None), every)
     detected = {"generator's head": detected_share(all_before, structures.points[1:1 + frames]),
                 "photo's face": detected_share(all_after, structures.points[1:1 + frames])}
     picked = np.linspace(0, frames - 1, columns).round().astype(int)

@@ -230,3 +230,112 @@ def test_a_reframed_reference_keeps_its_face_on_its_eyes(tracksuit):
     width = np.ptp(lm[:, 0])
     assert 5 < width < 14  # two thirds of the 14 px face
     assert np.linalg.norm(zoomed.person.eyes - mesh_eyes, axis=1).max() < 0.1 * width
+
+
+# --- the keypoint warp (frames-body-128): the face moved as the warp moves the head ------------------------------
+
+def test_the_head_s_affine_is_the_inverse_of_the_warp_s_head_field():
+    """A reference pixel moved by segment_affine is the target pixel whose head field (part_maps) samples it."""
+    import torch
+
+    from motion2video.generator.warp import SEGMENT_PARTS, part_maps, segment_affine
+
+    rng = np.random.default_rng(0)
+    ref = rng.uniform(20, 100, size=(3, 17, 2))
+    tgt = ref + rng.normal(scale=6.0, size=ref.shape)
+    maps = part_maps(torch.as_tensor(ref, dtype=torch.float64), torch.as_tensor(tgt, dtype=torch.float64), 120, 120)
+    head = 1 + [name for name, _, _ in SEGMENT_PARTS].index("head")
+    affine = segment_affine(ref, tgt, "head")  # (3, 2, 3)
+    for b in range(3):
+        for y, x in [(10, 15), (60, 70), (100, 30)]:
+            sampled = maps[b, head, y, x].numpy()  # the reference pixel the target pixel (x + .5, y + .5) samples
+            np.testing.assert_allclose(affine[b, :, :2] @ sampled + affine[b, :, 2], [x + 0.5, y + 0.5], atol=1e-6)
+
+
+def test_the_head_s_axes_turn_with_the_body_and_carry_its_points_rigidly():
+    from motion2video.core.rotations import axis_angle_to_matrix
+    from motion2video.generator.head_paste import joint_head_axes, rigid_head
+
+    rng = np.random.default_rng(1)
+    rest = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)[0]
+    turn = axis_angle_to_matrix(np.array([0.1, -0.2, 1.3]))
+    moved = rest @ turn.T + [0.3, -1.0, 0.2]
+    axes, origin = joint_head_axes(np.stack([rest, moved]))
+    np.testing.assert_allclose(axes[1], turn @ axes[0], atol=1e-9)
+    np.testing.assert_allclose(axes[0].T @ axes[0], np.eye(3), atol=1e-9)
+    points, normals = rng.normal(size=(20, 3)) * 0.1 + rest[10], rng.normal(size=(20, 3))
+    out, out_normals = rigid_head(points, normals, rest, np.stack([rest, moved]))
+    np.testing.assert_allclose(out[0], points, atol=1e-9)
+    np.testing.assert_allclose(out[1], (points - rest[10]) @ turn.T + moved[10], atol=1e-9)
+    np.testing.assert_allclose(out_normals[1], normals @ turn.T, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def warp_net():
+    from motion2video.generator.checkpoint import load_frame_model
+
+    return load_frame_model("frames-body-128")
+
+
+def test_the_keypoint_warp_carries_the_photos_face_on_its_head(warp_net, tracksuit, monkeypatch):
+    """frames-body-128 makes the photo walk: its frames carry the photo's face moved as the warp moves the head (PSNR
+    against the photo's face moved the same way, over the face's core), a face detector finds it there, and outside
+    the head's square the frames are the warp's own."""
+    import motion2video.stages.generation as generation
+    from motion2video.generator.head_paste import compose_affine, pixel_index_affine
+    from motion2video.stages.pictured_face import face_mesh, landmarks_in_reference
+    from motion2video.stages.structure import render_structures
+
+    forecast = walk_forecast()
+    structures = render_structures(forecast, domain="body", size=SIZE, reference=tracksuit)
+    pasted = generation.warp_face(tracksuit, structures)
+    assert pasted is not None
+    face, affines, weights = pasted
+    np.testing.assert_array_less(0.99, weights)  # walking towards the camera: the face fully laid over
+    out = generation.generate_video_frames(warp_net, tracksuit, structures)
+    frames = np.concatenate([out.observed, out.futures[0]])
+    monkeypatch.setattr(generation, "warp_face", lambda reference, structures: None)  # the warp's own frames
+    own = generation.generate_video_frames(warp_net, tracksuit, structures)
+    own = np.concatenate([own.observed, own.futures[0]])
+    lm = landmarks_in_reference(face)
+    for i in range(len(frames)):
+        move = compose_affine(affines[i], face.to_reference)
+        alpha = cv2.warpAffine(face.matte, pixel_index_affine(move), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
+        moved_photo = cv2.warpAffine(tracksuit.image, pixel_index_affine(affines[i]), (SIZE, SIZE),
+                                     flags=cv2.INTER_LINEAR)
+        core = alpha > 0.99
+        assert core.sum() > 40 and psnr(frames[i][core], moved_photo[core]) > 25.0
+        target_lm = lm @ affines[i][:, :2].T + affines[i][:, 2]
+        lo, hi = target_lm.min(axis=0), target_lm.max(axis=0)
+        changed = np.argwhere(np.any(frames[i] != own[i], axis=-1))[:, ::-1] + 0.5  # (x, y)
+        grow = (hi - lo) / 3
+        assert len(changed) > 40 and (changed >= lo - grow).all() and (changed <= hi + grow).all()
+        x0, y0 = np.floor(lo - (hi - lo)).astype(int)
+        side = int(np.ceil(3 * np.max(hi - lo)))
+        square = cv2.resize(frames[i][max(0, y0):y0 + side, max(0, x0):x0 + side], (192, 192),
+                            interpolation=cv2.INTER_CUBIC)
+        assert face_mesh().detect(np.ascontiguousarray(square)), f"no face found in frame {i}"
+
+
+def test_the_keypoint_warp_keeps_its_own_head_turned_away_from_the_photos_view(warp_net, tracksuit):
+    """The walk's futures turned by 0, 90 and 180 degrees: the face is laid over the first (about 18 degrees from the
+    photo's view), not over the others (a profile, the back of the head)."""
+    import motion2video.stages.generation as generation
+    from motion2video.stages.structure import render_structures
+
+    structures = render_structures(walk_forecast((0.0, 90.0, 180.0)), domain="body", size=SIZE, reference=tracksuit)
+    _, _, weights = generation.warp_face(tracksuit, structures)
+    np.testing.assert_array_equal(weights, [1.0, 1.0, 0.0, 0.0])
+
+
+def test_a_2d_motion_gives_the_keypoint_warp_no_face(tracksuit):
+    """2D joints do not say where the head is turned: no face is laid over."""
+    import motion2video.stages.generation as generation
+    from motion2video.stages.sampling import Forecast
+    from motion2video.stages.structure import render_structures
+
+    walk = walk_forecast()
+    flat = Forecast(observed=walk.observed[..., :2] * 100 + 128, futures=walk.futures[..., :2] * 100 + 128, fps=25.0,
+                    layout="body2d", model="test", seed=0)
+    structures = render_structures(flat, domain="body", size=SIZE, reference=tracksuit)
+    assert generation.warp_face(tracksuit, structures) is None

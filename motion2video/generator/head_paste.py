@@ -178,6 +178,52 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
     return out
 
 
+def joint_head_axes(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The head's axes and origin from canonical H36M-17 joints: up from the thorax joint to the head joint, left the
+    mean of the directions from the right shoulder to the left one and from the right hip to the left one (made
+    square to up), and their cross product; the origin at the head joint. The joints do not say where the head
+    looks. The thorax, not the neck joint: the neck-to-head segment is some 10 cm long, and in a sampled walk it
+    tilted by up to 36 degrees and swung around the vertical, so the face faded out every stride. Shoulders and hips:
+    they swing against each other in a walk, while a walker's head keeps its course.
+
+    Args:
+        joints: (..., 17, 3) world joints, metres.
+    Returns:
+        axes (..., 3, 3) whose columns are left, up x left, up; origins (..., 3).
+    """
+    from motion2video.core.skeletons import HEAD, L_HIP, L_SHOULDER, R_HIP, R_SHOULDER, THORAX
+
+    j = np.asarray(joints, np.float64)
+    up = j[..., HEAD, :] - j[..., THORAX, :]
+    up = up / np.linalg.norm(up, axis=-1, keepdims=True)
+
+    def unit(v: np.ndarray) -> np.ndarray:
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+    left = unit(j[..., L_SHOULDER, :] - j[..., R_SHOULDER, :]) + unit(j[..., L_HIP, :] - j[..., R_HIP, :])
+    left = left - np.sum(left * up, axis=-1, keepdims=True) * up
+    left = left / np.linalg.norm(left, axis=-1, keepdims=True)
+    return np.stack([left, np.cross(up, left), up], axis=-1), j[..., HEAD, :]
+
+
+def rigid_head(points: np.ndarray, normals: np.ndarray, rest_joints: np.ndarray, joints: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """A head at rest carried rigidly by the head's axes of each pose (:func:`joint_head_axes`): where a body posed
+    by 2D-lifted or 3D joints alone puts it, without a mesh.
+
+    Args:
+        points: (P, 3) the head's points at rest; normals: (P, 3) their surface normals at rest.
+        rest_joints: (17, 3) the rest pose's joints; joints: (N, 17, 3) the poses.
+    Returns:
+        points (N, P, 3) and normals (N, P, 3) in each pose.
+    """
+    rest_axes, rest_origin = joint_head_axes(rest_joints)
+    axes, origins = joint_head_axes(joints)  # (N, 3, 3), (N, 3)
+    turn = axes @ rest_axes.T  # (N, 3, 3) rest -> pose
+    moved = np.einsum("nij,pj->npi", turn, np.asarray(points, np.float64) - rest_origin) + origins[:, None]
+    return moved, np.einsum("nij,pj->npi", turn, np.asarray(normals, np.float64))
+
+
 def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.ndarray, face_weights: np.ndarray,
                ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, head_points: np.ndarray,
                head_vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

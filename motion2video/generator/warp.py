@@ -227,6 +227,30 @@ def part_maps(ref: torch.Tensor, tgt: torch.Tensor, height: int, width: int) -> 
     return torch.stack(maps, dim=1)
 
 
+def segment_affine(ref: np.ndarray, tgt: np.ndarray, part: str) -> np.ndarray:
+    """(B, 2, 3) float64 the affine map from reference pixels to target pixels that a limb part of
+    :data:`SEGMENT_PARTS` moves by: the inverse of its motion field (:func:`part_maps`), which stretches along the
+    segment by the ratio of its lengths and across it by the torso's scale.
+
+    Args:
+        ref, tgt: (B, 17, 2) joints of the reference and target frames (same pixel frame).
+        part: the part's name, e.g. ``"head"``.
+    """
+    (a, b), = [(i, j) for name, i, j in SEGMENT_PARTS if name == part]
+    r, t = torch.as_tensor(np.asarray(ref, np.float64)), torch.as_tensor(np.asarray(tgt, np.float64))
+    scale, _, _ = torso_similarity(r, t)
+    ra, rb, ta, tb = r[:, a], r[:, b], t[:, a], t[:, b]
+    t_len = (tb - ta).norm(dim=-1).clamp_min(1.0)
+    r_len = (rb - ra).norm(dim=-1).clamp_min(1.0)
+    u_t, u_r = (tb - ta) / t_len[:, None], (rb - ra) / r_len[:, None]
+    along = (r_len / t_len).clamp(1.0 / 3.0, 3.0)
+    # target -> reference is ra + M (x - ta), M = along u_r u_t^T + scale perp(u_r) perp(u_t)^T; its inverse:
+    inverse = (torch.einsum("bi,bj->bij", u_t, u_r) / along[:, None, None]
+               + torch.einsum("bi,bj->bij", _perp(u_t), _perp(u_r)) / scale[:, None, None])
+    shift = ta - torch.einsum("bij,bj->bi", inverse, ra)
+    return torch.cat([inverse, shift[:, :, None]], dim=2).numpy()
+
+
 def to_grid(coords: torch.Tensor, height: int, width: int) -> torch.Tensor:
     """Pixel coordinates (..., 2) -> grid_sample coordinates in [-1, 1] (align_corners=False)."""
     return torch.stack([2.0 * coords[..., 0] / width - 1.0, 2.0 * coords[..., 1] / height - 1.0], dim=-1)

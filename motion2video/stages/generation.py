@@ -80,6 +80,47 @@ def mesh_frames(net, reference: Reference, structures: Structures, video, rows: 
     return generate_mesh_frames(net, reference.image, video, rows, batch_size=batch_size)
 
 
+def warp_face(reference: Reference, structures: Structures):
+    """The keypoint warp's pictured face: the face the reference photo shows, found at its own resolution
+    (:func:`~motion2video.stages.pictured_face.reference_face`), moved in each target as the warp moves the head
+    (:func:`~motion2video.generator.warp.segment_affine`), laid over as much as the head still shows it
+    (:func:`~motion2video.stages.pictured_face.joint_face_weights`). None without a face, for face structures, or for
+    a 2D motion model's (which does not say where the head is turned).
+
+    Returns:
+        (face, affines (N, 2, 3) output pixels of the reference -> of each target, weights (N,)) or None.
+    """
+    from motion2video.generator.warp import segment_affine
+    from motion2video.stages.pictured_face import joint_face_weights, reference_face
+
+    if structures.domain != "body" or structures.placement is None:
+        return None
+    face = reference_face(reference)
+    if face is None:
+        return None
+    pictured = None if reference.pose is None else reference.pose.camera_joints
+    weights = joint_face_weights(face, structures.placement, structures.points[0], pictured=pictured)
+    if weights is None:
+        return None
+    targets = structures.points[1:1 + structures.num_targets]
+    affines = segment_affine(np.broadcast_to(structures.points[0], targets.shape), targets, "head")
+    return face, affines, weights
+
+
+def paste_faces(frames: np.ndarray, targets: np.ndarray, pasted) -> np.ndarray:
+    """(R, S, S, 3) uint8 ``frames`` of target indices ``targets`` (R,) (0 = the first observed frame) with the
+    pictured face of :func:`warp_face` (``pasted``; None leaves them) laid over each."""
+    from motion2video.generator.head_paste import compose_affine, paste_head
+
+    if pasted is None:
+        return frames
+    face, affines, weights = pasted
+    out = np.asarray(frames).copy()
+    for i, t in enumerate(np.asarray(targets, np.int64)):
+        out[i] = paste_head(out[i], face.image, face.matte, compose_affine(affines[t], face.to_reference), weights[t])
+    return out
+
+
 def reference_person(image: np.ndarray):
     """What BlazePose finds of the person in a reference image (its mask, eyes and hands): a
     :class:`motion2video.stages.reference.ReferencePerson`, or None when it finds nobody."""
@@ -178,6 +219,7 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
         with torch_threads(threads):
             state = net.encode_reference(reference.image, structures.points[0], path=reference.path)
             frames = net.decode(state, structures.points[1:1 + n], batch_size=batch_size)
+        frames = paste_faces(frames, np.arange(n), warp_face(reference, structures))
         to, k, tf = structures.observed, structures.samples, structures.horizon
         size = structures.size
         return GeneratedFrames(observed=frames[:to], futures=frames[to:].reshape(k, tf, size, size, 3))
@@ -221,6 +263,7 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
     elif warp:  # the warp generator works at any frame size: its person crop is resized to the model's size
         with torch_threads(threads):
             state = net.encode_reference(reference.image, structures.points[0], path=reference.path)
+        pasted = warp_face(reference, structures)
     else:
         size = net.config.image_size
         if structures.size != size:
@@ -237,7 +280,8 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
             if mesh:
                 frames = mesh_frames(net, reference, structures, video, unique - 1, batch_size=batch_size)
             elif warp:
-                frames = net.decode(state, structures.points[unique], batch_size=batch_size)
+                frames = paste_faces(net.decode(state, structures.points[unique], batch_size=batch_size), unique - 1,
+                                     pasted)
             else:
                 frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),
                                          batch_size=batch_size, channels_last=channels_last)

@@ -154,3 +154,48 @@ def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_v
     return head_moves(landmarks_in_reference(face), corr.points(rest.vertices)[mesh], corr.vertices[mesh],
                       corr.weights[mesh], ref_uv, tgt_uv, tgt_visible, head_points=rest.vertices[head],
                       head_vertices=head)
+
+
+def joint_face_weights(face: PicturedFace, placement, reference_points: np.ndarray, *,
+                       pictured: np.ndarray | None = None) -> np.ndarray | None:
+    """How much of the pictured face to lay over each target of a generator without a body mesh (the keypoint warp):
+    Anny's head carried rigidly by the head's axes of the joints (:func:`motion2video.generator.head_paste.rigid_head`),
+    the reference's lifted from its 2D joints as the mesh generator lifts them
+    (:func:`motion2video.generator.mesh_fit.lift_reference`); a head vertex counts as shown where it faces the camera
+    (the head's own back hides the face; an arm in front of it is not seen). The weights are
+    :func:`motion2video.generator.head_paste.head_moves`'s, as for the mesh generator.
+
+    Args:
+        face: the pictured face; placement: the structures' :class:`motion2video.stages.structure.BodyPlacement`.
+        reference_points: (17, 2) the reference's joints in output pixels.
+        pictured: (17, 3) the reference picture's own 3D pose (its pose file's ``camera_joints``), or None.
+    Returns:
+        (N,) weights in [0, 1]; None for a 2D placement (2D joints do not say which way the head is turned).
+    """
+    from motion2video.generator.head_paste import rigid_head
+    from motion2video.generator.mesh_fit import lift_reference
+    from motion2video.pose.face_anny import load_correspondence
+    from motion2video.pose.facemesh import NUM_LANDMARKS
+    from renderers import anny_model
+    from renderers.mesh import vertex_normals
+
+    if placement.world_observed is None or placement.camera is None:
+        return None
+    camera, scale, shift = placement.camera, placement.scale, np.asarray(placement.shift, np.float64)
+    world = np.concatenate([placement.world_observed, placement.world_futures.reshape(-1, 17, 3)])  # (N, 17, 3)
+    lifted = lift_reference(reference_points, world[0], camera, scale, shift, pictured=pictured)
+    rest = anny_model.anny_rest()
+    head = np.flatnonzero(anny_model.head_vertices())
+    points, normals = rigid_head(rest.vertices[head], vertex_normals(rest.vertices, anny_model.triangles())[head],
+                                 rest.joints17, np.concatenate([lifted[None], world]))
+    uv = camera.project(points.reshape(-1, 3))[:, :2].reshape(len(points), len(head), 2) * scale + shift
+    shown = np.einsum("npd,npd->np", normals, np.asarray(camera.position, np.float64) - points) > 0
+    corr = load_correspondence()
+    mesh = slice(0, NUM_LANDMARKS)  # the table's last two rows are the irises, which the landmarks do not hold
+    local = np.searchsorted(head, corr.vertices[mesh])  # the landmarks' vertices among the head's
+    if not np.array_equal(head[np.minimum(local, len(head) - 1)], corr.vertices[mesh]):
+        raise ValueError("a face landmark lies off Anny's head vertices")
+    _, weights = head_moves(landmarks_in_reference(face), corr.points(rest.vertices)[mesh], local,
+                            corr.weights[mesh], uv[0], uv[1:], shown[1:], head_points=rest.vertices[head],
+                            head_vertices=np.arange(len(head)))
+    return weights
