@@ -339,3 +339,25 @@ def test_a_2d_motion_gives_the_keypoint_warp_no_face(tracksuit):
                     layout="body2d", model="test", seed=0)
     structures = render_structures(flat, domain="body", size=SIZE, reference=tracksuit)
     assert generation.warp_face(tracksuit, structures) is None
+
+
+def test_the_head_cut_is_the_person_in_the_head_zone_only():
+    """head_cut: 1 away from the head; inside the head zone, the segmented person. cut_alpha samples it along the
+    flow: a target pixel whose colour comes from the cut's 0 is background."""
+    import torch
+
+    from motion2video.generator.mesh_flow import identity_flow
+    from motion2video.generator.mesh_warp import HEAD_ZONE, cut_alpha, head_cut
+
+    points = np.zeros((17, 2))
+    points[8], points[9], points[10] = (32.0, 40.0), (32.0, 30.0), (32.0, 20.0)  # thorax, neck, head: 20 px apart
+    person = np.zeros((64, 64), np.float32)
+    person[18:40, 26:38] = 1.0
+    cut = head_cut(person, points)
+    half = HEAD_ZONE * 20 / 2  # the zone's half side around (32, 25)
+    assert cut[25, 32] == 1.0 and cut[25, 20] == 0.0  # her head; beside it, in the zone
+    assert cut[25, int(32 + half + 2)] == 1.0 and cut[60, 5] == 1.0  # outside the zone: never cut
+    alpha = torch.ones(1, 1, 64, 64)
+    flow = torch.from_numpy(identity_flow(64, 64))[None].float()
+    out = cut_alpha(alpha, torch.from_numpy(cut)[None, None], flow)[0, 0].numpy()
+    np.testing.assert_allclose(out, cut, atol=1e-6)

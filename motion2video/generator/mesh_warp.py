@@ -45,6 +45,7 @@ PLATE_GROW_PX = 3  # the reference silhouette is grown by this many pixels (at 1
 ALPHA_PRIOR = 4.0  # logit of the person's alpha from the target silhouette: +-this
 VISIBILITY_PRIOR = 3.0  # logit of the visibility from the mesh's visibility map: (2 v - 1) x this
 OUT_CHANNELS = 7  # alpha, visibility, inpainting RGB, flow residual (x, y)
+HEAD_ZONE = 1.5  # head_cut: the head zone's side, times the thorax-to-head distance
 
 
 @dataclass(frozen=True)
@@ -250,6 +251,40 @@ def unsharp(image: torch.Tensor, amount: float, sigma: float = UNSHARP_SIGMA_PX)
     return image + amount * (image - blur)
 
 
+def cut_alpha(alpha: torch.Tensor, cut: torch.Tensor, flow: torch.Tensor) -> torch.Tensor:
+    """(B, 1, H, W) ``alpha`` times ``cut`` (B, 1, H, W), a reference mask (:func:`head_cut`), sampled along ``flow``
+    (B, H, W, 2): a target pixel whose colour comes from where the cut is 0 is background."""
+    return alpha * warp_image(cut, flow).clamp(0.0, 1.0)
+
+
+def head_cut(person: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(S, S) float32: 0 where the reference's head zone is not the person, 1 elsewhere. The zone is the square of
+    :data:`HEAD_ZONE` times the thorax-to-head distance around the middle of the neck and head joints.
+
+    A body fitted to a real person is not their outline: its silhouette, grown by the clothes margin
+    (:func:`motion2video.generator.mesh_reference.clothes_margin`), reaches past a slim person's head, and there the
+    flow lands on the reference's background, which :func:`fill_outside_person` paints with the nearest person
+    colour. The network, trained on renders whose person is the mesh's silhouette, keeps those pixels as person: on
+    ``dancer.avi`` a halo of face and hair colours stood around the head, like a second head beside it. Cut there
+    (:func:`cut_alpha`), the head is the pictured one. Along the limbs the same cut opened holes of background in
+    thin legs whose fitted mesh lies a little beside them (docs/experiments.md), so it is kept to the head.
+
+    Args:
+        person: (S, S) the reference's segmented person in [0, 1]; points: (17, 2) its joints in the same pixels.
+    """
+    from motion2video.core.skeletons import HEAD, NECK, THORAX
+
+    pts = np.asarray(points, np.float64)
+    size = person.shape[0]
+    centre = 0.5 * (pts[NECK] + pts[HEAD])
+    half = 0.5 * HEAD_ZONE * max(float(np.linalg.norm(pts[HEAD] - pts[THORAX])), 1.0)
+    grid = np.arange(size) + 0.5
+    inside_x = np.abs(grid - centre[0]) <= half
+    inside_y = np.abs(grid - centre[1]) <= half
+    zone = inside_y[:, None] & inside_x[None, :]
+    return np.where(zone, np.asarray(person, np.float32), 1.0).astype(np.float32)
+
+
 @dataclass
 class MeshWarpOutput:
     """What :meth:`MeshWarpGenerator.forward_parts` computes (all (B, ., H, W) unless said).
@@ -301,7 +336,8 @@ class MeshWarpGenerator(nn.Module):
     def forward_parts(self, ref_image: torch.Tensor, ref_mask: torch.Tensor, flow: torch.Tensor,
                       visibility: torch.Tensor, silhouette: torch.Tensor, tgt_structure: torch.Tensor,
                       plate: torch.Tensor | None = None, source_mask: torch.Tensor | None = None,
-                      colours: torch.Tensor | None = None) -> MeshWarpOutput:
+                      colours: torch.Tensor | None = None, person_cut: torch.Tensor | None = None
+                      ) -> MeshWarpOutput:
         """The output and its parts.
 
         Args: as :meth:`forward`, and plate: (B, 3, H, W) the background (:func:`mesh_plate` of the reference
@@ -311,6 +347,9 @@ class MeshWarpGenerator(nn.Module):
             outside is filled from inside its outline (:func:`segmented_core_px`).
             colours: (B, 3, H, W) :func:`sampled_colours` of the reference when the caller has them already (one
             reference for many batches of targets); ``source_mask`` is then not used.
+            person_cut: (B, 1, H, W) for a body fitted to a real person, :func:`head_cut` of the reference: the
+            alpha is multiplied by it sampled along the final flow (:func:`cut_alpha`). None (rendered pairs,
+            training): the alpha as the network gives it.
         """
         b, _, h, w = ref_image.shape
         dtype = ref_image.dtype
@@ -338,6 +377,8 @@ class MeshWarpGenerator(nn.Module):
         vis = torch.sigmoid(VISIBILITY_PRIOR * (2.0 * visibility - 1.0) + out[:, 1:2])
         final_flow = flow + out[:, 5:7].permute(0, 2, 3, 1) * (FLOW_UNIT * w)
         warped = warp_image(sampled, final_flow, mode)
+        if person_cut is not None:
+            alpha = cut_alpha(alpha, person_cut.to(dtype), final_flow)
         inpainting = torch.sigmoid(out[:, 2:5] + torch.logit(warped.clamp(0.02, 0.98)))
         person = vis * warped + (1.0 - vis) * inpainting
         image = alpha * person + (1.0 - alpha) * plate

@@ -34,7 +34,7 @@ from motion2video.generator.image_baselines import BASELINES, run_baseline
 from motion2video.generator.data import FramePairs, evaluation_pair_index, make_pairs
 from motion2video.generator.head_paste import paste_head
 from motion2video.generator.specs import FrameSequences
-from motion2video.generator.mesh_warp import MeshWarpGenerator, mesh_inputs, mesh_source_mask
+from motion2video.generator.mesh_warp import MeshWarpGenerator, head_cut, mesh_inputs, mesh_source_mask
 from motion2video.generator.model import FrameGenerator, generate, images_to_tensor
 from motion2video.generator.warp import WarpGenerator, warp_generate
 
@@ -364,8 +364,11 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
                 backgrounds[key] = inpaint_background(image, person | fitted)
             behind.append(backgrounds[key])
         behind = np.stack(behind)
+        segmented = mesh_source_mask(part)
+        cut = torch.from_numpy(np.stack([head_cut(m, p) for m, p in zip(part.ref_masks.astype(np.float32),
+                                                                         part.ref_points)]))[:, None]
         parts = model.forward_parts(images_to_tensor(part.ref_images), *inputs, torch.from_numpy(part.tgt_structures),
-                                    plate=images_to_tensor(behind), source_mask=mesh_source_mask(part))
+                                    plate=images_to_tensor(behind), source_mask=segmented, person_cut=cut)
         person = parts.person.clamp(0, 1).permute(0, 2, 3, 1).numpy()
         matte = soft_matte(parts.alpha[:, 0].numpy())
         frames = np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)])

@@ -37,7 +37,7 @@ from motion2video.generator.head_paste import compose_affine, paste_head
 from motion2video.generator.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
 from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
 from motion2video.generator.mesh_reference import clothes_margin, hand_colour_sources, reference_sampling
-from motion2video.generator.mesh_warp import mesh_plate, person_colours, sampled_colours
+from motion2video.generator.mesh_warp import head_cut, mesh_plate, person_colours, sampled_colours
 from motion2video.generator.warp import limb_region, person_crop
 from motion2video.stages.pictured_face import PicturedFace, face_moves
 from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
@@ -249,7 +249,11 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
         None].float() / 255.0
     behind = background[y0:y0 + side, x0:x0 + side]
     out = np.repeat(background[None], len(rows), axis=0)
-    colours = sampled_colours(x_ref, ref_mask, plate, sampled_person(video))  # once for every target
+    segmented = sampled_person(video)
+    colours = sampled_colours(x_ref, ref_mask, plate, segmented)  # once for every target
+    # the head's halo cut off (head_cut): where the flow lands beside the pictured head, the background
+    cut = None if segmented is None else torch.from_numpy(head_cut(video.person.astype(np.float32),
+                                                                    video.ref_points))[None, None]
     ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], image=small)
     if video.uv_sources is not None:  # a fitted hand beside the pictured one samples the pictured one
         ref_uv = ref_uv[video.uv_sources]
@@ -265,7 +269,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
                                       torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                       sil, structure, plate=plate.expand(n, -1, -1, -1),
-                                      colours=colours.expand(n, -1, -1, -1))
+                                      colours=colours.expand(n, -1, -1, -1),
+                                      person_cut=None if cut is None else cut.expand(n, -1, -1, -1))
             person = parts.person.clamp(0, 1).permute(0, 2, 3, 1).numpy()  # (n, size, size, 3)
             alpha = parts.alpha[:, 0].numpy()  # (n, size, size)
             if side != size:
