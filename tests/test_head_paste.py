@@ -63,6 +63,30 @@ def mesh_video_of(net, reference, forecast):
     return mesh_setup(net, reference, render_structures(forecast, domain="body", size=SIZE, reference=reference))
 
 
+def assert_face_laid_over(frame: np.ndarray, own: np.ndarray, image: np.ndarray, face, affine: np.ndarray) -> None:
+    """``frame`` carries the pictured ``face`` moved by ``affine`` (reference pixels -> frame pixels): its pixels over
+    the face's core are the reference ``image`` moved the same way (PSNR > 25 dB), it differs from the generator's
+    ``own`` frame only within the moved landmarks' box grown by a third, and a face detector finds the face in the
+    head's square enlarged."""
+    from motion2video.generator.head_paste import compose_affine, pixel_index_affine
+    from motion2video.stages.pictured_face import face_mesh, landmarks_in_reference
+
+    move = compose_affine(affine, face.to_reference)  # photo square -> frame
+    alpha = cv2.warpAffine(face.matte, pixel_index_affine(move), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
+    moved_photo = cv2.warpAffine(image, pixel_index_affine(affine), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
+    core = alpha > 0.99
+    assert core.sum() > 40 and psnr(frame[core], moved_photo[core]) > 25.0
+    target_lm = landmarks_in_reference(face) @ affine[:, :2].T + affine[:, 2]
+    lo, hi = target_lm.min(axis=0), target_lm.max(axis=0)
+    grow = (hi - lo) / 3
+    changed = np.argwhere(np.any(frame != own, axis=-1))[:, ::-1] + 0.5  # (x, y)
+    assert len(changed) > 40 and (changed >= lo - grow).all() and (changed <= hi + grow).all()
+    x0, y0 = np.floor(lo - (hi - lo)).astype(int)
+    side = int(np.ceil(3 * np.max(hi - lo)))
+    square = cv2.resize(frame[max(0, y0):y0 + side, max(0, x0):x0 + side], (192, 192), interpolation=cv2.INTER_CUBIC)
+    assert face_mesh().detect(np.ascontiguousarray(square)), "no face found on the head"
+
+
 def test_the_face_is_found_at_the_photos_own_resolution(tracksuit):
     """On a 1080 x 1920 photo cut to its person and resized to 256, her face is some 14 px wide; the face is looked
     for in the photo as given, where the square around her head is 5.6 times larger, and mapped into the 256 px
@@ -116,9 +140,7 @@ def test_a_walk_carries_the_photos_face_and_changes_nothing_outside_the_head(net
     head's square."""
     from dataclasses import replace
 
-    from motion2video.generator.head_paste import compose_affine, pixel_index_affine
     from motion2video.stages.generation import mesh_frames
-    from motion2video.stages.pictured_face import face_mesh, landmarks_in_reference
     from motion2video.stages.structure import render_structures
 
     forecast = walk_forecast()
@@ -129,29 +151,8 @@ def test_a_walk_carries_the_photos_face_and_changes_nothing_outside_the_head(net
     rows = np.arange(3)
     with_face = mesh_frames(net, tracksuit, structures, video, rows)
     without = mesh_frames(net, tracksuit, structures, replace(video, face=None), rows)
-    face = video.face
-    lm = landmarks_in_reference(face)
     for i in rows:
-        move = compose_affine(video.head_affines[i], face.to_reference)  # photo square -> frame
-        alpha = cv2.warpAffine(face.matte, pixel_index_affine(move), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
-        moved_photo = cv2.warpAffine(tracksuit.image, pixel_index_affine(video.head_affines[i]), (SIZE, SIZE),
-                                     flags=cv2.INTER_LINEAR)
-        core = alpha > 0.99
-        assert core.sum() > 40
-        assert psnr(with_face[i][core], moved_photo[core]) > 25.0
-        # nothing changes outside the head: the changed pixels lie within the moved landmarks' box grown by a third
-        target_lm = lm @ video.head_affines[i][:, :2].T + video.head_affines[i][:, 2]
-        lo, hi = target_lm.min(axis=0), target_lm.max(axis=0)
-        grow = (hi - lo) / 3
-        changed = np.argwhere(np.any(with_face[i] != without[i], axis=-1))[:, ::-1] + 0.5  # (x, y)
-        assert len(changed) > 40
-        assert (changed >= lo - grow).all() and (changed <= hi + grow).all()
-        # a face detector finds the face there, in the head's square enlarged
-        x0, y0 = np.floor(lo - (hi - lo)).astype(int)
-        side = int(np.ceil(3 * np.max(hi - lo)))
-        square = cv2.resize(with_face[i][max(0, y0):y0 + side, max(0, x0):x0 + side], (192, 192),
-                            interpolation=cv2.INTER_CUBIC)
-        assert face_mesh().detect(np.ascontiguousarray(square)), f"no face found in frame {i}"
+        assert_face_laid_over(with_face[i], without[i], tracksuit.image, video.face, video.head_affines[i])
 
 
 def test_a_head_turned_away_from_the_photos_view_keeps_the_generators_head(net, tracksuit):
@@ -282,8 +283,6 @@ def test_the_keypoint_warp_carries_the_photos_face_on_its_head(warp_net, tracksu
     against the photo's face moved the same way, over the face's core), a face detector finds it there, and outside
     the head's square the frames are the warp's own."""
     import motion2video.stages.generation as generation
-    from motion2video.generator.head_paste import compose_affine, pixel_index_affine
-    from motion2video.stages.pictured_face import face_mesh, landmarks_in_reference
     from motion2video.stages.structure import render_structures
 
     forecast = walk_forecast()
@@ -297,24 +296,8 @@ def test_the_keypoint_warp_carries_the_photos_face_on_its_head(warp_net, tracksu
     monkeypatch.setattr(generation, "warp_face", lambda reference, structures: None)  # the warp's own frames
     own = generation.generate_video_frames(warp_net, tracksuit, structures)
     own = np.concatenate([own.observed, own.futures[0]])
-    lm = landmarks_in_reference(face)
     for i in range(len(frames)):
-        move = compose_affine(affines[i], face.to_reference)
-        alpha = cv2.warpAffine(face.matte, pixel_index_affine(move), (SIZE, SIZE), flags=cv2.INTER_LINEAR)
-        moved_photo = cv2.warpAffine(tracksuit.image, pixel_index_affine(affines[i]), (SIZE, SIZE),
-                                     flags=cv2.INTER_LINEAR)
-        core = alpha > 0.99
-        assert core.sum() > 40 and psnr(frames[i][core], moved_photo[core]) > 25.0
-        target_lm = lm @ affines[i][:, :2].T + affines[i][:, 2]
-        lo, hi = target_lm.min(axis=0), target_lm.max(axis=0)
-        changed = np.argwhere(np.any(frames[i] != own[i], axis=-1))[:, ::-1] + 0.5  # (x, y)
-        grow = (hi - lo) / 3
-        assert len(changed) > 40 and (changed >= lo - grow).all() and (changed <= hi + grow).all()
-        x0, y0 = np.floor(lo - (hi - lo)).astype(int)
-        side = int(np.ceil(3 * np.max(hi - lo)))
-        square = cv2.resize(frames[i][max(0, y0):y0 + side, max(0, x0):x0 + side], (192, 192),
-                            interpolation=cv2.INTER_CUBIC)
-        assert face_mesh().detect(np.ascontiguousarray(square)), f"no face found in frame {i}"
+        assert_face_laid_over(frames[i], own[i], tracksuit.image, face, affines[i])
 
 
 def test_the_keypoint_warp_keeps_its_own_head_turned_away_from_the_photos_view(warp_net, tracksuit):
