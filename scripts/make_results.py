@@ -1953,10 +1953,11 @@ FACE_SHEET_DOC = """The photo's face over the generated heads: photos driven by 
 
 For each photo (a body reference, its pose estimated), the clip's observed frames drive the mesh frame generator
 (``synthesize``'s path: the motion model only supplies the structures of the observed frames, which are the clip's
-own; ``--frame-model frames-body-128``: the keypoint warp) and each picked frame is drawn twice: the generator's own head, and with the photo's face laid over it
-(:mod:`motion2video.generator.head_paste`). The sheet shows the whole frame and a close-up of the head (nearest
-neighbour, so the pixels are the frame's); ``--json`` records, per photo, how much of the face each frame took and
-in what share of all the frames a face detector finds a face on the head, either way.
+own; ``--frame-model frames-body-128``: the keypoint warp) and each picked frame is drawn twice: the generator's own
+head, and with the photo's face laid over it (:mod:`motion2video.generator.head_paste`). The sheet shows the whole
+frame and a close-up of the head (nearest neighbour, so the pixels are the frame's); ``--json`` records, per photo,
+how much of the face each frame took and in what share of all the frames a face detector finds a face on the head,
+either way.
 
     python scripts/make_results.py face-sheet ../shared/data/mocap/cmu/08_01.bvh \\
         ../shared/data/photos/woman_blue_tracksuit.jpg ../shared/data/photos/fashion_man_red_jacket.png \\

@@ -2,9 +2,9 @@
 morphable model's identity coefficients are fitted.
 
 Anny carries MakeHuman's (MPFB2, CC0) local targets as blend shapes: where the eyes, brows, nose, mouth and chin
-sit and how large they are, the cheeks. :data:`SHAPE_PAIRS` names the 27 pairs of opposite
-targets kept here (``pose/data/face_shape_targets.npz``, built by ``scripts/make_face_correspondence.py --shapes``); the
-left and right targets of an eye or a cheek are summed, so the fitted face is symmetric. Each target is a
+sit and how large they are, the cheeks. :data:`SHAPE_PAIRS` names the 27 pairs of opposite targets kept here
+(``pose/data/face_shape_targets.npz``, built by ``scripts/make_face_correspondence.py --shapes``); the left and right
+targets of an eye or a cheek are summed, so the fitted face is symmetric. Each target is a
 coefficient in [0, 1] (1: MakeHuman's full change), fitted by bounded least squares with a ridge, the head's pose
 and expression held (:func:`fit_shape`), alternating with their fit for a picture
 (:func:`motion2video.pose.face_portrait.fit_portrait`); for a video, fitted to the tracker's person offsets
