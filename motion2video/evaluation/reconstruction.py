@@ -223,17 +223,11 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
 def head_box_masks(points: np.ndarray, size: int) -> np.ndarray:
     """(N, S, S) bool: the head of each frame, a square around its canonical joints (N, 17, 2) (pixels): centred
     between the neck/nose and the head joint, its side :data:`HEAD_BOX_SCALE` times the thorax-to-head distance
-    (at least :data:`MIN_HEAD_BOX_PX`), clipped to the frame."""
-    from motion2video.core.skeletons import HEAD, NECK, THORAX
+    (at least :data:`MIN_HEAD_BOX_PX`), clipped to the frame
+    (:func:`motion2video.generator.head_paste.head_squares`)."""
+    from motion2video.generator.head_paste import head_squares
 
-    pts = np.asarray(points, np.float64)
-    centre = 0.5 * (pts[:, NECK] + pts[:, HEAD])  # (N, 2)
-    side = np.maximum(HEAD_BOX_SCALE * np.linalg.norm(pts[:, HEAD] - pts[:, THORAX], axis=-1), MIN_HEAD_BOX_PX)
-    grid = np.arange(size) + 0.5  # pixel centres
-    lo, hi = centre - side[:, None] / 2, centre + side[:, None] / 2  # (N, 2)
-    inside_x = (grid[None] >= lo[:, :1]) & (grid[None] < hi[:, :1])  # (N, S)
-    inside_y = (grid[None] >= lo[:, 1:]) & (grid[None] < hi[:, 1:])
-    return inside_y[:, :, None] & inside_x[:, None, :]
+    return head_squares(points, size, scale=HEAD_BOX_SCALE, min_side=MIN_HEAD_BOX_PX)
 
 
 def keypoint_distance(pred: np.ndarray, truth_points: np.ndarray, model: BlazePose | None = None

@@ -178,6 +178,22 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
     return out
 
 
+def head_squares(points: np.ndarray, size: int, *, scale: float, min_side: float) -> np.ndarray:
+    """(N, S, S) bool: the head of each of (N, 17, 2) canonical joints (pixels), a square centred between the neck
+    and head joints, its side ``scale`` times the thorax-to-head distance and at least ``min_side`` pixels, clipped
+    to the (S, S) frame."""
+    from motion2video.core.skeletons import HEAD, NECK, THORAX
+
+    pts = np.asarray(points, np.float64)
+    centre = 0.5 * (pts[:, NECK] + pts[:, HEAD])  # (N, 2)
+    side = np.maximum(scale * np.linalg.norm(pts[:, HEAD] - pts[:, THORAX], axis=-1), min_side)
+    grid = np.arange(size) + 0.5  # pixel centres
+    lo, hi = centre - side[:, None] / 2, centre + side[:, None] / 2  # (N, 2)
+    inside_x = (grid[None] >= lo[:, :1]) & (grid[None] < hi[:, :1])  # (N, S)
+    inside_y = (grid[None] >= lo[:, 1:]) & (grid[None] < hi[:, 1:])
+    return inside_y[:, :, None] & inside_x[:, None, :]
+
+
 def joint_head_axes(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The head's axes and origin from canonical H36M-17 joints: up from the thorax joint to the head joint, left the
     mean of the directions from the right shoulder to the left one and from the right hip to the left one (made

@@ -259,7 +259,8 @@ def cut_alpha(alpha: torch.Tensor, cut: torch.Tensor, flow: torch.Tensor) -> tor
 
 def head_cut(person: np.ndarray, points: np.ndarray) -> np.ndarray:
     """(S, S) float32: 0 where the reference's head zone is not the person, 1 elsewhere. The zone is the square of
-    :data:`HEAD_ZONE` times the thorax-to-head distance around the middle of the neck and head joints.
+    :data:`HEAD_ZONE` times the thorax-to-head distance around the middle of the neck and head joints
+    (:func:`motion2video.generator.head_paste.head_squares`).
 
     A body fitted to a real person is not their outline: its silhouette, grown by the clothes margin
     (:func:`motion2video.generator.mesh_reference.clothes_margin`), reaches past a slim person's head, and there the
@@ -272,16 +273,9 @@ def head_cut(person: np.ndarray, points: np.ndarray) -> np.ndarray:
     Args:
         person: (S, S) the reference's segmented person in [0, 1]; points: (17, 2) its joints in the same pixels.
     """
-    from motion2video.core.skeletons import HEAD, NECK, THORAX
+    from motion2video.generator.head_paste import head_squares
 
-    pts = np.asarray(points, np.float64)
-    size = person.shape[0]
-    centre = 0.5 * (pts[NECK] + pts[HEAD])
-    half = 0.5 * HEAD_ZONE * max(float(np.linalg.norm(pts[HEAD] - pts[THORAX])), 1.0)
-    grid = np.arange(size) + 0.5
-    inside_x = np.abs(grid - centre[0]) <= half
-    inside_y = np.abs(grid - centre[1]) <= half
-    zone = inside_y[:, None] & inside_x[None, :]
+    zone = head_squares(np.asarray(points)[None], person.shape[0], scale=HEAD_ZONE, min_side=HEAD_ZONE)[0]
     return np.where(zone, np.asarray(person, np.float32), 1.0).astype(np.float32)
 
 
