@@ -59,6 +59,7 @@ from motion2video.generator.model import images_to_tensor, tensor_to_images
 from motion2video.generator.specs import default_spec
 from motion2video.generator.warp import WarpGenerator, warp_image
 from motion2video.models.base import MODEL_REGISTRY
+from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import WEIGHTS_DIR, baseline_bundle, load_model
 from motion2video.models.training import TrainConfig, train_model
 from motion2video.stages.sampling import sample_futures
@@ -2012,7 +2013,6 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
     the share of all the frames where a face detector finds the face (:func:`detected_share`), either way. ``net``
     is a mesh generator or the keypoint warp."""
     from dataclasses import replace
-    from types import SimpleNamespace
 
     import cv2
 
@@ -2030,12 +2030,12 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
         all_before = net.decode(net.encode_reference(ref.image, structures.points[0], path=ref.path),
                                 structures.points[1:1 + frames])
         all_after = paste_faces(all_before, every, pasted)
-        video = SimpleNamespace(face=None if pasted is None else pasted[0],
-                                head_weights=None if pasted is None else pasted[2])
+        face, head_weights = (None, None) if pasted is None else (pasted[0], pasted[2])
     else:
         video = mesh_setup(net, ref, structures)
         all_after = mesh_frames(net, ref, structures, video, every)
         all_before = mesh_frames(net, ref, structures, replace(video, face=None), every)
+        face, head_weights = video.face, video.head_weights
     detected = {"generator's head": detected_share(all_before, structures.points[1:1 + frames]),
                 "photo's face": detected_share(all_after, structures.points[1:1 + frames])}
     picked = np.linspace(0, frames - 1, columns).round().astype(int)
@@ -2046,9 +2046,9 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
         cells = [np.concatenate([cv2.resize(f, (FACE_CLOSE_UP_PX, FACE_CLOSE_UP_PX), interpolation=cv2.INTER_AREA),
                                  head_close_up(f, p)], axis=1) for f, p in zip(frames_, points)]
         rows.append(sheet_label(np.concatenate(cells, axis=1), f"{photo.name}: {name}"))
-    weights = None if video.head_weights is None else [round(float(w), 2) for w in video.head_weights[picked]]
-    mean = None if video.head_weights is None else round(float(video.head_weights[:frames].mean()), 3)
-    return rows, {"photo": photo.name, "size": size, "frames": picked.tolist(), "face_found": video.face is not None,
+    weights = None if head_weights is None else [round(float(w), 2) for w in head_weights[picked]]
+    mean = None if head_weights is None else round(float(head_weights[:frames].mean()), 3)
+    return rows, {"photo": photo.name, "size": size, "frames": picked.tolist(), "face_found": face is not None,
                   "weights": weights, "mean_weight": mean,
                   "face_detected_share": {k: round(v, 3) for k, v in detected.items()}}
 
