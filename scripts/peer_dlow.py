@@ -3,6 +3,9 @@ project's metric on the project's test windows, beside the project's samplers.
 
     python scripts/peer_dlow.py --dlow /path/to/DLow --out out/peer_dlow              # train VAE, DLow, score
     python scripts/peer_dlow.py --dlow /path/to/DLow --out out/peer_dlow --stage score  # score the last checkpoints
+    python scripts/peer_dlow.py --dlow /path/to/DLow --out out/peer_dlow_subjects --split subjects \
+        --model mtvae-add-dlow-bandai --data ../shared/data/mocap --data ../shared/data/bandai --stride 128 \
+        --train-stride 4 --compare mixture-periodic mixture-periodic-bandai   # the subject split
 
 Nothing of DLow is part of this repository: the script re-runs itself with the ``--dlow`` checkout on PYTHONPATH
 and imports DLow's modules from there. The training
@@ -43,7 +46,8 @@ from motion2video.core.atomic import write_json
 from motion2video.core.errors import InputError
 from motion2video.data.dataset import WindowSet, build_dataset
 from motion2video.data.windows import FeatureLayout, metric_vectors
-from motion2video.evaluation.forecasting import EvalProtocol, dlow_metrics_per_window, evaluate_bundles
+from motion2video.evaluation.forecasting import (EvalProtocol, dlow_metrics_per_window, evaluate_bundles, rows_table,
+                                                 subject_split_tables, subject_windows)
 from motion2video.evaluation.per_action import group_by_action, macro_average, per_action_means
 from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import baseline_bundle, load_model
@@ -239,7 +243,9 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=Path("out/peer_dlow"), help="DLow's results, logs and eval.json")
     p.add_argument("--model", default="mtvae-add-dlow",
                    help="reference model: its data settings, split and normalisation give the windows")
-    p.add_argument("--data", default="../shared/data/mocap")
+    p.add_argument("--data", action="append", default=None,
+                   help="BVH folder; repeat to join folders (--split subjects: ../shared/data/mocap and "
+                   "../shared/data/bandai); default ../shared/data/mocap")
     p.add_argument("--compare", nargs="*", default=["mtvae-add-dlow", "mixture-periodic"],
                    help="shipped models scored beside DLow on the same windows (zero-velocity always)")
     p.add_argument("--stage", choices=("all", "vae", "dlow", "score"), default="all")
@@ -247,7 +253,9 @@ def main(argv=None) -> int:
     p.add_argument("--dlow-epochs", type=int, default=500)
     p.add_argument("--save-every", type=int, default=5, help="epochs between DLow checkpoints")
     p.add_argument("--train-stride", type=int, default=1, help="frames between exported training windows")
-    p.add_argument("--split", default="test")
+    p.add_argument("--split", default="test", choices=("test", "val", "subjects"),
+                   help="test / val: the reference model's split; subjects: the subject split of evaluate "
+                   "--split subjects (trained on its training part, scored on its held-out performers)")
     p.add_argument("--stride", type=int, default=16)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--batch-size", type=int, default=32)
@@ -269,7 +277,14 @@ def run(args) -> int:
     cfg = reference.data_config
     if cfg.feature_layout.kind != "body3d":
         raise InputError(f"DLow forecasts 3D body motion, not the {cfg.feature_layout.kind} layout of {args.model}")
-    dataset = build_dataset(args.data, cfg, split=reference.meta.split, stats=reference.stats)
+    data = args.data or ["../shared/data/mocap"]
+    data = data[0] if len(data) == 1 else data
+    train_actions = None
+    if args.split == "subjects":
+        dataset, windows, train_actions = subject_windows(data, cfg, [reference], stride=args.stride, character=None)
+    else:
+        dataset = build_dataset(data, cfg, split=reference.meta.split, stats=reference.stats)
+        windows = dataset.windows(args.split, stride=args.stride)
     out = args.out.resolve()
     (out / "motion_pred" / "cfg").mkdir(parents=True, exist_ok=True)
     import yaml
@@ -288,12 +303,11 @@ def run(args) -> int:
         del train_seq
     if args.stage not in ("all", "score"):
         return 0
-    windows = dataset.windows(args.split, stride=args.stride)
     test_seq = dlow_sequences(windows.raw, reference.layout)
     pred, info = sample_dlow(args, windows, test_seq, dlow_mods)
     torch.set_default_dtype(torch.float32)  # DLow runs in float64; the project's models are built in float32
     protocol = EvalProtocol(samples=cfg_dict["nk"], stride=args.stride, split=args.split, seed=args.seed)
-    compare = [load_model(name) for name in args.compare]
+    compare = [load_model(name) for name in args.compare or []]
     bundles = compare + [baseline_bundle(name, cfg, stats=reference.stats) for name in BASELINES]
     result = evaluate_bundles(bundles, windows, protocol=protocol)
     obs = windows.observed
@@ -307,8 +321,13 @@ def run(args) -> int:
     result.protocol.update({"peer": {"code": "github.com/Khrylx/DLow", "checkout": str(dlow_path), **info,
                                      "config": cfg_dict, "train_stride": args.train_stride,
                                      "futures": "as DLow's sampler draws them (not continued)"},
-                            "reference_model": args.model, "data": str(args.data)})
-    write_json(out / "eval.json", result.to_json())
+                            "reference_model": args.model, "data": str(data)})
+    record = result.to_json()
+    if train_actions is not None:
+        subjects = subject_split_tables(result, compare, train_actions)
+        record["subjects"] = subjects.json
+        print(rows_table(subjects.rows, ("ade", "fde", "ade_zv", "fde_zv", "apd"), first="row"))
+    write_json(out / "eval.json", record)
     print(f"DLow: VAE {info['vae_epochs']} epochs, DLow {info['dlow_epochs']} epochs; "
           f"{len(windows)} {args.split} windows")
     print(result.per_action_table(("ade", "fde", "mmade", "mmfde", "apd")))

@@ -16,7 +16,7 @@
 # here until then; its command is in its card in git history, commit 696e72f.) Logs and evaluation JSON go
 # to out/train_shipped/; the periodic checkpoints (*.last*.safetensors) are removed once a model is done.
 # Last, the mixtures are composed (nothing trained, seconds): mixture-dlow from the two DLow samplers, and
-# mixture-periodic (the best sampler) from them and the mirror-periodic rule; their cards,
+# mixture-periodic (the best sampler) from them and the mirror-periodic and settle rules; their cards,
 # motion2video/weights/mixture-*.md, are written by hand from the evaluations printed to their logs.
 # Afterwards: python scripts/make_results.py per-action, corpus and known-answer (their tables of docs/results.md).
 #
@@ -103,7 +103,7 @@ train_bandai() {
   case " $ONLY " in *" mixture-periodic-bandai "*)
     if [ $status -eq 0 ]; then
       "$PY" scripts/make_mixture.py "$WEIGHTS/mtvae-add-dlow-bandai.safetensors" "$WEIGHTS/mixer-cvae-dlow-bandai.safetensors" \
-          mirror-periodic --shares 19,19,12 -o "$WEIGHTS/mixture-periodic-bandai.safetensors" \
+          mirror-periodic settle --shares 17,17,12,4 -o "$WEIGHTS/mixture-periodic-bandai.safetensors" \
           > "$LOGS/mixture-periodic-bandai.log" 2>&1 || status=1
       echo "[$(date +%T)] mixture-periodic-bandai composed (status $status)"
     fi ;;
@@ -196,7 +196,7 @@ esac
 case " $ONLY " in *" mixture-periodic "*)
   if [ $status -eq 0 ]; then
     "$PY" scripts/make_mixture.py "$WEIGHTS/mtvae-add-dlow.safetensors" "$WEIGHTS/mixer-cvae-dlow.safetensors" \
-        mirror-periodic --shares 19,19,12 -o "$WEIGHTS/mixture-periodic.safetensors" > "$LOGS/mixture-periodic.log" 2>&1 || status=1
+        mirror-periodic settle --shares 17,17,12,4 -o "$WEIGHTS/mixture-periodic.safetensors" > "$LOGS/mixture-periodic.log" 2>&1 || status=1
     "$PY" -m motion2video.cli evaluate --model "$WEIGHTS/mixture-periodic.safetensors" \
         --model "$WEIGHTS/mixture-dlow.safetensors" --data "$MOCAP" \
         --samples 50 --json "$LOGS/mixture-periodic.eval.json" >> "$LOGS/mixture-periodic.log" 2>&1 || status=1

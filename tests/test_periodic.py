@@ -22,8 +22,8 @@ from motion2video.models.periodic import feature_mirror, fitted_half_period, hal
 REPO = Path(__file__).resolve().parents[1]
 MOCAP = REPO.parent / "shared" / "data" / "mocap"
 WALK = REPO / "demo_inputs" / "cmu_walk.npz"  # CMU 07_04, a slow walk (0.95 m/s), 90 frames
-PARTS = ("mtvae-add-dlow", "mixer-cvae-dlow", "mirror-periodic")
-SHARES = (19, 19, 12)
+PARTS = ("mtvae-add-dlow", "mixer-cvae-dlow", "mirror-periodic", "settle")
+SHARES = (17, 17, 12, 4)
 
 
 @pytest.fixture(scope="module")
@@ -151,7 +151,7 @@ def test_shares_decide_the_order_and_equal_shares_keep_k_mod_c(shipped):
     for k in range(1, 51):  # every prefix of the futures keeps the shares within one future
         assert all(abs(n - k * w) < 1 for n, w in zip(mix.counts(k), mix.shares))
     equal = build_model("mixture", {"components": shipped.meta.config["components"]})
-    assert equal.order(7) == [0, 1, 2, 0, 1, 2, 0]
+    assert equal.order(9) == [0, 1, 2, 3, 0, 1, 2, 3, 0]
     with pytest.raises(ValueError, match="one positive share per component"):
         build_model("mixture", {"components": shipped.meta.config["components"], "shares": (1.0, 2.0)})
 
@@ -172,7 +172,8 @@ def test_the_shipped_file_is_the_composition_of_the_shipped_parts(shipped, tmp_p
     """Composed again from the shipped samplers and the rule with the card's shares, saved and loaded, it has the
     shipped file's weights, statistics and record: a retrained component without a recomposed mixture fails."""
     first = load_model(PARTS[0])
-    bundles = [first, load_model(PARTS[1]), baseline_bundle(PARTS[2], first.data_config, stats=first.stats)]
+    bundles = [first, load_model(PARTS[1])] + [baseline_bundle(rule, first.data_config, stats=first.stats)
+                                               for rule in PARTS[2:]]
     composed = compose_mixture(bundles, list(SHARES))
     again = load_model(save_checkpoint(tmp_path / "m.safetensors", model=composed.model, meta=composed.meta))
     assert again.meta.config == shipped.meta.config

@@ -50,9 +50,8 @@ from motion2video.formats.video import VIDEO_SUFFIXES, VideoWriter
 from motion2video.generator.checkpoint import FORMAT as FRAMES_FORMAT
 from motion2video.generator.checkpoint import LoadedFrameModel, load_frame_model
 from motion2video.models import checkpoint
-from motion2video.models.baselines import BASELINES
+from motion2video.models.baselines import BASELINES, RULES
 from motion2video.models.checkpoint import ModelBundle
-from motion2video.models.periodic import RULES
 from motion2video.pose.estimate import open_video
 from motion2video.pose.files import save_video_pose
 from motion2video.stages import people

@@ -23,9 +23,8 @@ from motion2video.core.motion import FaceMotion
 from motion2video.data.dataset import DatasetConfig
 from motion2video.formats.bvh_write import write_bvh_files
 from motion2video.formats.video import VideoWriter, iter_observed_future
-from motion2video.models.baselines import BASELINES
+from motion2video.models.baselines import BASELINES, RULES
 from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_model
-from motion2video.models.periodic import RULES
 from motion2video.stages.clips import load_clip
 from motion2video.stages.sampling import Forecast, forecast
 from motion2video.stages.layout import check_bvh_output, check_cell_size, check_video_and_npz

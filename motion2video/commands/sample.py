@@ -27,12 +27,13 @@ examples:
 Every cell of the grid plays the observed frames framed in green, then one sampled future framed in red.
 --model also takes the baselines' names (zero-velocity, last-step, sequence-motion) for a body clip, and
 mirror-periodic for a 3D body clip (the observed motion repeated every half-period, mirrored; one half-period per
-future, spread over 0.32-0.64 s; --samples 1 takes the one that best fits the observed frames).
+future, spread over 0.32-0.64 s; --samples 1 takes the one that best fits the observed frames), and settle (the
+last step continued, slowing to rest; one decay time per future, spread over 0.04-0.64 s).
 
 shipped motion models (model cards in motion2video/weights/NAME.md):
   mixture-periodic 3D body: the best sampler (lowest best-of-50 error over actions, held out and validation,
-                  docs/results.md): its futures come from mtvae-add-dlow, mixer-cvae-dlow and mirror-periodic
-                  (38%, 38%, 24%; with 5 futures the third is mirror-periodic's, the walk's own steps)
+                  docs/results.md): its futures come from mtvae-add-dlow, mixer-cvae-dlow, mirror-periodic and
+                  settle (34%, 34%, 24%, 8%; with 5 futures the third is mirror-periodic's, the walk's own steps)
   mixture-dlow    3D body: the previous best, mtvae-add-dlow's and mixer-cvae-dlow's futures in turn
   mtvae-add-dlow  3D body: DLow over MT-VAE (the best sampler of one decoder)
   mtvae-add       3D body: MT-VAE, the model mtvae-add-dlow samples from

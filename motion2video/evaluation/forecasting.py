@@ -22,9 +22,8 @@ from motion2video.core.errors import InputError
 from motion2video.core.skeletons import bone_lengths, with_bone_lengths
 from motion2video.evaluation import metrics as M
 from motion2video.evaluation.plots import plot_ade_per_frame
-from motion2video.models.baselines import BASELINES
+from motion2video.models.baselines import BASELINES, RULES
 from motion2video.models.checkpoint import ModelBundle, baseline_bundle, load_model
-from motion2video.models.periodic import RULES
 from motion2video.data.corpus import BANDAI_SOURCES, source_of
 from motion2video.data.dataset import WindowSet, build_dataset
 from motion2video.data.windows import FeatureLayout, metric_vectors

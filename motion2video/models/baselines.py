@@ -20,6 +20,9 @@ from torch import nn
 from motion2video.models.base import DeterministicSampler, LossOutput, register_model
 
 BASELINES = ("zero-velocity", "last-step", "sequence-motion")
+# The multi-future rules (models/periodic.py, models/settle.py): `sample` and `evaluate` take them by name beside the
+# baselines, and a mixture may draw some of its futures from them (checkpoint.compose_mixture).
+RULES = ("mirror-periodic", "settle")
 
 
 @dataclass(frozen=True)

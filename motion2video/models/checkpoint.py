@@ -36,7 +36,7 @@ from motion2video.core.errors import CHECKPOINT_FORMAT_VERSION, check_format_ver
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import SKELETON_VERSION, check_skeleton_version
 from motion2video.models.base import MODEL_REGISTRY, build_model
-from motion2video.models.periodic import RULES
+from motion2video.models.baselines import RULES
 
 FORMAT = "motion2video-motion"
 WEIGHTS_DIR = Path(__file__).resolve().parents[1] / "weights"

@@ -41,9 +41,6 @@ from torch import nn
 from motion2video.core.skeletons import H36M_17
 from motion2video.models.base import LossOutput, check_sample_args, check_sequences, register_model
 
-# The multi-future rules: `sample` and `evaluate` take them by name beside the baselines, and a mixture may draw
-# some of its futures from them (checkpoint.compose_mixture).
-RULES = ("mirror-periodic",)
 BODY3D_FEATURES = 51  # 16 root-relative joints x 3, then the root (x, y, z)
 NOT_TRAINED = "mirror-periodic is a rule with no parameters: there is nothing to train"
 
