@@ -93,7 +93,8 @@ def test_the_panel_moves_as_its_two_triangles_do(skirted):
 
 
 @pytest.mark.slow
-def test_a_walk_keeps_one_skirt_between_the_legs(skirted, tmp_path):
+@pytest.mark.parametrize("frame_model", ["frames-body-mesh-128", "frames-body-128"])
+def test_a_walk_keeps_one_skirt_between_the_legs(skirted, tmp_path, frame_model):
     """``synthesize`` from the skirted photo, driven by a real CMU walk (16 observed + 48 future frames at 128 px):
     just above the hem, between the legs, every frame whose legs stand apart shows the skirt. Without the panel the
     mesh generator drew two red trouser legs with the wall between them: on those frames 47-80% of the points
@@ -102,7 +103,7 @@ def test_a_walk_keeps_one_skirt_between_the_legs(skirted, tmp_path):
     ref = tmp_path / "skirt.png"
     iio.imwrite(ref, image)
     frames = []
-    result = synthesize_app(motion_model="mixture-periodic", frame_model="frames-body-mesh-128",
+    result = synthesize_app(motion_model="mixture-periodic", frame_model=frame_model,
                             input_path=WALK, reference=ref, output=None,
                             config=SynthesisConfig(samples=1, horizon=48, crop_person=True),
                             on_chunk=lambda start, chunk, previews: frames.append(chunk[:, 0]))
