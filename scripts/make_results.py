@@ -2222,7 +2222,7 @@ def bandai_section(subjects: dict, corpus: dict, pairs: list[tuple[str, str]], *
 
 
 BANDAI_MIXTURE_COMMAND = ("python scripts/make_mixture.py motion2video/weights/mtvae-add-dlow-bandai.safetensors "
-                          "motion2video/weights/mixer-cvae-dlow-bandai.safetensors mirror-periodic --shares 19,19,12 "
+                          "motion2video/weights/mixer-cvae-dlow-bandai.safetensors mirror-periodic settle --shares 17,17,12,4 "
                           "-o motion2video/weights/mixture-periodic-bandai.safetensors")
 
 
