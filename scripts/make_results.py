@@ -2265,7 +2265,7 @@ def write_bandai_cards(subjects: dict, corpus: dict, pairs: list[tuple[str, str]
     scripts/train_shipped.sh --bandai logged to ``logs/NAME.command``; a mixture's is its make_mixture.py line."""
     written = []
     for shipped, name in pairs:
-        path = shipped_path(name)
+        path = WEIGHTS_DIR / f"{name}.safetensors"
         log = logs / f"{name}.command"
         if log.is_file():
             command = log.read_text().strip().split(": ", 1)[1]

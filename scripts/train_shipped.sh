@@ -37,10 +37,10 @@
 #   BASE_MINUTES / DLOW_MINUTES (0: none) give the base models and the DLow samplers a wall-time budget per run
 #   (TrainConfig.max_minutes: the learning rate follows whichever of steps and time is further along, and the run
 #   ends annealed when the budget is spent; the checkpoint and its card record the steps done). The shipped *-bandai
-#   checkpoints were trained with BASE_MINUTES=24 DLOW_MINUTES=10 on the shared 2-core machine under a load of
-#   about 14 processes, so they did fewer steps than the recipes (their cards say how many).
-#   Logs go to out/train_bandai/; the model cards are written by scripts/make_results.py card from the
-#   evaluations run afterwards (docs/results.md, "The samplers retrained with Bandai-Namco").
+#   checkpoints were trained without budgets, to the full recipes: 45 minutes for all four on the shared 2-core
+#   machine (2026-11-29, other jobs running beside them).
+#   Logs go to out/train_bandai/; the model cards are written by `scripts/make_results.py bandai --cards` from the
+#   evaluations it runs (docs/results_bandai.md), then scripts/shipped_licences.py adds their data licences.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

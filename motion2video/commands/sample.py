@@ -46,8 +46,8 @@ shipped motion models (model cards in motion2video/weights/NAME.md):
   mtvae-add-face  ARKit face coefficients + head pose
   mixture-periodic-bandai  3D body: mixture-periodic's recipe trained on the corpus joined with Bandai-Namco's
                   (mocap + bandai; NON-COMMERCIAL, CC BY-NC 4.0 data): its futures come from
-                  mtvae-add-dlow-bandai, mixer-cvae-dlow-bandai and mirror-periodic; its parts trained for a
-                  fraction of the recipe's steps, so it is behind mixture-periodic on held-out CMU subjects
+                  mtvae-add-dlow-bandai, mixer-cvae-dlow-bandai, mirror-periodic and settle; better on waves,
+                  raised hands and runs, behind mixture-periodic on held-out CMU subjects
   mtvae-add-dlow-bandai   3D body: its DLow part over mtvae-add-bandai (NON-COMMERCIAL)
   mixer-cvae-dlow-bandai  3D body: its DLow part over mixer-cvae-bandai (NON-COMMERCIAL)
   mtvae-add-bandai        3D body: MT-VAE trained likewise (NON-COMMERCIAL)
