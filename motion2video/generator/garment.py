@@ -110,7 +110,8 @@ def find_skirt(image: np.ndarray, person: np.ndarray, points: np.ndarray) -> Ski
     pts = np.asarray(points, np.float64)
     seg = np.asarray(person, np.float64) > 0.5
     lab = lab_image(image)
-    length = np.mean([np.linalg.norm(pts[a] - pts[b]) + np.linalg.norm(pts[b] - pts[c]) for a, b, c in (RIGHT_LEG, LEFT_LEG)])
+    length = np.mean([np.linalg.norm(pts[hip] - pts[knee]) + np.linalg.norm(pts[knee] - pts[ankle])
+                      for hip, knee, ankle in (RIGHT_LEG, LEFT_LEG)])  # hip to ankle, pixels
     radius = max(1.5, 0.03 * length)
     us = np.arange(GARMENT_TOP[0], MAX_HEM + 1e-9, STEP)
     legs = [colours_at(lab, seg, leg_points(pts, leg, us), radius) for leg in (RIGHT_LEG, LEFT_LEG)]  # (U, 3) each

@@ -18,7 +18,9 @@ for a placed video (:func:`mesh_video`) and runs the generator on it (:func:`gen
 The crop follows the keypoint warp generator's (:func:`motion2video.generator.warp.person_crop`): the person is generated
 at the model's size inside a square crop holding both poses and composited with a soft matte over the reference
 picture with its person inpainted at the output's resolution (:func:`reference_background`), so the background keeps
-its resolution and the reference person leaves no ghost.
+its resolution and the reference person leaves no ghost. A skirt or a dress the reference shows across both legs is
+laid over each frame as one panel moved with the hips and legs (:mod:`motion2video.generator.garment`), then the
+photo's face over each head.
 """
 
 from __future__ import annotations
