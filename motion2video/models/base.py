@@ -61,6 +61,15 @@ def check_sample_args(num_samples: int, horizon: int) -> None:
         raise ValueError(f"horizon must be >= 1, got {horizon}")
 
 
+def check_rule_input(name: str, obs: torch.Tensor, *, num_samples: int, horizon: int, feature_dim: int) -> None:
+    """The checks of a multi-future rule's ``sample`` (``mirror-periodic``, ``settle``): K and the horizon, obs
+    (B, To, F) with F == feature_dim, and the two observed frames a last step needs (ValueError otherwise)."""
+    check_sample_args(num_samples, horizon)
+    check_sequences(obs, None, feature_dim=feature_dim)
+    if obs.shape[1] < 2:
+        raise ValueError(f"{name} needs at least two observed frames")
+
+
 class LatentSampler:
     """The one ``sample()`` of the latent models: checks, then ``sample_rows`` draws all B*K futures in one
     batched pass (a model supplies ``sample_rows`` and, when its context check differs, ``check_context``)."""

@@ -39,7 +39,7 @@ from scipy.ndimage import gaussian_filter1d
 from torch import nn
 
 from motion2video.core.skeletons import H36M_17
-from motion2video.models.base import LossOutput, check_sample_args, check_sequences, register_model
+from motion2video.models.base import LossOutput, check_rule_input, register_model
 
 BODY3D_FEATURES = 51  # 16 root-relative joints x 3, then the root (x, y, z)
 NOT_TRAINED = "mirror-periodic is a rule with no parameters: there is nothing to train"
@@ -168,10 +168,8 @@ class MirrorPeriodic(nn.Module):
     def sample(self, obs: torch.Tensor, *, num_samples: int, horizon: int,
                generator: torch.Generator | None = None) -> torch.Tensor:
         """obs (B, To, 51) normalised -> (B, K, horizon, 51) normalised; ``generator`` is unused (a rule)."""
-        check_sample_args(num_samples, horizon)
-        check_sequences(obs, None, feature_dim=self.config.feature_dim)
-        if obs.shape[1] < 2:
-            raise ValueError("mirror-periodic needs at least two observed frames")
+        check_rule_input("mirror-periodic", obs, num_samples=num_samples, horizon=horizon,
+                         feature_dim=self.config.feature_dim)
         metres = obs.double() * self.std.double() + self.mean.double()
         sign = self.sign.double()
         if num_samples == 1:  # one future: each window's own best-fitting half-period

@@ -27,7 +27,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from motion2video.models.base import LossOutput, check_sample_args, check_sequences, register_model
+from motion2video.models.base import LossOutput, check_rule_input, register_model
 
 NOT_TRAINED = "settle is a rule with no parameters: there is nothing to train"
 
@@ -82,8 +82,5 @@ class Settle(nn.Module):
     def sample(self, obs: torch.Tensor, *, num_samples: int, horizon: int,
                generator: torch.Generator | None = None) -> torch.Tensor:
         """obs (B, To, F) -> (B, K, horizon, F), any affine normalisation; ``generator`` is unused (a rule)."""
-        check_sample_args(num_samples, horizon)
-        check_sequences(obs, None, feature_dim=self.config.feature_dim)
-        if obs.shape[1] < 2:
-            raise ValueError("settle needs at least two observed frames")
+        check_rule_input("settle", obs, num_samples=num_samples, horizon=horizon, feature_dim=self.config.feature_dim)
         return settle_futures(obs, decay_times(self.config, num_samples), horizon)
