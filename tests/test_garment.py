@@ -54,6 +54,21 @@ def test_the_painted_skirt_is_found_with_its_hem_below_the_knees(skirted):
     np.testing.assert_allclose(skirt.quad[:2], points[[RIGHT_LEG[0], LEFT_LEG[0]]])
 
 
+def test_a_skirt_in_the_shade_between_the_legs_is_still_found(skirted):
+    """Cloth between the legs is in shadow: the skirt darkened to 0.75 there is found (lightness counts half as much
+    as hue; at full weight it was not)."""
+    image, person, points = skirted
+    inside = np.zeros(image.shape[:2], np.uint8)
+    cv2.fillPoly(inside, [SKIRT], 1)
+    middle = int(round(0.5 * (points[RIGHT_LEG[0], 0] + points[LEFT_LEG[0], 0])))
+    band = np.zeros_like(inside)
+    cv2.rectangle(band, (middle - 45, 900), (middle + 45, 1500), 1, -1)
+    shaded = image.copy()
+    shade = (inside & band) > 0
+    shaded[shade] = (shaded[shade] * 0.75).astype(np.uint8)
+    assert find_skirt(shaded, person, points) is not None
+
+
 @pytest.mark.parametrize("name", ["woman_blue_tracksuit.jpg", "fashion_woman_shorts.png", "fashion_man_red_jacket.png",
                                   "skier.jpg", "three_walking.jpg"])
 def test_trousers_shorts_and_jackets_are_not_taken_for_a_skirt(name):

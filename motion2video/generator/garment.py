@@ -38,7 +38,8 @@ GARMENT_TOP = (0.15, 0.45)  # where along the thighs the garment's colour is rea
 MIN_HEM = 0.6  # a skirt reaches at least this far down the thighs (shorts and short jackets end above)
 MAX_HEM = 1.9  # a hem is looked for down to here (ankle = 2); trousers show their colour down to the shoes
 STEP = 0.05  # the spacing of the samples along the legs, in u
-COLOUR_DISTANCE = 18.0  # CIE Lab distance (L in 0..100) beyond which a sample is not the garment's colour
+COLOUR_DISTANCE = 18.0  # colour_distance beyond which a sample is not the garment's colour
+LIGHTNESS_WEIGHT = 0.5  # cloth between the legs is in shadow: lightness counts half as much as hue
 BETWEEN_SHARE = 0.8  # of the samples halfway between the legs above the hem, the share that must be the garment
 
 
@@ -99,6 +100,13 @@ def colours_at(lab: np.ndarray, person: np.ndarray, centres: np.ndarray, radius:
     return out
 
 
+def colour_distance(lab: np.ndarray, colour: np.ndarray) -> np.ndarray:
+    """Distance of Lab colours (..., 3) from one Lab colour (3,), lightness weighted by :data:`LIGHTNESS_WEIGHT`
+    (a fold or the shade between the legs darkens cloth without changing its hue); NaN stays NaN."""
+    d = np.asarray(lab, np.float64) - np.asarray(colour, np.float64)
+    return np.sqrt((LIGHTNESS_WEIGHT * d[..., 0]) ** 2 + d[..., 1] ** 2 + d[..., 2] ** 2)
+
+
 def find_skirt(image: np.ndarray, person: np.ndarray, points: np.ndarray) -> Skirt | None:
     """The skirt the reference shows, or None (module docstring, step 1).
 
@@ -121,7 +129,7 @@ def find_skirt(image: np.ndarray, person: np.ndarray, points: np.ndarray) -> Ski
     if len(samples) < 4:
         return None
     colour = np.median(samples, axis=0)
-    far = [np.linalg.norm(leg - colour, axis=1) > COLOUR_DISTANCE for leg in legs]  # NaN compares False
+    far = [colour_distance(leg, colour) > COLOUR_DISTANCE for leg in legs]  # NaN compares False
     off = far[0] & far[1]  # both legs off the garment's colour
     hem_at = next((i for i in range(len(us) - 1) if us[i] > GARMENT_TOP[1] and off[i] and off[i + 1]), None)
     if hem_at is None or us[hem_at] < MIN_HEM:
@@ -133,7 +141,7 @@ def find_skirt(image: np.ndarray, person: np.ndarray, points: np.ndarray) -> Ski
     if apart.sum() < 3:
         return None
     middle = colours_at(lab, seg, 0.5 * (right + left)[apart], radius)
-    between = np.linalg.norm(middle - colour, axis=1) <= COLOUR_DISTANCE  # NaN (not the person) compares False
+    between = colour_distance(middle, colour) <= COLOUR_DISTANCE  # NaN (not the person) compares False
     if between.mean() < BETWEEN_SHARE:
         return None
     return Skirt(hem=hem, colour=colour, quad=panel(pts, hem))
