@@ -2263,6 +2263,8 @@ def write_bandai_cards(subjects: dict, corpus: dict, pairs: list[tuple[str, str]
     """The model card of every retrained model of ``pairs`` (:func:`cmd_card` on its rows of the corpus test
     evaluation, then both per-action tables against its shipped twin). The training command is the one
     scripts/train_shipped.sh --bandai logged to ``logs/NAME.command``; a mixture's is its make_mixture.py line."""
+    from motion2video.data.licences import CARD_BEGIN, CARD_END
+
     written = []
     for shipped, name in pairs:
         path = WEIGHTS_DIR / f"{name}.safetensors"
@@ -2278,6 +2280,9 @@ def write_bandai_cards(subjects: dict, corpus: dict, pairs: list[tuple[str, str]
                   v[COUNT_KEY] for v in corpus["per_action"][BASELINE].values())},
               "results": {m: corpus["results"][m] for m in keep}}
         card = WEIGHTS_DIR / f"{name}.md"
+        old = card.read_text() if card.is_file() else ""
+        # an existing card's "Limits" are the author's: kept, before the data licence section, for them to revise
+        limits = old.split("\n## Limits\n", 1)[1].split(CARD_BEGIN, 1)[0].strip("\n") if "\n## Limits\n" in old else ""
         if command == BANDAI_MIXTURE_COMMAND:
             card.write_text(_bandai_mixture_card(path, ev, command))
         else:
@@ -2302,7 +2307,13 @@ def write_bandai_cards(subjects: dict, corpus: dict, pairs: list[tuple[str, str]
             _bandai_table(s_names, s_rows, [(shipped, name)]),
             "",
         ]
-        card.write_text(card.read_text() + "\n".join(extra))
+        tail = "\n".join(extra) + (f"\n## Limits\n\n{limits}\n\n" if limits else "")
+        text = card.read_text()
+        if CARD_BEGIN in text:  # the tables and the limits before the data licence (scripts/shipped_licences.py's)
+            text = text.replace(CARD_BEGIN, tail + CARD_BEGIN, 1)
+        else:
+            text = text.rstrip("\n") + "\n\n" + tail + f"{CARD_BEGIN}\n{CARD_END}\n"
+        card.write_text(text)
         written.append(card)
     return written
 
