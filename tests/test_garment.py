@@ -86,7 +86,7 @@ def test_the_panel_moves_as_its_two_triangles_do(skirted):
     image, person, points = skirted
     skirt = find_skirt(image, person, points)
     blank = np.zeros_like(image)
-    same = lay_skirt(blank, image, person, skirt, points, feather_px=0.0)
+    same = lay_skirt(blank, skirt, points, feather_px=0.0)
     inside = np.zeros(image.shape[:2], np.uint8)
     cv2.fillConvexPoly(inside, np.rint(skirt.quad).astype(np.int32), 1)
     off_arms = arms_region(points, person.shape) == 0
@@ -96,7 +96,7 @@ def test_the_panel_moves_as_its_two_triangles_do(skirted):
     spread = np.array(points, np.float64)
     for joint, dx in ((RIGHT_LEG[1], -80), (RIGHT_LEG[2], -160), (LEFT_LEG[1], 80), (LEFT_LEG[2], 160)):
         spread[joint, 0] += dx
-    moved = lay_skirt(blank, image, person, skirt, spread, feather_px=0.0)
+    moved = lay_skirt(blank, skirt, spread, feather_px=0.0)
     tgt = panel(spread, skirt.hem)
     for tri in ((0, 1, 2), (0, 2, 3)):  # an affine map takes a triangle's centroid to the other's
         here = np.rint(tgt[list(tri)].mean(axis=0)).astype(int)

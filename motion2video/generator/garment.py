@@ -30,9 +30,9 @@ from motion2video.core.skeletons import H36M_17
 # Leg joints of H36M-17 (hip, knee, ankle) on the person's right and left.
 RIGHT_LEG = tuple(H36M_17.joints.index(n) for n in ("right_hip", "right_knee", "right_ankle"))
 LEFT_LEG = tuple(H36M_17.joints.index(n) for n in ("left_hip", "left_knee", "left_ankle"))
-ARMS = tuple((H36M_17.joints.index(a), H36M_17.joints.index(b)) for a, b in (
-    ("left_shoulder", "left_elbow"), ("left_elbow", "left_wrist"),
-    ("right_shoulder", "right_elbow"), ("right_elbow", "right_wrist")))
+WRISTS = tuple(H36M_17.joints.index(n) for n in ("left_wrist", "right_wrist"))
+ARMS = tuple(H36M_17.joints.index(n) for n in ("left_elbow", "right_elbow")) + WRISTS  # their bones: the arms
+FEATHER_PX = 0.5  # the panel's edge is softened by a Gaussian of this many pixels at 256 px, scaled with the frame
 
 GARMENT_TOP = (0.15, 0.45)  # where along the thighs the garment's colour is read (u, hip = 0, knee = 1)
 MIN_HEM = 0.6  # a skirt reaches at least this far down the thighs (shorts and short jackets end above)
@@ -43,19 +43,23 @@ LIGHTNESS_WEIGHT = 0.5  # cloth between the legs is in shadow: lightness counts 
 BETWEEN_SHARE = 0.8  # of the samples halfway between the legs above the hem, the share that must be the garment
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Skirt:
-    """Cloth that hangs from the hips across both legs in the reference.
+    """Cloth that hangs from the hips across both legs in the reference, and the picture it is taken from.
 
     Attributes:
         hem: where the hem crosses the legs, in u (0 at the hips, 1 at the knees, 2 at the ankles).
         colour: (3,) the garment's CIE Lab colour (L in 0..100).
         quad: (4, 2) the reference's panel in its pixels: right hip, left hip, left leg's hem, right leg's hem.
+        image: (H, W, 3) uint8 the reference picture, the panel's colours.
+        cloth: (H, W) float32 the reference's segmented person: which of the panel is cloth, not background.
     """
 
     hem: float
     colour: np.ndarray
     quad: np.ndarray
+    image: np.ndarray
+    cloth: np.ndarray
 
 
 def leg_points(points: np.ndarray, leg: tuple[int, int, int], u: np.ndarray) -> np.ndarray:
@@ -144,7 +148,8 @@ def find_skirt(image: np.ndarray, person: np.ndarray, points: np.ndarray) -> Ski
     between = colour_distance(middle, colour) <= COLOUR_DISTANCE  # NaN (not the person) compares False
     if between.mean() < BETWEEN_SHARE:
         return None
-    return Skirt(hem=hem, colour=colour, quad=panel(pts, hem))
+    return Skirt(hem=hem, colour=colour, quad=panel(pts, hem), image=np.asarray(image),
+                 cloth=np.asarray(person, np.float32))
 
 
 def twice_area(tri: np.ndarray) -> float:
@@ -154,36 +159,35 @@ def twice_area(tri: np.ndarray) -> float:
 
 
 def arms_region(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """(H, W) float32 1 on the arms of the pose points (17, 2): upper arms and forearms drawn as thick lines and a
-    disc for each hand, the thickness of :func:`motion2video.generator.warp.limb_region`'s limbs."""
-    pts = np.asarray(points, np.float64)
-    thickness = max(3, int(round(0.08 * float(np.ptp(pts[:, 1])))))
-    out = np.zeros(shape, np.uint8)
-    for a, b in ARMS:
-        pa, pb = np.rint(pts[a]).astype(int), np.rint(pts[b]).astype(int)
-        cv2.line(out, (int(pa[0]), int(pa[1])), (int(pb[0]), int(pb[1])), 1, thickness)
-    for wrist in (H36M_17.joints.index("left_wrist"), H36M_17.joints.index("right_wrist")):
-        c = np.rint(pts[wrist]).astype(int)
+    """(H, W) float32 1 on the arms of the pose points (17, 2): upper arms and forearms as
+    :func:`motion2video.generator.warp.limb_region` draws limbs, and a disc of that width for each hand."""
+    from motion2video.generator.warp import limb_region, limb_thickness
+
+    thickness = limb_thickness(points)
+    out = limb_region(points, width=shape[1], height=shape[0], limbs=ARMS).astype(np.uint8)
+    for wrist in WRISTS:
+        c = np.rint(np.asarray(points, np.float64)[wrist]).astype(int)
         cv2.circle(out, (int(c[0]), int(c[1])), thickness, 1, -1)
     return out.astype(np.float32)
 
 
-def lay_skirt(frame: np.ndarray, image: np.ndarray, person: np.ndarray, skirt: Skirt, points: np.ndarray, *,
-              feather_px: float = 1.0) -> np.ndarray:
-    """The reference's skirt panel laid over a generated frame (module docstring, step 2).
+def lay_skirt(frame: np.ndarray, skirt: Skirt, points: np.ndarray, *, feather_px: float | None = None) -> np.ndarray:
+    """The reference's skirt panel laid over a generated frame of the reference's scale (module docstring, step 2).
 
     Args:
-        frame: (H, W, 3) uint8 a generated frame; image: (H, W, 3) uint8 the reference picture at the same scale.
-        person: (H, W) the reference's segmented person (what of the panel is cloth, not background).
+        frame: (H, W, 3) uint8 a generated frame, the size of ``skirt.image``.
         skirt: from :func:`find_skirt` on that reference.
         points: (17, 2) the frame's pose in its pixels.
-        feather_px: the Gaussian's standard deviation that softens the panel's edge.
+        feather_px: the Gaussian's standard deviation that softens the panel's edge (None: :data:`FEATHER_PX` at
+            256 px, scaled with the frame).
     Returns:
         (H, W, 3) uint8.
     """
     h, w = frame.shape[:2]
+    if feather_px is None:
+        feather_px = FEATHER_PX * h / 256
     target = panel(points, skirt.hem)
-    cloth = np.asarray(person, np.float32)
+    image, cloth = skirt.image, skirt.cloth
     colour = np.zeros((h, w, 3), np.float32)
     alpha = np.zeros((h, w), np.float32)
     for tri in ((0, 1, 2), (0, 2, 3)):
@@ -202,3 +206,9 @@ def lay_skirt(frame: np.ndarray, image: np.ndarray, person: np.ndarray, skirt: S
         alpha = cv2.GaussianBlur(alpha, (0, 0), feather_px)
     alpha = np.clip(alpha, 0.0, 1.0)[..., None]
     return np.rint(frame * (1.0 - alpha) + colour * alpha).clip(0, 255).astype(np.uint8)
+
+
+def lay_skirts(frames: np.ndarray, skirt: Skirt, points: np.ndarray) -> np.ndarray:
+    """(R, H, W, 3) uint8 ``frames`` with the skirt laid over each (:func:`lay_skirt`), moved with its pose of
+    ``points`` (R, 17, 2) in the frames' pixels."""
+    return np.stack([lay_skirt(frame, skirt, pts) for frame, pts in zip(frames, points)])

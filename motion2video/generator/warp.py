@@ -592,18 +592,25 @@ def check_reference_points(points: np.ndarray, *, width: int, height: int, path=
 MIN_PERSON_CONTRAST = 4.0
 
 
-def limb_region(points: np.ndarray, *, width: int, height: int) -> np.ndarray:
-    """(height, width) bool mask of the pose's 16 limbs drawn as thick lines (about 8 % of the pose's height,
-    at least 3 pixels): where the reference person must be, given joints (17, 2) in pixels."""
+def limb_thickness(points: np.ndarray) -> int:
+    """The width :func:`limb_region` draws a limb with, in pixels: about 8 % of the pose's height (joints (17, 2)),
+    at least 3."""
+    return max(3, int(round(0.08 * float(np.ptp(np.asarray(points, np.float64)[:, 1])))))
+
+
+def limb_region(points: np.ndarray, *, width: int, height: int, limbs: tuple[int, ...] | None = None) -> np.ndarray:
+    """(height, width) bool mask of the pose's limbs drawn as thick lines (:func:`limb_thickness`): where the
+    reference person must be, given joints (17, 2) in pixels. ``limbs``: the child joints of the bones to draw
+    (None: all 16)."""
     import cv2
 
     from motion2video.core.skeletons import H36M_17
 
     pts = np.asarray(points, np.float64)
-    thickness = max(3, int(round(0.08 * float(np.ptp(pts[:, 1])))))
+    thickness = limb_thickness(pts)
     mask = np.zeros((height, width), np.uint8)
     for child, parent in enumerate(H36M_17.parents):
-        if parent >= 0:
+        if parent >= 0 and (limbs is None or child in limbs):
             a, b = np.rint(pts[child]).astype(int), np.rint(pts[parent]).astype(int)
             cv2.line(mask, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), 1, thickness)
     return mask.astype(bool)

@@ -128,7 +128,7 @@ def warp_skirt(reference: Reference, structures: Structures):
     or when the reference shows none.
 
     Returns:
-        (skirt, cloth (S, S) float32 the reference's segmented person, which of the panel is cloth) or None.
+        the :class:`motion2video.generator.garment.Skirt`, or None.
     """
     from motion2video.generator.garment import find_skirt
 
@@ -138,22 +138,17 @@ def warp_skirt(reference: Reference, structures: Structures):
     if person is None:
         return None
     cloth = np.where(reference.picture_mask(), person.mask, 0.0).astype(np.float32)
-    skirt = find_skirt(reference.image, cloth, structures.points[0])
-    return None if skirt is None else (skirt, cloth)
+    return find_skirt(reference.image, cloth, structures.points[0])
 
 
-def lay_skirts(frames: np.ndarray, targets: np.ndarray, image: np.ndarray, structures: Structures, laid) -> np.ndarray:
+def skirted(frames: np.ndarray, targets: np.ndarray, structures: Structures, skirt) -> np.ndarray:
     """(R, S, S, 3) uint8 ``frames`` of target indices ``targets`` (R,) (0 = the first observed frame) with the skirt
-    of :func:`warp_skirt` (``laid``; None leaves them) over each, moved with that target's pose."""
-    from motion2video.generator.garment import lay_skirt
+    of :func:`warp_skirt` (None leaves them) over each, moved with that target's pose."""
+    from motion2video.generator.garment import lay_skirts
 
-    if laid is None:
+    if skirt is None:
         return frames
-    skirt, cloth = laid
-    out = np.asarray(frames).copy()
-    for i, t in enumerate(np.asarray(targets, np.int64)):
-        out[i] = lay_skirt(out[i], image, cloth, skirt, structures.points[1 + t], feather_px=0.5 * image.shape[0] / 256)
-    return out
+    return lay_skirts(frames, skirt, structures.points[1 + np.asarray(targets, np.int64)])
 
 
 def reference_person(image: np.ndarray):
@@ -254,7 +249,7 @@ def generate_video_frames(model, reference: Reference, structures: Structures, *
         with torch_threads(threads):
             state = net.encode_reference(reference.image, structures.points[0], path=reference.path)
             frames = net.decode(state, structures.points[1:1 + n], batch_size=batch_size)
-        frames = lay_skirts(frames, np.arange(n), reference.image, structures, warp_skirt(reference, structures))
+        frames = skirted(frames, np.arange(n), structures, warp_skirt(reference, structures))
         frames = paste_faces(frames, np.arange(n), warp_face(reference, structures))
         to, k, tf = structures.observed, structures.samples, structures.horizon
         size = structures.size
@@ -300,7 +295,7 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
         with torch_threads(threads):
             state = net.encode_reference(reference.image, structures.points[0], path=reference.path)
         pasted = warp_face(reference, structures)
-        laid = warp_skirt(reference, structures)
+        skirt = warp_skirt(reference, structures)
     else:
         size = net.config.image_size
         if structures.size != size:
@@ -318,8 +313,7 @@ def iter_generated(model, reference: Reference, structures: Structures, *, batch
                 frames = mesh_frames(net, reference, structures, video, unique - 1, batch_size=batch_size)
             elif warp:
                 frames = net.decode(state, structures.points[unique], batch_size=batch_size)
-                frames = paste_faces(lay_skirts(frames, unique - 1, reference.image, structures, laid), unique - 1,
-                                     pasted)
+                frames = paste_faces(skirted(frames, unique - 1, structures, skirt), unique - 1, pasted)
             else:
                 frames = generate_frames(net, reference.image, ref_structure, structure_maps(structures, unique),
                                          batch_size=batch_size, channels_last=channels_last)

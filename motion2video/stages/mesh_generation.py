@@ -35,7 +35,7 @@ from motion2video.core.camera import fit_camera, project
 from motion2video.core.errors import InputError
 from motion2video.generator.background import MATTE_FEATHER_PX, composite, inpaint_background, soft_matte
 from motion2video.generator.data import body_structures, face_structures
-from motion2video.generator.garment import Skirt, find_skirt, lay_skirt
+from motion2video.generator.garment import Skirt, find_skirt, lay_skirts
 from motion2video.generator.head_paste import compose_affine, paste_head
 from motion2video.generator.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
 from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
@@ -70,8 +70,7 @@ class MeshVideo:
             target takes (None without a face).
         skirt: cloth the reference shows hanging from the hips across both legs
             (:func:`motion2video.generator.garment.find_skirt`), laid over every frame as one panel moved with the
-            hips and legs; None: none found. skirt_cloth: (S_out, S_out) float32 the reference's segmented person at
-            the output's size, which of the panel is cloth.
+            hips and legs; None: none found.
     """
 
     crop: tuple[int, int, int]
@@ -87,7 +86,6 @@ class MeshVideo:
     head_affines: np.ndarray | None = None
     head_weights: np.ndarray | None = None
     skirt: Skirt | None = None
-    skirt_cloth: np.ndarray | None = None
 
 
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
@@ -160,7 +158,6 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
                                                  reference_points)
         if person is not None:
             video.skirt = find_skirt(image, person.mask, reference_points)
-            video.skirt_cloth = None if video.skirt is None else np.asarray(person.mask, np.float32)
     return video
 
 
@@ -293,10 +290,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             matte = soft_matte(alpha, feather_px=MATTE_FEATHER_PX * side / size)
             out[start:start + n, y0:y0 + side, x0:x0 + side] = composite(behind, person, matte)
             if video.skirt is not None:  # a skirt or a dress: one panel over both legs, the arms in front
-                for i, row in enumerate(part):
-                    points = video.tgt_points[row] * (side / size) + [x0, y0]
-                    out[start + i] = lay_skirt(out[start + i], image, video.skirt_cloth, video.skirt, points,
-                                               feather_px=0.5 * image.shape[0] / 256)
+                points = video.tgt_points[part] * (side / size) + [x0, y0]  # output pixels
+                out[start:start + n] = lay_skirts(out[start:start + n], video.skirt, points)
             if video.face is not None:  # the photo's own face over the generated heads, inside the generated person
                 face = video.face
                 for i, row in enumerate(part):
