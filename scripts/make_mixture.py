@@ -3,11 +3,11 @@
     python scripts/make_mixture.py mtvae-add-dlow mixer-cvae-dlow mirror-periodic settle --shares 17,17,12,4 \
         -o motion2video/weights/mixture-periodic.safetensors
 
-Each MODEL is a checkpoint path, a shipped name, or the name of a multi-future rule (``mirror-periodic``, ``settle``, which take
-the first model's windows and normalisation). With equal shares (no ``--shares``) future k of the mixture comes from
-MODEL number k mod C; otherwise from the model furthest behind its share (:mod:`motion2video.models.mixture`). The
-trained models must share their windows, feature layout, normalisation and split. Bad input gives one line and
-exit 2.
+Each MODEL is a checkpoint path, a shipped name, or the name of a multi-future rule (``mirror-periodic``,
+``settle``, which take the first model's windows and normalisation). With equal shares (no ``--shares``) future k of
+the mixture comes from MODEL number k mod C; otherwise from the model furthest behind its share
+(:mod:`motion2video.models.mixture`). The trained models must share their windows, feature layout, normalisation and
+split. Bad input gives one line and exit 2.
 """
 
 from __future__ import annotations

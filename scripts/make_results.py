@@ -2222,7 +2222,8 @@ def bandai_section(subjects: dict, corpus: dict, pairs: list[tuple[str, str]], *
 
 
 BANDAI_MIXTURE_COMMAND = ("python scripts/make_mixture.py motion2video/weights/mtvae-add-dlow-bandai.safetensors "
-                          "motion2video/weights/mixer-cvae-dlow-bandai.safetensors mirror-periodic settle --shares 17,17,12,4 "
+                          "motion2video/weights/mixer-cvae-dlow-bandai.safetensors mirror-periodic settle "
+                          "--shares 17,17,12,4 "
                           "-o motion2video/weights/mixture-periodic-bandai.safetensors")
 
 
@@ -2282,7 +2283,9 @@ def write_bandai_cards(subjects: dict, corpus: dict, pairs: list[tuple[str, str]
         card = WEIGHTS_DIR / f"{name}.md"
         old = card.read_text() if card.is_file() else ""
         # an existing card's "Limits" are the author's: kept, before the data licence section, for them to revise
-        limits = old.split("\n## Limits\n", 1)[1].split(CARD_BEGIN, 1)[0].strip("\n") if "\n## Limits\n" in old else ""
+        limits = ""
+        if "\n## Limits\n" in old:
+            limits = old.split("\n## Limits\n", 1)[1].split(CARD_BEGIN, 1)[0].strip("\n")
         if command == BANDAI_MIXTURE_COMMAND:
             card.write_text(_bandai_mixture_card(path, ev, command))
         else:

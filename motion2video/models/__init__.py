@@ -4,5 +4,6 @@ See :mod:`motion2video.models.base` for the interface, ``MODEL_REGISTRY`` and ``
 """
 
 from motion2video.models import (  # noqa: F401  (importing registers the models)
-    baselines, behavior, blocks, cvae, dlow, flow, lcpvae, mixer, mixer_cvae, mixture, mtvae, periodic, pred_lstm, settle,
+    baselines, behavior, blocks, cvae, dlow, flow, lcpvae, mixer, mixer_cvae, mixture, mtvae, periodic, pred_lstm,
+    settle,
 )
