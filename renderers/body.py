@@ -30,7 +30,7 @@ them through the process-wide :class:`~renderers.mesh.MeshRenderer` backend.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Iterator, Mapping
 
 import numpy as np
@@ -384,16 +384,20 @@ def skin_vertices(rest: AnnyRest, bone_poses: np.ndarray) -> np.ndarray:
     return verts.double().cpu().numpy()
 
 
-def posed_vertices(pose: AnnyPose, *, batch: int = 16):
+def posed_vertices(pose: AnnyPose, *, batch: int = 16, offsets: np.ndarray | None = None):
     """Yield Anny's posed vertices for a fitted pose, chunk by chunk.
 
     Args:
         pose: a fitted pose (T frames).
         batch: frames per skinning call.
+        offsets: (V, 3) metres added to the rest vertices before skinning (a surface fitted to a pictured person's
+            outline), or None.
     Yields:
         (start, vertices) with vertices (b, V, 3) float32 world metres for frames start..start+b-1.
     """
     rest = anny_model.anny_rest(dict(zip(anny_model.PHENOTYPE_NAMES, pose.phenotype)))
+    if offsets is not None:
+        rest = replace(rest, vertices=rest.vertices + np.asarray(offsets, np.float64))
     num_frames = len(pose.bone_poses)
     for start in range(0, num_frames, batch):
         stop = min(start + batch, num_frames)

@@ -2030,12 +2030,12 @@ def photo_rows(net, photo: Path, clip, bundle, *, size: int, frames: int, column
         all_before = net.decode(net.encode_reference(ref.image, structures.points[0], path=ref.path),
                                 structures.points[1:1 + frames])
         all_after = paste_faces(all_before, every, pasted)
-        face, head_weights = (None, None) if pasted is None else (pasted[0], pasted[2])
+        face, head_weights = (None, None) if pasted is None else (pasted[0], pasted[2].weights)
     else:
         video = mesh_setup(net, ref, structures)
         all_after = mesh_frames(net, ref, structures, video, every)
         all_before = mesh_frames(net, ref, structures, replace(video, face=None), every)
-        face, head_weights = video.face, video.head_weights
+        face, head_weights = video.face, None if video.head is None else video.head.weights
     detected = {"generator's head": detected_share(all_before, structures.points[1:1 + frames]),
                 "photo's face": detected_share(all_after, structures.points[1:1 + frames])}
     picked = np.linspace(0, frames - 1, columns).round().astype(int)

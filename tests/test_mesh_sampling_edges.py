@@ -208,16 +208,19 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     assert skin_now <= 5 and white_now <= 5  # 0 and 0
 
 
-def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them():
-    """A real photo (the skier of ../shared/data/photos): Anny fitted from her estimated pose is a little off her
-    legs, and its silhouette grown by her clothes margin (7 px) covers snow. Sampling the fitted silhouette joined
-    with her segmented person painted white patches into her trousers in every frame; the segmented person alone
-    does not."""
+def test_a_real_photos_legs_take_her_trousers_not_the_snow_beside_them(monkeypatch):
+    """A real photo (the skier of ../shared/data/photos): Anny fitted from her estimated pose, its weight alone
+    fitted to her mask (the surface fitted to her outline takes her legs' outline, generator/outline_fit.py), is a
+    little off her legs, and its silhouette grown by her clothes margin (6 px) covers snow. Sampling the fitted
+    silhouette joined with her segmented person painted white patches into her trousers in every frame; the segmented
+    person alone does not."""
     from motion2video.generator.mesh_flow import flows_to_targets, grow_masks
     from motion2video.generator.mesh_warp import mesh_plate
     from motion2video.generator.warp import warp_image
+    from motion2video.stages import mesh_generation
     from motion2video.stages.mesh_generation import sampled_person
 
+    monkeypatch.setattr(mesh_generation, "outline_surface", lambda *args, **kwargs: None)
     photo = ROOT.parent / "shared" / "data" / "photos" / "skier.jpg"
     reference, video = fitted_reference(photo, crop_person=True)
     x0, y0, side = video.crop

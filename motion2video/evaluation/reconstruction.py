@@ -182,8 +182,8 @@ def video_pairs(frames: VideoFrames) -> FramePairs:
 
 def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     """The pairs with the correspondence of Anny fitted to every frame (:func:`stages.mesh_generation.video_mesh_track`),
-    for the mesh generator: the fitted mesh's silhouettes, grown by the person's clothes margin in frame 0
-    (:func:`generator.mesh_reference.clothes_margin`), stand in for the masks it is given (the scores still use BlazePose's
+    for the mesh generator: the fitted mesh's silhouettes (its surface fitted to frame 0's person outline, grown by
+    :func:`generator.outline_fit.outline_margin`) stand in for the masks it is given (the scores still use BlazePose's
     person masks). As in ``synthesize``, a vertex frame 0 shows counts as shown only where it lands on the person
     (:func:`generator.mesh_reference.on_person`), the colours are sampled from the segmented person
     (:func:`generator.mesh_warp.mesh_source_mask`), and frame 0's face, when one is found, is laid over the generated
@@ -191,10 +191,13 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     from dataclasses import replace
 
     from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
-    from motion2video.generator.mesh_reference import clothes_margin, on_person
+    from motion2video.generator.mesh_reference import on_person
+    from motion2video.generator.outline_fit import outline_margin
     from motion2video.generator.head_paste import pixel_index_affine
     from motion2video.stages.mesh_generation import video_mesh_track
-    from motion2video.stages.pictured_face import face_moves, pictured_face
+    from motion2video.stages.pictured_face import (
+        face_moves, landmark_triangles, landmarks_in_reference, pictured_face,
+    )
     from renderers import anny_model
 
     size = frames.images.shape[1]
@@ -203,7 +206,7 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     shown = track.visible.copy()
     shown[0] &= on_person(track.uv[0], frames.masks[0])
     track = MeshTrack(track.uv, shown, track.masks)
-    margin = clothes_margin(frames.masks[0], track.masks[0])
+    margin = outline_margin(size)  # the body is fitted to frame 0's outline (video_mesh_track)
     ref_uv = complete_reference_uv(track.uv[0], track.visible[0], image=frames.images[0])
     flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)), margin=margin)
     pairs = replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
@@ -213,11 +216,13 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     if face is None:
         return pairs
     # the face found in frame 0's square; frame 0 itself is the picture it is laid from
-    affines, weights = face_moves(face, track.uv[0], track.uv[1:], track.visible[1:],
-                                  rest=anny_model.anny_rest(phenotype))
+    head = face_moves(face, track.uv[0], track.uv[1:], track.visible[1:], rest=anny_model.anny_rest(phenotype))
     mattes = cv2.warpAffine(face.matte, pixel_index_affine(face.to_reference), (size, size), flags=cv2.INTER_LINEAR)
-    return replace(pairs, head_mattes=np.repeat(mattes[None], len(flows), axis=0), head_affines=affines,
-                   head_weights=weights)
+    n = len(flows)
+    return replace(pairs, head_mattes=np.repeat(mattes[None], n, axis=0), head_affines=head.affines,
+                   head_weights=head.weights, head_shown=head.shown,
+                   head_landmarks=np.repeat(landmarks_in_reference(face)[None], n, axis=0),
+                   head_triangles=np.repeat(landmark_triangles()[None], n, axis=0))
 
 
 def head_box_masks(points: np.ndarray, size: int) -> np.ndarray:

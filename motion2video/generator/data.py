@@ -122,7 +122,10 @@ class FramePairs:
         head_mattes: (B, H, W) float32 the face the reference shows (its matte in the reference's pixels,
             :func:`generator.head_paste.face_matte`), laid over the mesh generator's heads; None: no face.
         head_affines: (B, 2, 3) reference pixels -> target pixels of that face; head_weights: (B,) how much of it
-            each target takes (:func:`generator.head_paste.head_moves`).
+            each target takes; head_shown: (B, L) bool the target shows each of its landmarks
+            (:class:`generator.head_paste.HeadMoves`).
+        head_landmarks: (B, L, 2) the face's landmarks in the reference's pixels; head_triangles: (B, T, 3) int their
+            triangles (:func:`generator.head_paste.shown_face`).
     """
 
     ref_images: np.ndarray
@@ -140,6 +143,9 @@ class FramePairs:
     head_mattes: np.ndarray | None = None
     head_affines: np.ndarray | None = None
     head_weights: np.ndarray | None = None
+    head_shown: np.ndarray | None = None
+    head_landmarks: np.ndarray | None = None
+    head_triangles: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])

@@ -121,7 +121,8 @@ def track_resolution(camera, scales: np.ndarray) -> tuple[object, np.ndarray]:
 
 
 def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform: tuple,
-                      size: int, progress=None, clear_arms: bool | np.ndarray = True) -> MeshTrack:
+                      size: int, progress=None, clear_arms: bool | np.ndarray = True,
+                      offsets: np.ndarray | None = None) -> MeshTrack:
     """Pose Anny on ``joints`` and render its correspondence.
 
     In the frames ``clear_arms`` picks (True: all; or (N,) bool), elbows and wrists that fall inside the torso are
@@ -138,6 +139,8 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
             (2,), or per frame: ``a`` (N,) and ``b`` (N, 2).
         size: the track's image side (square).
         progress: called with the number of frames done.
+        offsets: (V, 3) metres added to the rest vertices (the surface fitted to a pictured person's outline,
+            :func:`motion2video.generator.outline_fit.surface_offsets`), or None.
     Returns:
         The :class:`MeshTrack`.
     """
@@ -161,7 +164,7 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     renderer = MeshRenderer(camera.width, camera.height)
     uv, visible, masks = None, None, np.zeros((n, size, size), bool)
     try:
-        for start, verts in posed_vertices(pose):
+        for start, verts in posed_vertices(pose, offsets=offsets):
             if uv is None:
                 uv = np.zeros((n, verts.shape[1], 2), np.float32)
                 visible = np.zeros((n, verts.shape[1]), bool)

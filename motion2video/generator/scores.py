@@ -32,7 +32,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 from motion2video.generator.background import composite, inpaint_background, soft_matte
 from motion2video.generator.image_baselines import BASELINES, run_baseline
 from motion2video.generator.data import FramePairs, evaluation_pair_index, make_pairs
-from motion2video.generator.head_paste import paste_head
+from motion2video.generator.head_paste import paste_head, shown_face
 from motion2video.generator.specs import FrameSequences
 from motion2video.generator.mesh_warp import MeshWarpGenerator, head_cut, mesh_inputs, mesh_source_mask
 from motion2video.generator.model import FrameGenerator, generate, images_to_tensor
@@ -373,9 +373,11 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
         matte = soft_matte(parts.alpha[:, 0].numpy())
         frames = np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)])
         if part.head_mattes is not None:  # the reference's own face over the generated heads, as synthesize does
-            frames = np.stack([paste_head(f, r, m, a, w, within=p) for f, r, m, a, w, p in
-                               zip(frames, part.ref_images, part.head_mattes, part.head_affines, part.head_weights,
-                                   matte)])
+            frames = np.stack([
+                paste_head(f, r, m, a, w, within=p * shown_face(xy @ a[:, :2].T + a[:, 2], t, shown, p.shape))
+                for f, r, m, xy, a, t, shown, w, p in
+                zip(frames, part.ref_images, part.head_mattes, part.head_landmarks, part.head_affines,
+                    part.head_triangles, part.head_shown, part.head_weights, matte)])
         out.append(frames)
     return np.concatenate(out)
 

@@ -84,14 +84,15 @@ def warp_face(reference: Reference, structures: Structures):
     """The keypoint warp's pictured face: the face the reference photo shows, found at its own resolution
     (:func:`~motion2video.stages.pictured_face.reference_face`), moved in each target as the warp moves the head
     (:func:`~motion2video.generator.warp.segment_affine`), laid over as much as the head still shows it
-    (:func:`~motion2video.stages.pictured_face.joint_face_weights`). None without a face, for face structures, or for
+    (:func:`~motion2video.stages.pictured_face.joint_face_moves`). None without a face, for face structures, or for
     a 2D motion model's (which does not say where the head is turned).
 
     Returns:
-        (face, affines (N, 2, 3) output pixels of the reference -> of each target, weights (N,)) or None.
+        (face, affines (N, 2, 3) output pixels of the reference -> of each target, the
+        :class:`~motion2video.generator.head_paste.HeadMoves` of the N targets) or None.
     """
     from motion2video.generator.warp import segment_affine
-    from motion2video.stages.pictured_face import joint_face_weights, reference_face
+    from motion2video.stages.pictured_face import joint_face_moves, reference_face
 
     if structures.domain != "body" or structures.placement is None:
         return None
@@ -99,25 +100,25 @@ def warp_face(reference: Reference, structures: Structures):
     if face is None:
         return None
     pictured = None if reference.pose is None else reference.pose.camera_joints
-    weights = joint_face_weights(face, structures.placement, structures.points[0], pictured=pictured)
-    if weights is None:
+    head = joint_face_moves(face, structures.placement, structures.points[0], pictured=pictured)
+    if head is None:
         return None
     targets = structures.points[1:1 + structures.num_targets]
     affines = segment_affine(np.broadcast_to(structures.points[0], targets.shape), targets, "head")
-    return face, affines, weights
+    return face, affines, head
 
 
 def paste_faces(frames: np.ndarray, targets: np.ndarray, pasted) -> np.ndarray:
     """(R, S, S, 3) uint8 ``frames`` of target indices ``targets`` (R,) (0 = the first observed frame) with the
     pictured face of :func:`warp_face` (``pasted``; None leaves them) laid over each."""
-    from motion2video.generator.head_paste import compose_affine, paste_head
+    from motion2video.stages.pictured_face import lay_face
 
     if pasted is None:
         return frames
-    face, affines, weights = pasted
+    face, affines, head = pasted
     out = np.asarray(frames).copy()
     for i, t in enumerate(np.asarray(targets, np.int64)):
-        out[i] = paste_head(out[i], face.image, face.matte, compose_affine(affines[t], face.to_reference), weights[t])
+        out[i] = lay_face(out[i], face, head, t, affine=affines[t])
     return out
 
 

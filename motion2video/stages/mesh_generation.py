@@ -36,13 +36,14 @@ from motion2video.core.errors import InputError
 from motion2video.generator.background import MATTE_FEATHER_PX, composite, inpaint_background, soft_matte
 from motion2video.generator.data import body_structures, face_structures
 from motion2video.generator.garment import Skirt, find_skirt, lay_skirts
-from motion2video.generator.head_paste import compose_affine, paste_head
+from motion2video.generator.head_paste import HeadMoves
 from motion2video.generator.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
 from motion2video.generator.mesh_flow import MeshTrack, complete_reference_uv, flows_to_targets, grow_masks
 from motion2video.generator.mesh_reference import clothes_margin, hand_colour_sources, reference_sampling
 from motion2video.generator.mesh_warp import head_cut, mesh_plate, person_colours, sampled_colours
+from motion2video.generator.outline_fit import FIT_IOU, pixels_per_metre, surface_offsets
 from motion2video.generator.warp import limb_region, person_crop
-from motion2video.stages.pictured_face import PicturedFace, face_moves
+from motion2video.stages.pictured_face import PicturedFace, face_moves, lay_face
 from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
 from renderers import anny_model
 
@@ -65,9 +66,9 @@ class MeshVideo:
             (:func:`reference_background`), or None (made from the fitted silhouette and the joints when needed).
         face: the face the reference photo shows (:func:`motion2video.stages.pictured_face.reference_face`), laid over
             every generated head where the head faces as it does in the photo; None: the generator's heads stay.
-        head_affines: (N, 2, 3) output pixels of the reference -> of each target, the fitted face's move
-            (:func:`motion2video.stages.pictured_face.face_moves`); head_weights: (N,) how much of the face each
-            target takes (None without a face).
+        head: where the pictured face goes in each target (output pixels of the reference -> of the target) and
+            how much of it each target takes (:func:`motion2video.stages.pictured_face.face_moves`); None without a
+            face.
         skirt: cloth the reference shows hanging from the hips across both legs
             (:func:`motion2video.generator.garment.find_skirt`), laid over every frame as one panel moved with the
             hips and legs; None: none found.
@@ -83,8 +84,7 @@ class MeshVideo:
     uv_sources: np.ndarray | None = None
     background: np.ndarray | None = None
     face: PicturedFace | None = None
-    head_affines: np.ndarray | None = None
-    head_weights: np.ndarray | None = None
+    head: HeadMoves | None = None
     skirt: Skirt | None = None
 
 
@@ -102,7 +102,8 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         output_size: the output frames' side; model_size: the generator's.
         person: what BlazePose found of the reference person in output pixels
             (:class:`motion2video.stages.reference.ReferencePerson`), or None. Anny's weight is fitted to its mask
-            (:func:`~motion2video.generator.mesh_fit.fit_width`, when ``fit_to_mask``); where the colours are sampled,
+            (:func:`~motion2video.generator.mesh_fit.fit_width`, when ``fit_to_mask``), then its surface to the mask's
+            outline (:func:`outline_surface`); where the colours are sampled,
             a vertex the reference mesh shows counts as shown only where it lands on the person, and the fitted head
             is moved onto its eyes
             (:func:`~motion2video.generator.mesh_reference.reference_sampling`).
@@ -125,15 +126,18 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift, pictured=pictured)
-    small, seen = None, None
+    small, seen, offsets = None, None, None
     if person is not None:
         seen = person.moved(k, -np.array([x0, y0]) * k, (model_size, model_size))
         small = seen.segmented()
         if fit_to_mask:
             phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
                                      person_mask=small, phenotype=phenotype)
+            offsets = outline_surface(lifted, camera=placement.camera, transform=to_crop, size=model_size,
+                                      person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
-                             transform=to_crop, size=model_size, clear_arms=np.arange(len(world) + 1) > 0)
+                             transform=to_crop, size=model_size, clear_arms=np.arange(len(world) + 1) > 0,
+                             offsets=offsets)
     rest = anny_model.anny_rest(phenotype)
     ref_uv, ref_visible = reference_sampling(both.uv[0], both.visible[0], both.masks[0], seen, rest=rest)
     sources = None
@@ -151,8 +155,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         corner = np.array([x0, y0], np.float64)
         video.face = face
         # the reference's vertices as its colours are sampled: the fitted face moved onto the pictured eyes
-        video.head_affines, video.head_weights = face_moves(face, ref_uv / k + corner, tgt.uv / k + corner,
-                                                            tgt.visible, rest=rest)
+        video.head = face_moves(face, ref_uv / k + corner, tgt.uv / k + corner, tgt.visible, rest=rest)
     if image is not None:
         video.background = reference_background(image, video, None if person is None else person.mask,
                                                  reference_points)
@@ -197,7 +200,8 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         joints3d: (N, 17, 3) canonical joints (z up). points2d: (N, 17, 2) the same joints in frame pixels.
         size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
         person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it
-            (:func:`~motion2video.generator.mesh_fit.fit_width`).
+            (:func:`~motion2video.generator.mesh_fit.fit_width`), then its surface to its outline
+            (:func:`outline_surface`).
     Returns:
         the track, and the phenotype it was rendered with (the fitted width's).
     """
@@ -207,14 +211,40 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
     fits = [similarity_fit(p[list(ALIGN_JOINTS)], q[list(ALIGN_JOINTS)]) for p, q in zip(projected, points2d)]
     scales = np.array([f[0] for f in fits])
     shifts = np.stack([f[1] for f in fits])
+    offsets = None
     if person_mask is not None:
         phenotype, _ = fit_width(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
                                  person_mask=person_mask, phenotype=phenotype)
+        offsets = outline_surface(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
+                                  person_mask=person_mask, phenotype=phenotype)
     # the joints are this person's own, observed in every frame: no arms moved out of a torso (moved, dancer.avi's
     # person PSNR fell 21.26 -> 19.88 dB while L1 0.0191 -> 0.0174 and akd 3.42 -> 2.79 px; docs/results.md)
     phenotype = phenotype or {}
     return render_mesh_track(joints3d, phenotype=phenotype, camera=camera, transform=(scales, shifts), size=size,
-                             clear_arms=False), phenotype
+                             clear_arms=False, offsets=offsets), phenotype
+
+
+def outline_surface(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
+                    phenotype: dict | None) -> np.ndarray | None:
+    """(V, 3) metres: Anny's rest surface moved so that, posed on the pictured ``joints`` (17, 3), its outline is
+    the person's (:func:`motion2video.generator.outline_fit.surface_offsets`); None where the body covers the person's
+    mask already (:data:`motion2video.generator.outline_fit.FIT_IOU`).
+
+    Args:
+        joints: (17, 3) world joints of the pictured pose; camera, transform, size: as
+            :func:`~motion2video.generator.mesh_fit.render_mesh_track` (one frame).
+        person_mask: (size, size) bool the person's pixels; phenotype: the fitted phenotype.
+    """
+    phenotype = phenotype or {}
+    joints = np.asarray(joints, np.float64)[None]
+    seen = render_mesh_track(joints, phenotype=phenotype, camera=camera, transform=transform, size=size,
+                             clear_arms=False)
+    person = np.asarray(person_mask, bool)
+    if (seen.masks[0] & person).sum() >= FIT_IOU * max(1, (seen.masks[0] | person).sum()):
+        return None
+    per_metre = pixels_per_metre(camera, joints[0, 0], float(transform[0]))
+    return surface_offsets(seen.uv[0], seen.masks[0], person_mask, rest=anny_model.anny_rest(phenotype),
+                           per_metre=per_metre)
 
 
 def sampled_person(video: MeshVideo):
@@ -234,7 +264,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     through its soft matte (:func:`motion2video.generator.background.soft_matte` of the generator's alpha), so where
     the reference person stood shows the background, and no background colour is mixed into the person. With a
     pictured face (``video.face``) the photo's face is laid over each generated head, moved as the fitted face moves
-    and faded out as the head turns away (:func:`motion2video.generator.head_paste.paste_head`).
+    and faded out as the head turns away (:func:`motion2video.generator.head_paste.paste_face`).
 
     Args:
         net: a :class:`motion2video.generator.mesh_warp.MeshWarpGenerator`.
@@ -297,9 +327,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
                 for i, row in enumerate(part):
                     within = np.zeros(out.shape[1:3], np.float32)
                     within[y0:y0 + side, x0:x0 + side] = matte[i]
-                    out[start + i] = paste_head(out[start + i], face.image, face.matte,
-                                                compose_affine(video.head_affines[row], face.to_reference),
-                                                video.head_weights[row], within=within)
+                    out[start + i] = lay_face(out[start + i], face, video.head, row, within=within)
     return out
 
 

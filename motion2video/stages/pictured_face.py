@@ -10,13 +10,16 @@ is found, and the generator's own head stays.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
 
 from motion2video.core.camera import affine_matrix
 from motion2video.core.skeletons import HEAD, NECK, THORAX
-from motion2video.generator.head_paste import face_matte, head_moves, pixel_index_affine
+from motion2video.generator.head_paste import (
+    HeadMoves, compose_affine, face_matte, face_triangles, head_moves, paste_head, pixel_index_affine, shown_face,
+)
 
 # The square searched for the face: centred between the nose and head joints, this many times the thorax-to-head
 # distance (about a head's height: the face fills a third of it, as BlazeFace's short-range model expects).
@@ -131,8 +134,40 @@ def landmarks_in_reference(face: PicturedFace) -> np.ndarray:
     return face.landmarks @ face.to_reference[:, :2].T + face.to_reference[:, 2]
 
 
+@lru_cache(maxsize=1)
+def landmark_triangles() -> np.ndarray:
+    """(T, 3) int the triangles of the face mesh's landmarks (:func:`motion2video.generator.head_paste.face_triangles`
+    of their points on Anny's head at rest)."""
+    from motion2video.pose.face_anny import load_correspondence
+    from motion2video.pose.facemesh import NUM_LANDMARKS
+    from renderers import anny_model
+
+    points = load_correspondence().points(anny_model.anny_rest().vertices)[:NUM_LANDMARKS]
+    return face_triangles(points)
+
+
+def lay_face(frame: np.ndarray, face: PicturedFace, head: HeadMoves, row: int, *, affine: np.ndarray | None = None,
+             within: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, 3) uint8 ``frame``, target ``row`` of ``head``, with the pictured face laid over the part of it the
+    target shows (:func:`motion2video.generator.head_paste.shown_face`,
+    :func:`motion2video.generator.head_paste.paste_head`).
+
+    Args:
+        frame: (H, W, 3) uint8 in the reference picture's pixels (the output's).
+        affine: (2, 3) reference pixels -> the target's, the head's move when it is not ``head``'s own (the keypoint
+            warp moves the head by its head segment); None: ``head.affines[row]``.
+        within: (H, W) float in [0, 1] the generated person's matte, or None.
+    """
+    move = head.affines[row] if affine is None else np.asarray(affine, np.float64)
+    where = landmarks_in_reference(face) @ move[:, :2].T + move[:, 2]
+    shown = shown_face(where, landmark_triangles(), head.shown[row], frame.shape[:2])
+    within = shown if within is None else shown * np.asarray(within, np.float32)
+    return paste_head(frame, face.image, face.matte, compose_affine(move, face.to_reference),
+                      float(head.weights[row]), within=within)
+
+
 def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, rest
-               ) -> tuple[np.ndarray, np.ndarray]:
+               ) -> HeadMoves:
     """Where the pictured face goes in each target and how much of it to lay over
     (:func:`motion2video.generator.head_paste.head_moves`), through the face mesh's correspondence with Anny's head
     (:mod:`motion2video.pose.face_anny`).
@@ -142,7 +177,8 @@ def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_v
             tgt_uv: (N, V, 2) the same vertices in each target, in the same pixels; tgt_visible: (N, V) bool;
             rest: the body's :class:`renderers.anny_model.AnnyRest`.
     Returns:
-        affines (N, 2, 3) reference pixels -> target pixels, weights (N,).
+        the :class:`~motion2video.generator.head_paste.HeadMoves` of the N targets (reference pixels -> target
+        pixels).
     """
     from motion2video.pose.face_anny import load_correspondence
     from motion2video.pose.facemesh import NUM_LANDMARKS
@@ -156,21 +192,23 @@ def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_v
                       head_vertices=head)
 
 
-def joint_face_weights(face: PicturedFace, placement, reference_points: np.ndarray, *,
-                       pictured: np.ndarray | None = None) -> np.ndarray | None:
-    """How much of the pictured face to lay over each target of a generator without a body mesh (the keypoint warp):
-    Anny's head carried rigidly by the head's axes of the joints (:func:`motion2video.generator.head_paste.rigid_head`),
-    the reference's lifted from its 2D joints as the mesh generator lifts them
-    (:func:`motion2video.generator.mesh_fit.lift_reference`); a head vertex counts as shown where it faces the camera
-    (the head's own back hides the face; an arm in front of it is not seen). The weights are
-    :func:`motion2video.generator.head_paste.head_moves`'s, as for the mesh generator.
+def joint_face_moves(face: PicturedFace, placement, reference_points: np.ndarray, *,
+                     pictured: np.ndarray | None = None) -> HeadMoves | None:
+    """How the pictured face moves and how much of it to lay over in each target of a generator without a body mesh
+    (the keypoint warp): Anny's head carried rigidly by the head's axes of the joints
+    (:func:`motion2video.generator.head_paste.rigid_head`), the reference's lifted from its 2D joints as the mesh
+    generator lifts them (:func:`motion2video.generator.mesh_fit.lift_reference`); a head vertex counts as shown where
+    it faces the camera (the head's own back hides the face; an arm in front of it is not seen). The moves are
+    :func:`motion2video.generator.head_paste.head_moves`'s, as for the mesh generator (the warp moves the face by its
+    own head segment; which landmarks are shown and the weights are the rigid head's).
 
     Args:
         face: the pictured face; placement: the structures' :class:`motion2video.stages.structure.BodyPlacement`.
         reference_points: (17, 2) the reference's joints in output pixels.
         pictured: (17, 3) the reference picture's own 3D pose (its pose file's ``camera_joints``), or None.
     Returns:
-        (N,) weights in [0, 1]; None for a 2D placement (2D joints do not say which way the head is turned).
+        the :class:`~motion2video.generator.head_paste.HeadMoves` of the N targets; None for a 2D placement (2D
+        joints do not say which way the head is turned).
     """
     from motion2video.generator.head_paste import rigid_head
     from motion2video.generator.mesh_fit import lift_reference
@@ -195,7 +233,5 @@ def joint_face_weights(face: PicturedFace, placement, reference_points: np.ndarr
     local = np.searchsorted(head, corr.vertices[mesh])  # the landmarks' vertices among the head's
     if not np.array_equal(head[np.minimum(local, len(head) - 1)], corr.vertices[mesh]):
         raise ValueError("a face landmark lies off Anny's head vertices")
-    _, weights = head_moves(landmarks_in_reference(face), corr.points(rest.vertices)[mesh], local,
-                            corr.weights[mesh], uv[0], uv[1:], shown[1:], head_points=rest.vertices[head],
-                            head_vertices=np.arange(len(head)))
-    return weights
+    return head_moves(landmarks_in_reference(face), corr.points(rest.vertices)[mesh], local, corr.weights[mesh], uv[0],
+                      uv[1:], shown[1:], head_points=rest.vertices[head], head_vertices=np.arange(len(head)))
