@@ -113,8 +113,8 @@ def test_the_face_is_found_at_the_photos_own_resolution(tracksuit):
 def test_pasting_the_face_where_it_was_gives_the_photo_back_and_touches_nothing_else(tracksuit):
     """Laid over a grey frame by its own map to the reference picture, the face is the reference picture's face
     (the photo shrunk by area to 256, as the reference is): PSNR over the face's core 35.8 dB (33.2 dB warped
-    bilinearly); moved by a quarter pixel it falls to 26-28 dB, so the map keeps the pixel grid. Where the warped matte is 0 the frame is
-    untouched, to the bit."""
+    bilinearly); moved by a quarter pixel it falls to 26-28 dB, so the map keeps the pixel grid. Where the warped
+    matte is 0 the frame is untouched, to the bit."""
     from motion2video.stages.pictured_face import reference_face
 
     from motion2video.generator.head_paste import pixel_index_affine
@@ -386,13 +386,13 @@ def test_a_hand_in_front_of_the_face_stays_in_front(net, tracksuit):
     axes, _ = joint_head_axes(futures[0, 0])
     front = -axes[:, 1]  # the way the body faces (up x left points to its back)
     head = futures[0, 0, HEAD]
-    futures[0, 0, R_WRIST] = head - 0.06 * axes[:, 2] + 0.15 * front
+    futures[0, 0, R_WRIST] = head - 0.06 * axes[:, 2] + 0.15 * front - 0.03 * axes[:, 0]  # a little to her right
     futures[0, 0, R_ELBOW] = head - 0.30 * axes[:, 2] + 0.10 * front - 0.15 * axes[:, 0]
     forecast = replace(forecast, futures=futures)
     structures = render_structures(forecast, domain="body", size=SIZE, reference=tracksuit)
     video = mesh_video_of(net, tracksuit, forecast)
     hidden = ~video.head.shown[1]  # target 1: the first future
-    assert 0.3 < hidden.mean() < 0.5 and (~video.head.shown[2]).mean() < 0.05  # 0.40; the next target's hand is down
+    assert 0.3 < hidden.mean() < 0.5 and (~video.head.shown[2]).mean() < 0.05  # 0.37; the next target's hand is down
     assert video.head.weights[1] == 1.0  # the rest of the face is laid over fully
     with_face = mesh_frames(net, tracksuit, structures, video, np.array([1]))[0]
     without = mesh_frames(net, tracksuit, structures, replace(video, face=None), np.array([1]))[0]

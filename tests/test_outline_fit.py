@@ -49,7 +49,8 @@ def test_offsets_spread_over_the_surface_and_to_parts_no_edge_joins():
     last smoothing rounds ease its ends a little); a triangle of its own (an eye) takes the value of the nearest
     vertex."""
     xs = np.arange(11, dtype=np.float64)
-    strip = np.concatenate([np.stack([xs, np.zeros(11), np.zeros(11)], 1), np.stack([xs, np.ones(11), np.zeros(11)], 1)])
+    strip = np.concatenate([np.stack([xs, np.zeros(11), np.zeros(11)], 1),
+                            np.stack([xs, np.ones(11), np.zeros(11)], 1)])
     tris = [[i, i + 1, 11 + i] for i in range(10)] + [[i + 1, 12 + i, 11 + i] for i in range(10)]
     eye = np.array([[10.2, 0.3, 0.1], [10.4, 0.3, 0.1], [10.3, 0.5, 0.1]])
     points = np.concatenate([strip, eye])

@@ -13,7 +13,7 @@ fits its body mesh to the person's silhouette as well as to the skeleton; here t
    the outline beside them, and a few more rounds smooth them.
 3. **Carried by the skinning.** In metres (:func:`pixels_per_metre`), clipped to [-:data:`MAX_IN_M`,
    :data:`MAX_OUT_M`], each vertex moves along its rest normal (:func:`surface_offsets`); posed by the skinning, the
-   body keeps the person's outline in every frame.
+   body keeps the person's outline in every frame. The head and the forearms keep their shape (:func:`kept_shape`).
 
 Masks are (S, S) bool; vertex positions in pixels, x right, y down, the origin at the top-left corner of the top-left
 pixel (its centre at (0.5, 0.5)).
@@ -32,6 +32,8 @@ OUTLINE_PX = 1.0
 # the body's surface: long hair over a shoulder, the gap between an arm and the waist that the segmentation fills,
 # a bag, a limb the fit put beside the pictured one
 MAX_MEASURED_PX = 4.0
+# the bones whose vertices keep the body model's shape (kept_shape), besides the head's
+KEPT_BONES = ("lowerarm", "wrist", "metacarpal", "finger")
 # how far a vertex may move along its normal, outwards and inwards: loose clothes and hair reach some centimetres
 # past a body model; a segmentation's edge is a pixel or two inside the person
 MAX_OUT_M = 0.08
@@ -39,8 +41,8 @@ MAX_IN_M = 0.03
 # a body fitted to the outline and posed by joints estimated in other frames of a video (the reconstruction
 # protocol) is grown by this many pixels (at 128 px, scaled with the size): it lies a pixel or two beside the person
 # there, and a pixel of the person's colour beside them costs less than a pixel of the background inside them
-# (dancer.avi, evaluate-frames --video at 128: grown by 0 / 1 / 2 px, person PSNR 18.92 / 20.85 / 21.54 dB, L1 0.0157
-# / 0.0165 / 0.0190; copy-reference's L1 0.0169)
+# (dancer.avi, evaluate-frames --video at 128: grown by 0 / 1 / 2 px, person PSNR 18.37 / 20.48 / 21.51 dB, L1 0.0156
+# / 0.0162 / 0.0183; copy-reference's L1 0.0169)
 GROW_PX = 1.0
 # a body whose weight fit already covers the person this well (intersection over union of the silhouette and the
 # mask) is left as it is: an Anny render's (make demo's reference, 0.957) differs from its segmentation by the
@@ -120,6 +122,18 @@ def spread_over_mesh(values: np.ndarray, known: np.ndarray, triangles: np.ndarra
     return x
 
 
+def kept_shape() -> np.ndarray:
+    """(V,) bool: the vertices the outline fit leaves where the body model puts them (:data:`KEPT_BONES`): the head
+    (the face is put on the pictured eyes, and hair is no skull) and the forearms with the hands (a hand holding
+    something, or hanging against the hip, widens the outline there; moved out to it, the forearm became a thick
+    skin-coloured blob across the chest whenever a target swung it in front of the body: three_walking.jpg)."""
+    from renderers import anny_model
+
+    names = anny_model.bone_names()
+    kept = np.array([name.startswith(KEPT_BONES) for name in names])
+    return anny_model.head_vertices() | kept[anny_model.dominant_bones()]
+
+
 def pixels_per_metre(camera, point: np.ndarray, scale: float) -> float:
     """Pixels per metre at the depth of world ``point`` (3,) seen by ``camera``, its pixels scaled by ``scale`` (as a
     track's transform scales them)."""
@@ -145,10 +159,10 @@ def surface_offsets(uv: np.ndarray, fitted: np.ndarray, person: np.ndarray, *, r
 
     offsets, measured = outline_offsets(uv, fitted, person)
     measured &= np.abs(offsets) <= MAX_MEASURED_PX * np.asarray(person).shape[0] / 128
-    head = anny_model.head_vertices()
-    offsets[head] = 0.0  # the head keeps its shape: the face is put on the pictured eyes, and hair is no skull
+    kept = kept_shape()
+    offsets[kept] = 0.0
     triangles = anny_model.triangles()
-    spread = spread_over_mesh(offsets / per_metre, measured | head, triangles, rest.vertices)
-    spread[head] = 0.0  # after the smoothing too
+    spread = spread_over_mesh(offsets / per_metre, measured | kept, triangles, rest.vertices)
+    spread[kept] = 0.0  # after the smoothing too
     normals = vertex_normals(rest.vertices, triangles).astype(np.float64)
     return np.clip(spread, -MAX_IN_M, MAX_OUT_M)[:, None] * normals
