@@ -47,8 +47,7 @@ GROW_PX = 1.0
 # a body whose weight fit already covers the person this well (intersection over union of the silhouette and the
 # mask) is left as it is: an Anny render's (make demo's reference, 0.957) differs from its segmentation by the
 # segmentation's own blur, and moving its surface by a pixel changed which of a hand and the thigh it touches some
-# vertices sample; real photos measured 0.69-0.80 (the skier, woman_blue_tracksuit.jpg, fashion_woman_shorts.png) and
-# dancer.avi 0.77
+# vertices sample; the six photos of ../shared/data/photos measured 0.69-0.85 (docs/results.md), dancer.avi 0.77
 FIT_IOU = 0.9
 # rounds of averaging over the mesh's edges: to fill the surface from the outline, then to smooth it
 SPREAD_ROUNDS = 300
