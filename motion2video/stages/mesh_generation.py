@@ -7,7 +7,8 @@ for a placed video (:func:`mesh_video`) and runs the generator on it (:func:`gen
 1. **The reference person's body.** Anny with the reference's phenotype (``pose.identity`` of the reference
    pose file, Anny's defaults otherwise), in the reference pose lifted to 3D through the placement's camera
    (:func:`motion2video.generator.mesh_fit.lift_reference`), its weight fitted to the person's mask
-   (:func:`~motion2video.generator.mesh_fit.fit_width`).
+   (:func:`~motion2video.generator.mesh_fit.fit_width`), then its surface to the mask's outline
+   (:func:`outline_surface`, :mod:`motion2video.generator.outline_fit`).
 2. **Every target pose on that body.** Anny's inverse kinematics follows the driving joints' directions, so
    the target meshes keep the motion's joint angles with the reference person's proportions (one scale for
    the whole video, fitted to leg + torso length; feet flat on the floor near it).
