@@ -71,19 +71,20 @@ def test_the_margin_is_a_pixel_at_128_and_scales():
 
 
 @pytest.fixture(scope="module")
-def dancer_frame(dancer_video, tmp_path_factory):
-    """dancer.avi's first frames, its track cached in a temporary folder (not the user's ~/.cache)."""
+def dancer_frames(dancer_video, tmp_path_factory):
+    """dancer.avi's first frames at 128 and at 256 px, its track cached in a temporary folder (not the user's
+    ~/.cache)."""
     from motion2video.evaluation.reconstruction import video_frames
     from tests.test_pose import _cut_video
 
     clip = _cut_video(dancer_video, tmp_path_factory.mktemp("clip") / "dancer30.avi", 30)
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("cache")))
-        return video_frames(clip, size=128, targets=1)
+        return {size: video_frames(clip, size=size, targets=1) for size in (128, 256)}
 
 
 @pytest.mark.slow
-def test_the_dancer_s_fitted_body_takes_her_outline(dancer_frame):
+def test_the_dancer_s_fitted_body_takes_her_outline(dancer_frames):
     """dancer.avi's first frame at 128: Anny with its weight fitted to her mask covers it with IoU 0.77 (her loose
     suit reaches past it on her left); with its surface fitted to her outline, 0.9 and more."""
     from motion2video.core.camera import fit_camera, project
@@ -91,7 +92,7 @@ def test_the_dancer_s_fitted_body_takes_her_outline(dancer_frame):
     from motion2video.stages.mesh_generation import video_mesh_track
     from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
 
-    frames = dancer_frame
+    frames = dancer_frames[128]
     person = frames.masks[0]
     track, phenotype = video_mesh_track(frames.joints3d[:1], frames.points[:1], size=128, person_mask=person)
     fitted = track.masks[0]
@@ -138,3 +139,46 @@ def test_the_head_keeps_its_shape_and_no_vertex_moves_past_the_limits(photos_dir
     assert length[head].max() == 0.0
     assert length.max() <= max(MAX_IN_M, MAX_OUT_M) + 1e-9
     assert video.margin == 0  # 4 px at 256 with the weight fitted alone
+
+
+def test_core_sources_are_the_person_s_pixels_away_from_its_outline():
+    """Known answer at 128 px: sources on the person's outline pixels are left out, sources 2 px inside kept; a
+    region with too few sources inside keeps them all."""
+    from motion2video.generator.mesh_flow import COLOUR_MIN_SOURCES, core_sources
+
+    person = np.zeros((128, 128), bool)
+    person[20:100, 30:90] = True
+    n = COLOUR_MIN_SOURCES
+    inner = np.stack([np.linspace(40, 80, n), np.full(n, 50.0)], axis=1)  # well inside
+    edge = np.stack([np.full(n, 30.5), np.linspace(30, 90, n)], axis=1)  # the outline's first column
+    few = np.stack([np.full(3, 30.5), [40.0, 50.0, 60.0]], axis=1)  # another region's, on the outline too
+    uv = np.concatenate([inner, edge, few])
+    regions = np.array([0] * (2 * n) + [1] * 3)
+    kept = core_sources(uv, np.arange(len(uv)), person, regions)
+    np.testing.assert_array_equal(kept, np.concatenate([np.arange(n), np.arange(2 * n, 2 * n + 3)]))
+
+
+@pytest.mark.slow
+def test_the_dancer_s_hidden_hair_takes_her_hair_not_the_blue_fringe(dancer_frames):
+    """dancer.avi's first frame at 256: the hair vertices the reference hides (the back of her head), completed
+    from shown hair on the person's outline, sampled the backdrop's blue fringe; from the person's core they do
+    not."""
+    from motion2video.generator.mesh_flow import complete_reference_uv
+    from motion2video.generator.mesh_reference import on_person
+    from motion2video.stages.mesh_generation import video_mesh_track
+    from renderers import anny_model
+
+    frames = dancer_frames[256]
+    track, _ = video_mesh_track(frames.joints3d[:1], frames.points[:1], size=256, person_mask=frames.masks[0])
+    seen = track.visible[0] & on_person(track.uv[0], frames.masks[0])
+    hidden_hair = ~seen & (anny_model.vertex_regions() == anny_model.HAIR)
+    assert hidden_hair.sum() > 100
+
+    def blue_share(uv: np.ndarray) -> float:
+        px = np.clip(np.floor(uv[hidden_hair]).astype(int), 0, 255)
+        c = frames.images[0][px[:, 1], px[:, 0]].astype(int)
+        return float(np.mean(c[:, 2] > c[:, 0] + 40))
+
+    fringe = blue_share(complete_reference_uv(track.uv[0], seen, image=frames.images[0]))
+    core = blue_share(complete_reference_uv(track.uv[0], seen, image=frames.images[0], person=frames.masks[0]))
+    assert fringe > 0.3 and core < 0.02, (fringe, core)  # 0.45 and 0.00

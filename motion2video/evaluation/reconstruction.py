@@ -207,7 +207,8 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     shown[0] &= on_person(track.uv[0], frames.masks[0])
     track = MeshTrack(track.uv, shown, track.masks)
     margin = outline_margin(size)  # the body is fitted to frame 0's outline (video_mesh_track)
-    ref_uv = complete_reference_uv(track.uv[0], track.visible[0], image=frames.images[0])
+    ref_uv = complete_reference_uv(track.uv[0], track.visible[0], image=frames.images[0],
+                                   person=frames.masks[0])
     flows, visibility = flows_to_targets(ref_uv, track.visible[0], track, range(1, len(track.uv)), margin=margin)
     pairs = replace(pairs, mesh_flow=flows, mesh_visibility=visibility,
                     mesh_ref_masks=np.repeat(grow_masks(track.masks[:1], margin), len(flows), axis=0),

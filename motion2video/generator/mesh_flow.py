@@ -254,6 +254,28 @@ def typical_colour_sources(ref_uv: np.ndarray, sources: np.ndarray, image: np.nd
 # pixels beside the hanging hands, came out skin-coloured in `make demo`). The regions of a face are left alone: they
 # are a few pixels wide in a photo, and their hidden sides then took colours from far away.
 INTERIOR_PX = 2.0
+CORE_PX = 1.0  # core_sources: a source this far (at 128 px) inside the person, at least
+
+
+def core_sources(ref_uv: np.ndarray, sources: np.ndarray, person: np.ndarray, regions: np.ndarray) -> np.ndarray:
+    """The subset of ``sources`` (vertex ids) whose pixel lies at least CORE_PX (at 128 px, scaled) inside the
+    segmented ``person`` (H, W) bool: the outline's pixels are the person mixed with what lies behind (the top of a
+    dancer's head half blue backdrop), and the hidden back of her head, completed from them, came out navy. A region
+    left with fewer than COLOUR_MIN_SOURCES sources keeps all of its sources."""
+    from scipy.ndimage import distance_transform_edt
+
+    h, w = person.shape
+    depth = distance_transform_edt(np.asarray(person, bool))  # pixels to the nearest pixel outside the person
+    xy = np.asarray(ref_uv, np.float64)[sources]
+    x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
+    y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
+    inside = depth[y, x] > CORE_PX * h / 128
+    keep = inside.copy()
+    for region in np.unique(regions[sources]):
+        mine = regions[sources] == region
+        if (inside & mine).sum() < COLOUR_MIN_SOURCES:
+            keep[mine] = True
+    return sources[keep]
 
 
 def interior_sources(ref_uv: np.ndarray, sources: np.ndarray, seen: np.ndarray, regions: np.ndarray, *,
@@ -283,7 +305,7 @@ def interior_sources(ref_uv: np.ndarray, sources: np.ndarray, seen: np.ndarray, 
 
 
 def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bool = True,
-                          image: np.ndarray | None = None) -> np.ndarray:
+                          image: np.ndarray | None = None, person: np.ndarray | None = None) -> np.ndarray:
     """(V, 2) reference pixels where every vertex the reference does not show takes the pixel of the nearest
     shown vertex *along the body's surface* (Dijkstra over :func:`surface_graph`): the hidden side of a thigh
     starts from the colour of its front, not from whatever covers its own pixel in the reference (a hand) or lies
@@ -305,6 +327,8 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
         ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
         by_region: keep to the clothing region first (the default since 2026-11-26); False: any region.
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv`` (None: every shown vertex is a source).
+        person: (H, W) bool the segmented person in the same pixels, or None: with it, a region's sources are its
+            shown vertices inside the person's core (:func:`core_sources`).
     """
     uv = np.array(ref_uv, np.float32, copy=True)
     graph = surface_graph()
@@ -320,8 +344,10 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
     if by_region:
         inside, regions = region_graph()
         typical = sources
+        if person is not None:
+            typical = core_sources(uv, typical, person, regions)
         if image is not None:
-            typical = typical_colour_sources(uv, sources, image, regions)
+            typical = typical_colour_sources(uv, typical, image, regions)
             typical = interior_sources(uv, typical, seen, regions, radius_px=INTERIOR_PX * image.shape[0] / 128)
         within = _nearest_sources(inside, typical)
         nearest = np.where(within >= 0, within, nearest)

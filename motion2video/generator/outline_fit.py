@@ -41,7 +41,7 @@ MAX_IN_M = 0.03
 # a body fitted to the outline and posed by joints estimated in other frames of a video (the reconstruction
 # protocol) is grown by this many pixels (at 128 px, scaled with the size): it lies a pixel or two beside the person
 # there, and a pixel of the person's colour beside them costs less than a pixel of the background inside them
-# (dancer.avi, evaluate-frames --video at 128: grown by 0 / 1 / 2 px, person PSNR 18.37 / 20.48 / 21.51 dB, L1 0.0156
+# (dancer.avi, evaluate-frames --video at 128: grown by 0 / 1 / 2 px, person PSNR 18.41 / 20.52 / 21.58 dB, L1 0.0156
 # / 0.0162 / 0.0183; copy-reference's L1 0.0169)
 GROW_PX = 1.0
 # a body whose weight fit already covers the person this well (intersection over union of the silhouette and the

@@ -294,7 +294,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     # the head's halo cut off (head_cut): where the flow lands beside the pictured head, the background
     cut = None if segmented is None else torch.from_numpy(head_cut(video.person.astype(np.float32),
                                                                     video.ref_points))[None, None]
-    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], image=small)
+    ref_uv = complete_reference_uv(video.reference.uv[0], video.reference.visible[0], image=small,
+                                   person=video.person)
     if video.uv_sources is not None:  # a fitted hand beside the pictured one samples the pictured one
         ref_uv = ref_uv[video.uv_sources]
     net.eval()
