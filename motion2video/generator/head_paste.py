@@ -303,12 +303,12 @@ def shown_face(points: np.ndarray, triangles: np.ndarray, shown: np.ndarray, sha
     area = signed_areas(pts, triangles)
     front = 1.0 if np.sum(area > 0) >= np.sum(area < 0) else -1.0
     drawn = np.asarray(shown, bool)[triangles].all(axis=1) & (area * front > 1e-6)
+    if drawn.all():
+        return np.ones(shape, np.float32)  # nothing hidden: the matte alone outlines the face
     cover = np.zeros(shape, np.float32)
     corners = np.round((pts - 0.5) * 16).astype(np.int32)  # OpenCV's pixel centres, 4 fractional bits
     for tri in triangles[drawn]:
         cv2.fillConvexPoly(cover, corners[tri], 1.0, lineType=cv2.LINE_8, shift=4)
-    if drawn.all():
-        return np.ones(shape, np.float32)  # nothing hidden: the matte alone outlines the face
     sigma = max(0.5, MATTE_FEATHER * float(np.ptp(pts, axis=0).max()))
     return cover * cv2.GaussianBlur(cover, (0, 0), sigmaX=sigma, borderType=cv2.BORDER_CONSTANT)
 
