@@ -8,7 +8,7 @@ for a placed video (:func:`mesh_video`) and runs the generator on it (:func:`gen
    pose file, Anny's defaults otherwise), in the reference pose lifted to 3D through the placement's camera
    (:func:`motion2video.generator.mesh_fit.lift_reference`), its weight fitted to the person's mask
    (:func:`~motion2video.generator.mesh_fit.fit_width`), then its surface to the mask's outline
-   (:func:`outline_surface`, :mod:`motion2video.generator.outline_fit`).
+   (:func:`fit_to_person`, :mod:`motion2video.generator.outline_fit`).
 2. **Every target pose on that body.** Anny's inverse kinematics follows the driving joints' directions, so
    the target meshes keep the motion's joint angles with the reference person's proportions (one scale for
    the whole video, fitted to leg + torso length; feet flat on the floor near it).
@@ -104,7 +104,7 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         person: what BlazePose found of the reference person in output pixels
             (:class:`motion2video.stages.reference.ReferencePerson`), or None. Anny's weight is fitted to its mask
             (:func:`~motion2video.generator.mesh_fit.fit_width`, when ``fit_to_mask``), then its surface to the mask's
-            outline (:func:`outline_surface`); where the colours are sampled,
+            outline (:func:`fit_to_person`); where the colours are sampled,
             a vertex the reference mesh shows counts as shown only where it lands on the person, and the fitted head
             is moved onto its eyes
             (:func:`~motion2video.generator.mesh_reference.reference_sampling`).
@@ -132,10 +132,8 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         seen = person.moved(k, -np.array([x0, y0]) * k, (model_size, model_size))
         small = seen.segmented()
         if fit_to_mask:
-            phenotype, _ = fit_width(lifted, camera=placement.camera, transform=to_crop, size=model_size,
-                                     person_mask=small, phenotype=phenotype)
-            offsets = outline_surface(lifted, camera=placement.camera, transform=to_crop, size=model_size,
-                                      person_mask=small, phenotype=phenotype)
+            phenotype, offsets = fit_to_person(lifted, camera=placement.camera, transform=to_crop, size=model_size,
+                                               person_mask=small, phenotype=phenotype)
     both = render_mesh_track(np.concatenate([lifted[None], world]), phenotype=phenotype, camera=placement.camera,
                              transform=to_crop, size=model_size, clear_arms=np.arange(len(world) + 1) > 0,
                              offsets=offsets)
@@ -202,7 +200,7 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
         size: the frames' side (square). phenotype: Anny phenotype (its defaults when None).
         person_mask: (size, size) bool the person in frame 0: the body's width is fitted to it
             (:func:`~motion2video.generator.mesh_fit.fit_width`), then its surface to its outline
-            (:func:`outline_surface`).
+            (:func:`fit_to_person`).
     Returns:
         the track, and the phenotype it was rendered with (the fitted width's).
     """
@@ -214,10 +212,8 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
     shifts = np.stack([f[1] for f in fits])
     offsets = None
     if person_mask is not None:
-        phenotype, _ = fit_width(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
-                                 person_mask=person_mask, phenotype=phenotype)
-        offsets = outline_surface(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
-                                  person_mask=person_mask, phenotype=phenotype)
+        phenotype, offsets = fit_to_person(joints3d[0], camera=camera, transform=(scales[0], shifts[0]), size=size,
+                                           person_mask=person_mask, phenotype=phenotype)
     # the joints are this person's own, observed in every frame: no arms moved out of a torso (moved, dancer.avi's
     # person PSNR fell 21.26 -> 19.88 dB while L1 0.0191 -> 0.0174 and akd 3.42 -> 2.79 px; docs/results.md)
     phenotype = phenotype or {}
@@ -225,11 +221,31 @@ def video_mesh_track(joints3d: np.ndarray, points2d: np.ndarray, *, size: int, p
                              clear_arms=False, offsets=offsets), phenotype
 
 
+def fit_to_person(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
+                  phenotype: dict | None) -> tuple[dict, np.ndarray | None]:
+    """Anny fitted to a pictured person's mask: its weight (:func:`~motion2video.generator.mesh_fit.fit_width`), then,
+    unless that body already covers the mask (intersection over union :data:`~motion2video.generator.outline_fit.
+    FIT_IOU`), its surface to the mask's outline (:func:`outline_surface`).
+
+    Args:
+        joints: (17, 3) world joints of the pictured pose; camera, transform, size: as
+            :func:`~motion2video.generator.mesh_fit.render_mesh_track` (one frame).
+        person_mask: (size, size) bool the person's pixels; phenotype: the other phenotype values (None: Anny's).
+    Returns:
+        (the phenotype with the fitted weight, (V, 3) rest offsets in metres or None).
+    """
+    phenotype, iou = fit_width(joints, camera=camera, transform=transform, size=size, person_mask=person_mask,
+                               phenotype=phenotype)
+    if iou >= FIT_IOU:
+        return phenotype, None
+    return phenotype, outline_surface(joints, camera=camera, transform=transform, size=size, person_mask=person_mask,
+                                      phenotype=phenotype)
+
+
 def outline_surface(joints: np.ndarray, *, camera, transform: tuple, size: int, person_mask: np.ndarray,
-                    phenotype: dict | None) -> np.ndarray | None:
+                    phenotype: dict | None) -> np.ndarray:
     """(V, 3) metres: Anny's rest surface moved so that, posed on the pictured ``joints`` (17, 3), its outline is
-    the person's (:func:`motion2video.generator.outline_fit.surface_offsets`); None where the body covers the person's
-    mask already (:data:`motion2video.generator.outline_fit.FIT_IOU`).
+    the person's (:func:`motion2video.generator.outline_fit.surface_offsets`).
 
     Args:
         joints: (17, 3) world joints of the pictured pose; camera, transform, size: as
@@ -240,9 +256,6 @@ def outline_surface(joints: np.ndarray, *, camera, transform: tuple, size: int, 
     joints = np.asarray(joints, np.float64)[None]
     seen = render_mesh_track(joints, phenotype=phenotype, camera=camera, transform=transform, size=size,
                              clear_arms=False)
-    person = np.asarray(person_mask, bool)
-    if (seen.masks[0] & person).sum() >= FIT_IOU * max(1, (seen.masks[0] | person).sum()):
-        return None
     per_metre = pixels_per_metre(camera, joints[0, 0], float(transform[0]))
     return surface_offsets(seen.uv[0], seen.masks[0], person_mask, rest=anny_model.anny_rest(phenotype),
                            per_metre=per_metre)
