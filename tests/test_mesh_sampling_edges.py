@@ -318,6 +318,30 @@ def test_a_pose_files_padded_border_is_never_the_person(tmp_path):
     assert small.any() and not (video.person & small).any()
 
 
+def test_a_person_cut_by_the_pictures_edge_leaves_no_legs_in_the_padded_border(tmp_path):
+    """``--crop-person`` on a photo cut at the thighs pads the square below the picture; replicated, that border drew
+    her trousers on down to the frame's edge, and the background every frame is laid over kept those legs where she
+    stood. The pad is filled with the person: below the picture, in her legs' columns, the background is nearer the
+    wall than her trousers (95% of those pixels were nearer the trousers)."""
+    import cv2
+
+    photo = cv2.imread(str(ROOT.parent / "shared" / "data" / "photos" / "woman_blue_tracksuit.jpg"))
+    cut = tmp_path / "tracksuit_thighs.png"
+    cv2.imwrite(str(cut), photo[: int(photo.shape[0] * 0.62)])
+    reference, video = fitted_reference(cut, crop_person=True)
+    border = ~reference.picture_mask()
+    last = int(np.flatnonzero((~border).any(axis=1)).max())  # the picture's last row
+    assert border.shape[0] - 1 - last > 40  # the pad below her
+    row = last - 2
+    legs = (reference.person.mask[row] > 0.5) & ~border[row]
+    assert legs.sum() > 20
+    trousers = np.median(reference.image[row][legs], axis=0)
+    wall = np.median(reference.image[row][~legs & ~border[row]], axis=0)
+    below = video.background[last + 5:][:, legs].reshape(-1, 3).astype(np.float64)
+    nearer_trousers = np.linalg.norm(below - trousers, axis=1) < np.linalg.norm(below - wall, axis=1)
+    assert nearer_trousers.mean() < 0.05
+
+
 def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     """A hand vertex that lands on something other than the pictured hand takes the pixel of the nearest hand vertex
     that lands on it; the pictured hand's colour is read at BlazePose's hand points, so a glove stays a glove."""

@@ -92,7 +92,7 @@ class MeshVideo:
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
                output_size: int, model_size: int, person=None, image: np.ndarray | None = None,
                fit_to_mask: bool = True, pictured: np.ndarray | None = None,
-               face: PicturedFace | None = None) -> MeshVideo:
+               face: PicturedFace | None = None, from_file: np.ndarray | None = None) -> MeshVideo:
     """The meshes of a placed body video.
 
     Args:
@@ -114,6 +114,9 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         pictured: (17, 3) the reference picture's own 3D pose in its camera's axes (its pose file's
             ``camera_joints``), or None (:func:`~motion2video.generator.mesh_fit.lift_reference`).
         face: the reference photo's face (:func:`motion2video.stages.pictured_face.reference_face`), or None.
+        from_file: (output_size, output_size) bool the pixels of ``image`` that come from the image file, or None (all
+            of them): a border the pipeline replicated around a photo is inpainted with the person
+            (:func:`reference_background`).
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -157,14 +160,14 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         video.head = face_moves(face, ref_uv / k + corner, tgt.uv / k + corner, tgt.visible, rest=rest)
     if image is not None:
         video.background = reference_background(image, video, None if person is None else person.mask,
-                                                 reference_points)
+                                                 reference_points, from_file=from_file)
         if person is not None:
             video.skirt = find_skirt(image, person.mask, reference_points)
     return video
 
 
 def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray | None,
-                         points: np.ndarray) -> np.ndarray:
+                         points: np.ndarray, *, from_file: np.ndarray | None = None) -> np.ndarray:
     """(S, S, 3) uint8: the reference picture with its person inpainted
     (:func:`motion2video.generator.background.inpaint_background`), the background every generated person is
     composited over.
@@ -174,6 +177,10 @@ def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray
     missed; with no segmented person, the silhouette joined with the pose's limbs drawn thick
     (:func:`motion2video.generator.warp.limb_region` of ``points`` (17, 2), output pixels), as hair and clothes reach
     past the body model.
+
+    A border the pipeline replicated around the photo (``from_file`` (S, S) bool False there: ``--crop-person``'s pad,
+    ``--fit-view``'s zoom) is filled too: replicated, the picture's edge drew stretched stripes, and of a person cut by
+    that edge (legs below the frame) a ghost of their legs that stayed where they were in every frame.
     """
     h, w = image.shape[:2]
     x0, y0, side = video.crop
@@ -184,6 +191,8 @@ def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray
         hole = np.maximum(hole, np.asarray(person, np.float32))
     else:
         hole = np.maximum(hole, limb_region(points, width=w, height=h).astype(np.float32))
+    if from_file is not None:
+        hole = np.where(np.asarray(from_file, bool), hole, 1.0)
     return inpaint_background(image, hole)
 
 
