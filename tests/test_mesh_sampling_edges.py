@@ -445,12 +445,97 @@ def test_the_hidden_back_of_the_shirt_and_the_head_take_the_shirt_and_the_hair()
     assert len(shirt) > 500 and len(hair) > 200
     anywhere = complete_reference_uv(uv, seen, by_region=False)
     assert skin_share(anywhere, shirt) > 0.1 and skin_share(anywhere, hair) > 0.3  # 0.15 and 0.38
-    assert skin_share(complete_reference_uv(uv, seen), shirt) > 0.02  # the region alone: 0.036
+    region_alone = skin_share(complete_reference_uv(uv, seen, mirror=False), shirt)
+    assert region_alone > 0.02  # 0.036
+    assert skin_share(complete_reference_uv(uv, seen), shirt) < region_alone  # the front at the same place: 0.022
     completed = complete_reference_uv(uv, seen, image=picture)
     assert skin_share(completed, shirt) < 0.02 and skin_share(completed, hair) < 0.02  # 0.000 and 0.000
     # the typical sources of a region are most of its shown vertices, not a hand-picked few
     top = np.flatnonzero(seen & (regions == anny_model.TOP))
     assert 0.8 * len(top) < len(typical_colour_sources(uv, top, picture, regions)) < len(top)
+
+
+def test_mirror_vertices_pair_the_front_and_the_back_of_the_body():
+    """The vertices of the trunk and limbs that face the front have a mirror on the back at the same place seen from
+    the front (Anny's rest pose: y is the depth, z up); the head, hands and feet have none (a face is not its hair)."""
+    import trimesh
+
+    from renderers import anny_model
+
+    from motion2video.generator.mesh_flow import mirror_vertices
+
+    mirror = mirror_vertices()
+    skip = anny_model.head_vertices() | anny_model.hand_vertices("L") | anny_model.hand_vertices("R")
+    skip |= anny_model.vertex_regions() == anny_model.SHOES
+    assert (mirror[skip] == -1).all()
+    rest = np.asarray(anny_model.anny_rest({}).vertices)
+    normals = trimesh.Trimesh(rest, anny_model.triangles(), process=False).vertex_normals
+    regions = anny_model.vertex_regions()
+    front = np.flatnonzero((normals[:, 1] < -0.8) & (regions == anny_model.TOP) & ~skip)  # the chest and belly
+    assert len(front) > 100 and (mirror[front] >= 0).mean() > 0.95
+    other = mirror[front]
+    assert np.median(normals[other, 1]) > 0.5  # on the back
+    assert np.median(np.abs(rest[other, 2] - rest[front, 2])) < 0.02  # at the same height
+    assert np.median(np.abs(rest[other, 0] - rest[front, 0])) < 0.02  # and the same side
+
+
+def test_the_hidden_back_takes_the_front_at_the_same_place():
+    """A body seen from the front, in a picture whose shirt has a lighter band down its middle (a placket): the back
+    is completed from the front's clothing at the same place, as Photo Wake-Up textures a body's back with its front,
+    so the middle of the back takes the band; completed from the nearest shown vertex alone it took the sides'
+    darker blue (the band is shown only in front)."""
+    import trimesh
+
+    from renderers import anny_model
+
+    rest = np.asarray(anny_model.anny_rest({}).vertices)
+    normals = trimesh.Trimesh(rest, anny_model.triangles(), process=False).vertex_normals
+    uv = np.stack([(rest[:, 0] + 0.6) * 200.0, (0.9 - rest[:, 2]) * 200.0], axis=1)  # seen from the front
+    picture = np.zeros((360, 240, 3), np.uint8)
+    picture[:] = (40, 60, 160)
+    band = np.abs(np.arange(240) / 200.0 - 0.6) < 0.03
+    picture[:, band] = (70, 90, 190)
+    seen = normals[:, 1] < -0.2
+    regions = anny_model.vertex_regions()
+    back = np.flatnonzero(~seen & (regions == anny_model.TOP) & (normals[:, 1] > 0.8) & (np.abs(rest[:, 0]) < 0.02)
+                          & (rest[:, 2] > 0.1) & (rest[:, 2] < 0.45))
+    assert len(back) > 20
+
+    def band_share(completed: np.ndarray) -> float:
+        return float(band[np.clip(completed[back, 0].astype(int), 0, 239)].mean())
+
+    assert band_share(complete_reference_uv(uv, seen, image=picture)) > 0.9
+    assert band_share(complete_reference_uv(uv, seen, image=picture, mirror=False)) < 0.5
+
+
+def test_bare_shins_under_shorts_complete_the_hidden_shins_with_skin():
+    """A body seen from the front in black shorts over bare shins: Anny's trousers region runs to the ankles, and
+    judged over the whole region the shins' skin was untypical of it, so the hidden backs of the shins took the
+    shorts' black. Judged by body segment (:func:`~motion2video.generator.mesh_flow.colour_groups`), they take skin."""
+    import trimesh
+
+    from renderers import anny_model
+
+    rest = anny_model.anny_rest({})
+    vertices = np.asarray(rest.vertices)
+    normals = trimesh.Trimesh(vertices, anny_model.triangles(), process=False).vertex_normals
+    uv = np.stack([(vertices[:, 0] + 0.6) * 200.0, (0.9 - vertices[:, 2]) * 200.0], axis=1)  # seen from the front
+    knee = float(np.asarray(rest.bone_heads)[anny_model.bone_index("lowerleg01.L"), 2])
+    picture = np.zeros((360, 240, 3), np.uint8)
+    picture[:] = (20, 20, 25)  # black shorts
+    picture[int((0.9 - knee) * 200.0):] = (200, 150, 120)  # bare skin from the knees down
+    seen = normals[:, 1] < -0.2
+    regions = anny_model.vertex_regions()
+    shins = np.flatnonzero(~seen & (regions == anny_model.TROUSERS) & (vertices[:, 2] < knee - 0.08)
+                           & (vertices[:, 2] > knee - 0.35))
+    assert len(shins) > 50
+
+    def skin_share(completed: np.ndarray) -> float:
+        px = np.clip(np.floor(completed[shins]).astype(int), 0, [239, 359])
+        return float((picture[px[:, 1], px[:, 0], 0] > 100).mean())
+
+    assert skin_share(complete_reference_uv(uv, seen, image=picture)) > 0.9
+    assert skin_share(complete_reference_uv(uv, seen, image=picture, by_segment=False)) < 0.1
 
 
 def test_completion_sources_keep_away_from_another_region():
@@ -499,6 +584,8 @@ def test_the_back_of_a_turned_body_is_not_sampled_from_beside_the_hands(monkeypa
 
     monkeypatch.setattr(mesh_reference, "GRAZING_FACING", 0.0)  # this rule alone (the grazing rule: end of file)
     monkeypatch.setattr(mesh_flow, "bilinear_footprint", own_pixel)  # nor the footprint test (end of file)
+    # nor the mirror (test_the_hidden_back_takes_the_front_at_the_same_place), which alone gives 12 such pixels
+    monkeypatch.setattr(mesh_flow, "mirror_vertices", lambda: np.full(len(anny_model.vertex_regions()), -1))
 
     away = np.array([[0.53, 0.57, 0.87], [0.588, 0.583, 0.865], [0.608, 0.705, 0.476], [0.618, 0.576, 0.07],
                      [0.474, 0.57, 0.876], [0.45, 0.609, 0.505], [0.485, 0.428, 0.123], [0.511, 0.602, 1.09],

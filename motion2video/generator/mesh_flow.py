@@ -205,6 +205,31 @@ def bilinear_footprint(xy: np.ndarray, height: int, width: int) -> tuple[np.ndar
     return rows, cols
 
 
+LIMB_SEGMENTS = ("upperleg", "lowerleg", "upperarm", "lowerarm")  # colour_groups: bone-name prefixes of a limb's parts
+
+
+@lru_cache(maxsize=1)
+def colour_groups() -> np.ndarray:
+    """(V,) int64: the group whose typical colour each vertex's completion sources are judged by
+    (:func:`typical_colour_sources`): its clothing region, the clothes (top and trousers) split into the thighs, the
+    shins, the upper arms and the forearms (both sides together) and the rest. A clothes region is a garment of Anny's
+    clothes (long trousers, a T-shirt), and a person's clothes often end elsewhere: shorts over bare shins, a singlet
+    over bare shoulders. Judged over the whole region, the shins' skin was untypical of black shorts, and a
+    bare-shouldered back lent its skin to the hidden chest. The skin keeps one group: the neck of a person seen from
+    behind, judged alone, is the hair over it, and their hidden face came out dark."""
+    from renderers import anny_model
+
+    names = anny_model.bone_names()
+    segment_of_bone = np.array([next((i + 1 for i, p in enumerate(LIMB_SEGMENTS) if n.startswith(p)), 0)
+                                for n in names], np.int64)
+    regions = anny_model.vertex_regions().astype(np.int64)
+    segments = np.where(np.isin(regions, (anny_model.TOP, anny_model.TROUSERS)),
+                        segment_of_bone[anny_model.dominant_bones()], 0)
+    groups = regions * (len(LIMB_SEGMENTS) + 1) + segments
+    groups.setflags(write=False)
+    return groups
+
+
 def typical_colour_sources(ref_uv: np.ndarray, sources: np.ndarray, image: np.ndarray,
                            regions: np.ndarray) -> np.ndarray:
     """The subset of ``sources`` (vertex ids) whose colour in ``image`` is typical of the vertex's region: every
@@ -304,8 +329,44 @@ def interior_sources(ref_uv: np.ndarray, sources: np.ndarray, seen: np.ndarray, 
     return sources[keep]
 
 
+MIRROR_FACING = 0.3  # mirror_vertices: only vertices that face the front or the back this squarely (|normal_y|)
+MIRROR_APART_M = 0.03  # and a mirror no farther than this from the vertex seen from the front
+
+
+@lru_cache(maxsize=1)
+def mirror_vertices() -> np.ndarray:
+    """(V,) int64: for every vertex of Anny's body, the vertex at the same place on the other side of the body (the
+    front of the chest <-> the back, the front of a thigh <-> its back), -1 for the head, the hands and the feet,
+    whose two sides differ (a face and its hair), for the sides seen edge-on, and where none is found.
+
+    In the rest pose (x the body's left-right, y its depth, z up; trunk and limbs spread in the frontal plane), a
+    vertex facing the front (normal's y component below -:data:`MIRROR_FACING`) takes the vertex facing the back
+    nearest to it seen from the front (in x and z), within :data:`MIRROR_APART_M`, and the other way round.
+    (Reflecting through each bone's plane failed on bones that carry one side only: a spine bone's back vertices
+    were their own mirrors; a ray into the body along the normal left the chest's curve sideways.)"""
+    import trimesh
+    from scipy.spatial import cKDTree
+
+    from renderers import anny_model
+
+    rest = np.asarray(anny_model.anny_rest({}).vertices, np.float64)
+    normals = trimesh.Trimesh(rest, anny_model.triangles(), process=False).vertex_normals
+    skip = anny_model.head_vertices() | anny_model.hand_vertices("L") | anny_model.hand_vertices("R")
+    skip |= anny_model.vertex_regions() == anny_model.SHOES
+    front = np.flatnonzero(~skip & (normals[:, 1] < -MIRROR_FACING))
+    back = np.flatnonzero(~skip & (normals[:, 1] > MIRROR_FACING))
+    mirror = np.full(len(rest), -1, np.int64)
+    for mine, theirs in ((front, back), (back, front)):
+        apart, nearest = cKDTree(rest[theirs][:, [0, 2]]).query(rest[mine][:, [0, 2]])
+        close = apart < MIRROR_APART_M
+        mirror[mine[close]] = theirs[nearest[close]]
+    mirror.setflags(write=False)
+    return mirror
+
+
 def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bool = True,
-                          image: np.ndarray | None = None, person: np.ndarray | None = None) -> np.ndarray:
+                          image: np.ndarray | None = None, person: np.ndarray | None = None,
+                          mirror: bool = True, by_segment: bool = True) -> np.ndarray:
     """(V, 2) reference pixels where every vertex the reference does not show takes the pixel of the nearest
     shown vertex *along the body's surface* (Dijkstra over :func:`surface_graph`): the hidden side of a thigh
     starts from the colour of its front, not from whatever covers its own pixel in the reference (a hand) or lies
@@ -321,11 +382,19 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
     (:func:`typical_colour_sources`): the outline's vertices, which show part of what lies beside the region, do not
     colour its hidden side; and a clothes region's only those INTERIOR_PX (at 128 px) from every shown vertex of
     another region (:func:`interior_sources`), so that the generator's small flow correction does not carry the
-    samples across.
+    samples across. With ``by_segment`` a clothes region's typical colour is read per body segment
+    (:func:`colour_groups`: shorts over bare shins).
+
+    With ``mirror``, before the nearest source, a hidden vertex takes the place on the other side of the body
+    (:func:`mirror_vertices`) where that is a source of its own region: the back is completed from the front's
+    clothing at the same place, as Photo Wake-Up textures a body's back with its front (a singlet seen from behind
+    gives a singlet in front, where the nearest sources made a patchwork of its straps' skin and its black).
 
     Args:
         ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
         by_region: keep to the clothing region first (the default since 2026-11-26); False: any region.
+        mirror: the other side of the body first (with ``by_region``).
+        by_segment: the typical colour per body segment (with ``by_region`` and ``image``).
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv`` (None: every shown vertex is a source).
         person: (H, W) bool the segmented person in the same pixels, or None: with it, a region's sources are its
             shown vertices inside the person's core (:func:`core_sources`).
@@ -347,10 +416,17 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
         if person is not None:
             typical = core_sources(uv, typical, person, regions)
         if image is not None:
-            typical = typical_colour_sources(uv, typical, image, regions)
+            typical = typical_colour_sources(uv, typical, image, colour_groups() if by_segment else regions)
             typical = interior_sources(uv, typical, seen, regions, radius_px=INTERIOR_PX * image.shape[0] / 128)
         within = _nearest_sources(inside, typical)
         nearest = np.where(within >= 0, within, nearest)
+        if mirror:
+            other = mirror_vertices()
+            usable = np.zeros(len(uv), bool)
+            usable[typical] = True
+            ok = other >= 0
+            ok[ok] = usable[other[ok]] & (regions[other[ok]] == regions[ok])
+            nearest = np.where(ok, other, nearest)
     hidden = ~np.asarray(seen, bool) & (nearest >= 0)
     uv[hidden] = uv[nearest[hidden]]
     return uv
