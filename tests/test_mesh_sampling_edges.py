@@ -385,6 +385,30 @@ def test_a_fitted_hand_beside_the_pictured_hand_samples_the_pictured_hand():
     np.testing.assert_array_equal(sources[elsewhere], elsewhere)
 
 
+def test_hands_in_pockets_take_the_faces_skin_and_gloves_stay_gloves():
+    """``woman_blue_tracksuit.jpg`` stands with her hands in her trouser pockets: BlazePose's hand points lie on the
+    pockets, and the hands came out as blocks of the trousers' teal whenever a target swung them out. A hand whose
+    colour is the clothes' around it and not the face's skin is hidden and takes the face's skin; the skier's gloves,
+    another colour than her clothes, keep their own pixels."""
+    from renderers import anny_model
+
+    from motion2video.generator.mesh_fit import reference_crop
+
+    photos = ROOT.parent / "shared" / "data" / "photos"
+    reference, video = fitted_reference(photos / "woman_blue_tracksuit.jpg", crop_person=True)
+    assert video.uv_sources is not None
+    picture = reference_crop(reference.image, video.crop, 256).astype(int)
+    for side in ("L", "R"):
+        sources = video.uv_sources[anny_model.hand_vertices(side)]
+        assert anny_model.head_vertices()[sources].all()
+        x, y = np.floor(video.reference.uv[0][sources]).astype(int).T
+        red, green, blue = picture[y, x].T
+        assert (red > blue + 20).all()  # skin, not the trousers' teal (her face: 144, 109, 99)
+    _, skier = fitted_reference(photos / "skier.jpg", crop_person=True)
+    hands = anny_model.hand_vertices("L") | anny_model.hand_vertices("R")
+    assert skier.uv_sources is None or not anny_model.head_vertices()[skier.uv_sources[hands]].any()
+
+
 def test_the_demo_pictures_hands_sample_skin(monkeypatch):
     """End to end on the demo's reference and its pose file: the fitted right hand shows its palm where the pictured
     one hangs edge-on beside the thigh, and most of its shown vertices landed on the trousers (the hands came out

@@ -285,6 +285,38 @@ MIN_HAND_LANDMARKS = 3
 HAND_REACH = 1.5  # clothes beside the hand: within this times the hand points' largest distance from their centre
 
 
+POCKET_COLOUR_DISTANCE = 40.0  # pocketed_hand_skin: a pictured hand this close to the clothes around it is in them
+MIN_POCKET_VERTICES = 5  # and the clothes around it and the face show at least this many vertices each
+POCKET_REACH_PX = 6.0  # the clothes around a hand: within this (at 128 px) of its points' centre, at least
+
+
+def pocketed_hand_skin(hand_colour: np.ndarray, colours: np.ndarray, shown: np.ndarray, near: np.ndarray,
+                       regions: np.ndarray, any_hand: np.ndarray) -> int | None:
+    """The vertex whose pixel a hand hidden in the clothes samples instead of itself, or None for a hand in view.
+
+    A hand in a pocket (``woman_blue_tracksuit.jpg``) has BlazePose's hand points on the pocket, so its colour read
+    there is the clothes' colour, which the hand-colour rule kept as if it were a glove: the hands came out as blue
+    blocks when a target swung them out. A hand whose colour lies within :data:`POCKET_COLOUR_DISTANCE` of the median
+    colour of the shown clothes around it (``near``) and further than :data:`HAND_COLOUR_DISTANCE` from the face's skin
+    counts as hidden, and takes the face's skin: the shown face-skin vertex nearest the face's median colour. A glove
+    of another colour than the clothes around it is kept.
+
+    Args:
+        hand_colour: (3,) the colour read at the hand's points; colours: (V, 3) each vertex's pixel; shown: (V,) bool;
+        near: (V,) bool vertices within reach of the hand; regions: (V,) int; any_hand: (V,) bool either hand.
+    """
+    clothes = shown & near & np.isin(regions, (anny_model.TOP, anny_model.TROUSERS)) & ~any_hand
+    face = np.flatnonzero(shown & (regions == anny_model.SKIN) & anny_model.head_vertices())
+    if clothes.sum() < MIN_POCKET_VERTICES or len(face) < MIN_POCKET_VERTICES:
+        return None
+    if np.linalg.norm(hand_colour - np.median(colours[clothes], axis=0)) > POCKET_COLOUR_DISTANCE:
+        return None
+    skin = np.median(colours[face], axis=0)
+    if np.linalg.norm(hand_colour - skin) <= HAND_COLOUR_DISTANCE:
+        return None
+    return int(face[np.argmin(np.linalg.norm(colours[face] - skin, axis=1))])
+
+
 def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, hands: np.ndarray,
                         hand_visibility: np.ndarray, *, rest) -> np.ndarray | None:
     """(V,) int64: for every vertex, the vertex whose reference pixel it samples: itself, except a shown hand vertex
@@ -304,7 +336,8 @@ def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, ha
     hand's colour than :data:`HAND_COLOUR_DISTANCE` and further than that from the median colour of its clothes
     samples where the nearest vertex of its clothes showing their colour does (bare skin beside a hand cannot be
     told from the hand, and is left). Reaching along the forearm to the elbow as well was measured and not kept:
-    on the demo 12 more trousers pixels, on the fitted held-out references 0.03-0.05 dB less person PSNR. Applied
+    on the demo 12 more trousers pixels, on the fitted held-out references 0.03-0.05 dB less person PSNR. A hand in a
+    pocket, whose points read the clothes around it, takes the face's skin (:func:`pocketed_hand_skin`). Applied
     after the surface completion
     (:func:`motion2video.generator.mesh_flow.complete_reference_uv`), whose test of a thigh touching the hand must see
     the fitted hand where it lies.
@@ -343,12 +376,18 @@ def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, ha
         patch = points[:, None, :] + np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1]), -1).reshape(1, 9, 2)
         colour = np.median(picture[pixels(patch.reshape(-1, 2))], axis=0)
         to_hand = np.linalg.norm(colours - colour, axis=1)
-        hand = np.flatnonzero(anny_model.hand_vertices(side) & shown)
-        far = to_hand[hand] > HAND_COLOUR_DISTANCE
-        changed |= take_nearest(hand[far], hand[~far])
         centre = points.mean(axis=0)
         reach = HAND_REACH * max(np.linalg.norm(points - centre, axis=1).max(), 1.0)
         near = np.linalg.norm(np.asarray(uv, np.float64) - centre, axis=1) <= reach
+        around = np.linalg.norm(np.asarray(uv, np.float64) - centre, axis=1) <= max(reach, POCKET_REACH_PX * h / 128)
+        cheek = pocketed_hand_skin(colour, colours, shown, around, regions, any_hand)
+        if cheek is not None:  # the hand is inside a pocket or a sleeve: it takes the face's skin
+            sources[anny_model.hand_vertices(side)] = cheek
+            changed = True
+            continue
+        hand = np.flatnonzero(anny_model.hand_vertices(side) & shown)
+        far = to_hand[hand] > HAND_COLOUR_DISTANCE
+        changed |= take_nearest(hand[far], hand[~far])
         for region in (anny_model.TOP, anny_model.TROUSERS):
             clothes = shown & (regions == region) & ~any_hand
             if clothes.sum() < 2:
