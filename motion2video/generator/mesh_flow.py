@@ -206,27 +206,57 @@ def bilinear_footprint(xy: np.ndarray, height: int, width: int) -> tuple[np.ndar
 
 
 LIMB_SEGMENTS = ("upperleg", "lowerleg", "upperarm", "lowerarm")  # colour_groups: bone-name prefixes of a limb's parts
+SEGMENT_SPLIT_COLOUR = 100.0  # colour_groups: a segment this far (RGB) from the rest of its region is a garment apart
 
 
 @lru_cache(maxsize=1)
-def colour_groups() -> np.ndarray:
-    """(V,) int64: the group whose typical colour each vertex's completion sources are judged by
-    (:func:`typical_colour_sources`): its clothing region, the clothes (top and trousers) split into the thighs, the
-    shins, the upper arms and the forearms (both sides together) and the rest. A clothes region is a garment of Anny's
-    clothes (long trousers, a T-shirt), and a person's clothes often end elsewhere: shorts over bare shins, a singlet
-    over bare shoulders. Judged over the whole region, the shins' skin was untypical of black shorts, and a
-    bare-shouldered back lent its skin to the hidden chest. The skin keeps one group: the neck of a person seen from
-    behind, judged alone, is the hair over it, and their hidden face came out dark."""
+def limb_segments() -> np.ndarray:
+    """(V,) int64: 1 + the index in :data:`LIMB_SEGMENTS` of each vertex's dominant bone's limb part (both sides
+    together), 0 for the trunk, head, hands and feet."""
     from renderers import anny_model
 
     names = anny_model.bone_names()
-    segment_of_bone = np.array([next((i + 1 for i, p in enumerate(LIMB_SEGMENTS) if n.startswith(p)), 0)
-                                for n in names], np.int64)
+    of_bone = np.array([next((i + 1 for i, p in enumerate(LIMB_SEGMENTS) if n.startswith(p)), 0) for n in names],
+                       np.int64)
+    segments = of_bone[anny_model.dominant_bones()]
+    segments.setflags(write=False)
+    return segments
+
+
+def colour_groups(ref_uv: np.ndarray, sources: np.ndarray, image: np.ndarray) -> np.ndarray:
+    """(V,) int64: the group whose typical colour each vertex's completion sources are judged by
+    (:func:`typical_colour_sources`): its clothing region, with a limb segment of the clothes (the thighs, the shins,
+    the upper arms, the forearms: :func:`limb_segments`) a group of its own where its sources' median colour lies
+    further than :data:`SEGMENT_SPLIT_COLOUR` from the rest of its region's.
+
+    A clothes region is a garment of Anny's clothes (long trousers, a T-shirt), and a person's clothes often end
+    elsewhere: shorts over bare shins, a singlet over bare shoulders. Judged over the whole region, the shins' skin was
+    untypical of black shorts, and the hidden shins took the shorts' black. Judged always by segment, a shin half in
+    shadow kept its shadow as typical of grey trousers (``fashion_man_red_jacket.png``'s dark shins); the skin keeps
+    one group (the neck of a person seen from behind, judged alone, is the hair over it).
+
+    Args:
+        ref_uv: (V, 2) reference pixels; sources: (S,) int the shown vertices; image: (H, W, 3) in those pixels.
+    """
+    from renderers import anny_model
+
     regions = anny_model.vertex_regions().astype(np.int64)
-    segments = np.where(np.isin(regions, (anny_model.TOP, anny_model.TROUSERS)),
-                        segment_of_bone[anny_model.dominant_bones()], 0)
-    groups = regions * (len(LIMB_SEGMENTS) + 1) + segments
-    groups.setflags(write=False)
+    segments = limb_segments()
+    groups = regions * (len(LIMB_SEGMENTS) + 1)
+    h, w = image.shape[:2]
+    xy = np.asarray(ref_uv, np.float64)[sources]
+    colour = np.asarray(image, np.float64)[np.clip(xy[:, 1].astype(np.int64), 0, h - 1),
+                                           np.clip(xy[:, 0].astype(np.int64), 0, w - 1)][:, :3]
+    for region in (anny_model.TOP, anny_model.TROUSERS):
+        inside = regions[sources] == region
+        for segment in range(1, len(LIMB_SEGMENTS) + 1):
+            mine = inside & (segments[sources] == segment)
+            rest = inside & ~mine
+            if mine.sum() < COLOUR_MIN_SOURCES or rest.sum() < COLOUR_MIN_SOURCES:
+                continue
+            apart = np.linalg.norm(np.median(colour[mine], axis=0) - np.median(colour[rest], axis=0))
+            if apart > SEGMENT_SPLIT_COLOUR:
+                groups[(regions == region) & (segments == segment)] += segment
     return groups
 
 
@@ -382,8 +412,8 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
     (:func:`typical_colour_sources`): the outline's vertices, which show part of what lies beside the region, do not
     colour its hidden side; and a clothes region's only those INTERIOR_PX (at 128 px) from every shown vertex of
     another region (:func:`interior_sources`), so that the generator's small flow correction does not carry the
-    samples across. With ``by_segment`` a clothes region's typical colour is read per body segment
-    (:func:`colour_groups`: shorts over bare shins).
+    samples across. With ``by_segment`` a clothes segment whose colour differs from the rest of its region's is
+    judged alone (:func:`colour_groups`: shorts over bare shins).
 
     With ``mirror``, before the nearest source, a hidden vertex takes the place on the other side of the body
     (:func:`mirror_vertices`) where that is a source of its own region: the back is completed from the front's
@@ -416,7 +446,8 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
         if person is not None:
             typical = core_sources(uv, typical, person, regions)
         if image is not None:
-            typical = typical_colour_sources(uv, typical, image, colour_groups() if by_segment else regions)
+            groups = colour_groups(uv, typical, image) if by_segment else regions
+            typical = typical_colour_sources(uv, typical, image, groups)
             typical = interior_sources(uv, typical, seen, regions, radius_px=INTERIOR_PX * image.shape[0] / 128)
         within = _nearest_sources(inside, typical)
         nearest = np.where(within >= 0, within, nearest)
