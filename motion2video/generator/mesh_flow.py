@@ -195,6 +195,15 @@ COLOUR_SPREAD = 3.0
 COLOUR_MIN_SOURCES = 20  # regions showing fewer vertices keep them all
 
 
+def pixel_indices(xy: np.ndarray, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pixel each of the (N, 2) points lies in (pixel centres at integer + 0.5): rows, cols (N,) int64, clipped
+    to the image."""
+    xy = np.asarray(xy, np.float64)
+    cols = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, width - 1)
+    rows = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, height - 1)
+    return rows, cols
+
+
 def bilinear_footprint(xy: np.ndarray, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
     """The four pixels a bilinear sample at each of the (N, 2) points reads (pixel centres at integer + 0.5):
     rows, cols (N, 4) int64, clipped to the image."""
@@ -245,8 +254,7 @@ def colour_groups(ref_uv: np.ndarray, sources: np.ndarray, image: np.ndarray) ->
     groups = regions * (len(LIMB_SEGMENTS) + 1)
     h, w = image.shape[:2]
     xy = np.asarray(ref_uv, np.float64)[sources]
-    colour = np.asarray(image, np.float64)[np.clip(xy[:, 1].astype(np.int64), 0, h - 1),
-                                           np.clip(xy[:, 0].astype(np.int64), 0, w - 1)][:, :3]
+    colour = np.asarray(image, np.float64)[pixel_indices(xy, h, w)][:, :3]
     for region in (anny_model.TOP, anny_model.TROUSERS):
         inside = regions[sources] == region
         for segment in range(1, len(LIMB_SEGMENTS) + 1):
@@ -285,9 +293,7 @@ def typical_colour_sources(ref_uv: np.ndarray, sources: np.ndarray, image: np.nd
     xy = np.asarray(ref_uv, np.float64)[sources]
     inside = (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)  # outside a crop: no colour
     sources, xy = sources[inside], xy[inside]
-    x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
-    y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
-    colour = picture[y, x]  # (S, 3)
+    colour = picture[pixel_indices(xy, h, w)]  # (S, 3)
     rows, cols = bilinear_footprint(xy, h, w)
     footprint = picture[rows, cols]  # (S, 4, 3)
     keep = np.ones(len(sources), bool)
@@ -322,9 +328,7 @@ def core_sources(ref_uv: np.ndarray, sources: np.ndarray, person: np.ndarray, re
     h, w = person.shape
     depth = distance_transform_edt(np.asarray(person, bool))  # pixels to the nearest pixel outside the person
     xy = np.asarray(ref_uv, np.float64)[sources]
-    x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
-    y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
-    inside = depth[y, x] > CORE_PX * h / 128
+    inside = depth[pixel_indices(xy, h, w)] > CORE_PX * h / 128
     keep = inside.copy()
     for region in np.unique(regions[sources]):
         mine = regions[sources] == region

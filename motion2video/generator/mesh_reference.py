@@ -14,7 +14,7 @@ import numpy as np
 from scipy.ndimage import binary_erosion, distance_transform_edt
 from scipy.spatial import cKDTree
 
-from motion2video.generator.mesh_flow import touching_other_part
+from motion2video.generator.mesh_flow import pixel_indices, touching_other_part
 from renderers import anny_model
 
 # clothes_margin: the quantile, over the fitted silhouette's outline, of how far the person reaches past each outline
@@ -353,10 +353,6 @@ def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, ha
     h, w = image.shape[:2]
     picture = np.asarray(image, np.float64)
 
-    def pixels(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        p = np.floor(np.asarray(points, np.float64)).astype(np.int64)
-        return np.clip(p[:, 1], 0, h - 1), np.clip(p[:, 0], 0, w - 1)
-
     def take_nearest(off: np.ndarray, on: np.ndarray) -> bool:  # off vertices sample where their nearest on does
         if len(off) == 0 or len(on) == 0:
             return False
@@ -366,7 +362,7 @@ def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, ha
 
     any_hand = anny_model.hand_vertices("L") | anny_model.hand_vertices("R")
     regions = anny_model.vertex_regions(rest)
-    ys, xs = pixels(uv)
+    ys, xs = pixel_indices(uv, h, w)
     colours = picture[ys, xs]  # (V, 3) what each vertex's pixel shows
     changed = False
     for side, points, seen in zip(("L", "R"), np.asarray(hands), np.asarray(hand_visibility)):
@@ -374,13 +370,14 @@ def hand_colour_sources(uv: np.ndarray, shown: np.ndarray, image: np.ndarray, ha
         if len(points) < MIN_HAND_LANDMARKS:
             continue
         patch = points[:, None, :] + np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1]), -1).reshape(1, 9, 2)
-        colour = np.median(picture[pixels(patch.reshape(-1, 2))], axis=0)
+        colour = np.median(picture[pixel_indices(patch.reshape(-1, 2), h, w)], axis=0)
         to_hand = np.linalg.norm(colours - colour, axis=1)
         centre = points.mean(axis=0)
         reach = HAND_REACH * max(np.linalg.norm(points - centre, axis=1).max(), 1.0)
-        near = np.linalg.norm(np.asarray(uv, np.float64) - centre, axis=1) <= reach
-        around = np.linalg.norm(np.asarray(uv, np.float64) - centre, axis=1) <= max(reach, POCKET_REACH_PX * h / 128)
-        cheek = pocketed_hand_skin(colour, colours, shown, around, regions, any_hand)
+        apart = np.linalg.norm(np.asarray(uv, np.float64) - centre, axis=1)
+        near = apart <= reach
+        cheek = pocketed_hand_skin(colour, colours, shown, apart <= max(reach, POCKET_REACH_PX * h / 128), regions,
+                                   any_hand)
         if cheek is not None:  # the hand is inside a pocket or a sleeve: it takes the face's skin
             sources[anny_model.hand_vertices(side)] = cheek
             changed = True
