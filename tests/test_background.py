@@ -131,3 +131,63 @@ def test_no_ghost_where_the_photos_person_stood(photos_dir):
     assert left.sum() > 300  # where she stood is uncovered: 667 pixels
     assert not_white(reference.image[left]) > 0.9  # it was her
     assert not_white(frame[left]) < 0.01  # now it is the background (0.0)
+
+
+def test_ski_poles_leave_the_background_with_the_skier(photos_dir):
+    """What the person holds is not the person to BlazePose's segmentation: the skier's poles stayed in the
+    background where they were pictured, while she walked away from them. The poles (the dark pixels on the snow
+    above her feet, outside her grown silhouette: 227 at 256 px) are filled with snow: all of them stayed dark
+    without :func:`~motion2video.generator.background.attached_objects`, none does with it."""
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.stages.generation import mesh_setup
+    from motion2video.stages.reference import load_reference
+    from motion2video.stages.sampling import Forecast
+    from motion2video.stages.structure import render_structures
+
+    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
+    forecast = Forecast(observed=walk[:2], futures=walk[None, 2:4], fps=25.0, layout="body3d", model="test", seed=0)
+    reference = load_reference(photos_dir / "skier.jpg", size=256, domain="body", crop_person=True)
+    net = load_frame_model("frames-body-mesh-256").model
+    video = mesh_setup(net, reference, render_structures(forecast, domain="body", size=256, reference=reference))
+    ankles = reference.pose.points[[3, 6], 1]
+    poles = (reference.image.max(axis=2) < 90) & ~person_hole(reference.person.mask, grow_px=4)
+    poles[int(ankles.min()) - 10:] = False  # the skis under her boots are not asked about
+    assert poles.sum() > 150
+    assert float(np.mean(video.background[poles].max(axis=1) < 90)) < 0.05
+
+
+def test_nothing_held_leaves_the_background_as_it_was(tracksuit):
+    """On a photo of a woman with her hands in her pockets against a wall and a door, the thin lines the rule takes
+    for held things (the door's edge beside her hand) are under 3% of her area. A stick planted in her hand (a dark
+    bar 3 px wide on the 288 x 512 photo, from her wrist out over the wall) is found, 90% of it or more; the same
+    line bent into a half circle (the edge of something her hand rests on) is not."""
+    from motion2video.generator.background import attached_objects
+    from motion2video.pose.blazepose import LANDMARK_NAMES
+    from motion2video.pose.estimate import default_model, estimate_image
+
+    image, person = tracksuit
+    found = estimate_image(image, model=default_model())
+    joints = np.asarray(found.landmarks.xy, np.float64)[:, :2]
+    anchors = joints[[LANDMARK_NAMES.index("left_wrist"), LANDMARK_NAMES.index("right_wrist")]]
+    held = attached_objects(image, person, anchors)
+    assert held.sum() < 0.03 * (person > 0.5).sum()
+    planted = image.copy()
+    wrist = anchors[1]
+    outward = np.sign(wrist[0] - np.median(np.flatnonzero((person > 0.5).any(axis=0))))
+    tip = wrist + (70.0 * outward, 40.0)  # away from her, down onto the wall
+    ends = [tuple(int(round(v)) for v in p) for p in (wrist, tip)]
+    cv2.line(planted, *ends, (20, 20, 20), 3)
+    stick = np.zeros(image.shape[:2], np.uint8)
+    cv2.line(stick, *ends, 1, 3)
+    stick = (stick > 0) & ~person_hole(person)
+    assert stick.sum() > 150
+    found_stick = attached_objects(planted, person, anchors)
+    assert float(found_stick[stick].mean()) > 0.9
+    bent = image.copy()
+    centre = (int(round(wrist[0] + 30 * outward)), int(round(wrist[1])))
+    cv2.ellipse(bent, centre, (30, 30), 0, 0, 180, (20, 20, 20), 3)  # from her wrist round below to 60 px out
+    arc = np.zeros(image.shape[:2], np.uint8)
+    cv2.ellipse(arc, centre, (30, 30), 0, 0, 180, 1, 3)
+    arc = (arc > 0) & ~person_hole(person)
+    assert arc.sum() > 150
+    assert float(attached_objects(bent, person, anchors)[arc].mean()) < 0.1

@@ -34,7 +34,8 @@ import torch
 
 from motion2video.core.camera import fit_camera, project
 from motion2video.core.errors import InputError
-from motion2video.generator.background import MATTE_FEATHER_PX, composite, inpaint_background, soft_matte
+from motion2video.generator.background import (MATTE_FEATHER_PX, attached_objects, composite, inpaint_background,
+                                               soft_matte)
 from motion2video.generator.data import body_structures, face_structures
 from motion2video.generator.garment import Skirt, find_skirt, lay_skirts
 from motion2video.generator.head_paste import HeadMoves
@@ -47,6 +48,11 @@ from motion2video.generator.warp import limb_region, person_crop
 from motion2video.stages.pictured_face import PicturedFace, face_moves, lay_face
 from motion2video.stages.structure import ALIGN_JOINTS, similarity_fit
 from renderers import anny_model
+
+# The joints (H36M-17) near which what the person holds is looked for
+# (:func:`~motion2video.generator.background.attached_objects`): the wrists. Not the ankles: near the feet, the
+# lines of a floor or a road were taken for held things as often as skis were.
+ATTACHED_ANCHORS = (13, 16)
 
 
 @dataclass
@@ -178,6 +184,10 @@ def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray
     (:func:`motion2video.generator.warp.limb_region` of ``points`` (17, 2), output pixels), as hair and clothes reach
     past the body model.
 
+    What the person holds, thin and outside the segmentation (a bar, ski poles), is filled too
+    (:func:`~motion2video.generator.background.attached_objects` near the wrists): left in the picture, it stayed
+    where it was pictured while the person moved away from it.
+
     A border the pipeline replicated around the photo (``from_file`` (S, S) bool False there: ``--crop-person``'s pad,
     ``--fit-view``'s zoom) is filled too: replicated, the picture's edge drew stretched stripes, and of a person cut by
     that edge (legs below the frame) a ghost of their legs that stayed where they were in every frame.
@@ -189,6 +199,8 @@ def reference_background(image: np.ndarray, video: MeshVideo, person: np.ndarray
     hole[y0:y0 + side, x0:x0 + side] = cv2.resize(silhouette, (side, side), interpolation=cv2.INTER_LINEAR)
     if person is not None and (np.asarray(person) > 0.5).any():
         hole = np.maximum(hole, np.asarray(person, np.float32))
+        held = attached_objects(image, person, points[list(ATTACHED_ANCHORS)], picture=from_file)
+        hole = np.maximum(hole, held.astype(np.float32))
     else:
         hole = np.maximum(hole, limb_region(points, width=w, height=h).astype(np.float32))
     if from_file is not None:
