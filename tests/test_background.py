@@ -98,27 +98,36 @@ def test_a_cut_outs_alpha_is_the_reference_person(photos_dir, tmp_path):
     assert reference_alpha(photos_dir / "skier.jpg") is None
 
 
+def walked_reference(path: Path):
+    """``path`` as ``synthesize --crop-person`` loads it at 256 px, the shipped mesh generator, and the
+    :class:`~motion2video.stages.mesh_generation.MeshVideo` it fits for two frames of the demo's CMU walk observed and
+    two predicted: (reference, net, video)."""
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.stages.generation import mesh_setup
+    from motion2video.stages.reference import load_reference
+    from motion2video.stages.sampling import Forecast
+    from motion2video.stages.structure import render_structures
+
+    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
+    forecast = Forecast(observed=walk[:2], futures=walk[None, 2:4], fps=25.0, layout="body3d", model="test", seed=0)
+    reference = load_reference(path, size=256, domain="body", crop_person=True)
+    net = load_frame_model("frames-body-mesh-256").model
+    video = mesh_setup(net, reference, render_structures(forecast, domain="body", size=256, reference=reference))
+    return reference, net, video
+
+
 def test_no_ghost_where_the_photos_person_stood(photos_dir):
     """synthesize's mesh path on the cut-out (a runner on white) driven by a walk: where she stood and no generated
     person now covers (her new silhouette grown by 6 px) is white. Pasting the generated person over the reference
     with the old feathered paste mask left 11.5% of those pixels hers (a hand and a shoe's shadow beside the new
     body); over the inpainted background, none."""
-    from motion2video.generator.checkpoint import load_frame_model
     from motion2video.generator.mesh_flow import grow_masks
-    from motion2video.stages.generation import mesh_setup
     from motion2video.stages.mesh_generation import generate_mesh_frames
-    from motion2video.stages.reference import load_reference
-    from motion2video.stages.sampling import Forecast
-    from motion2video.stages.structure import render_structures
 
     def not_white(pixels: np.ndarray) -> float:
         return float(np.mean(np.asarray(pixels).min(axis=1) < 230))
 
-    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
-    forecast = Forecast(observed=walk[:2], futures=walk[None, 2:4], fps=25.0, layout="body3d", model="test", seed=0)
-    reference = load_reference(photos_dir / "fashion_woman_shorts.png", size=256, domain="body", crop_person=True)
-    net = load_frame_model("frames-body-mesh-256").model
-    video = mesh_setup(net, reference, render_structures(forecast, domain="body", size=256, reference=reference))
+    reference, net, video = walked_reference(photos_dir / "fashion_woman_shorts.png")
     assert video.background is not None and not_white(video.background.reshape(-1, 3)) < 0.01
     frame = generate_mesh_frames(net, reference.image, video, np.array([3]))[0]
     stood = reference.person.mask > 0.5
@@ -138,17 +147,7 @@ def test_ski_poles_leave_the_background_with_the_skier(photos_dir):
     background where they were pictured, while she walked away from them. The poles (the dark pixels on the snow
     above her feet, outside her grown silhouette: 227 at 256 px) are filled with snow: all of them stayed dark
     without :func:`~motion2video.generator.background.attached_objects`, none does with it."""
-    from motion2video.generator.checkpoint import load_frame_model
-    from motion2video.stages.generation import mesh_setup
-    from motion2video.stages.reference import load_reference
-    from motion2video.stages.sampling import Forecast
-    from motion2video.stages.structure import render_structures
-
-    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)
-    forecast = Forecast(observed=walk[:2], futures=walk[None, 2:4], fps=25.0, layout="body3d", model="test", seed=0)
-    reference = load_reference(photos_dir / "skier.jpg", size=256, domain="body", crop_person=True)
-    net = load_frame_model("frames-body-mesh-256").model
-    video = mesh_setup(net, reference, render_structures(forecast, domain="body", size=256, reference=reference))
+    reference, _, video = walked_reference(photos_dir / "skier.jpg")
     ankles = reference.pose.points[[3, 6], 1]
     poles = (reference.image.max(axis=2) < 90) & ~person_hole(reference.person.mask, grow_px=4)
     poles[int(ankles.min()) - 10:] = False  # the skis under her boots are not asked about

@@ -55,9 +55,16 @@ def person_hole(person: np.ndarray, *, grow_px: float | None = None) -> np.ndarr
     import cv2
 
     mask = np.asarray(person) > 0.5
-    grow = max(1, round(BACKGROUND_GROW_PX * mask.shape[1] / 128 if grow_px is None else grow_px))
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * grow + 1, 2 * grow + 1))
-    return cv2.dilate(mask.astype(np.uint8), kernel) > 0
+    grow = BACKGROUND_GROW_PX * mask.shape[1] / 128 if grow_px is None else grow_px
+    return cv2.dilate(mask.astype(np.uint8), disc(grow)) > 0
+
+
+def disc(radius: float) -> np.ndarray:
+    """OpenCV's elliptic structuring element of ``radius`` pixels (rounded, at least 1): (2r + 1, 2r + 1) uint8."""
+    import cv2
+
+    r = max(1, round(radius))
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
 
 
 def attached_objects(image: np.ndarray, person: np.ndarray, anchors: np.ndarray, *,
@@ -97,16 +104,11 @@ def attached_objects(image: np.ndarray, person: np.ndarray, anchors: np.ndarray,
     anchors = np.asarray(anchors, np.float64).reshape(-1, 2)
     yy, xx = np.mgrid[:h, :w]
     near = np.min([(xx - x) ** 2 + (yy - y) ** 2 for x, y in anchors], axis=0)  # squared distance to an anchor
-
-    def disc(radius: float) -> np.ndarray:
-        r = max(1, round(radius))
-        return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-
     image = np.ascontiguousarray(image, np.uint8)
     width = disc(ATTACHED_HALF_WIDTH_PX * scale)
     contrast = np.maximum(cv2.morphologyEx(image, cv2.MORPH_TOPHAT, width),
                           cv2.morphologyEx(image, cv2.MORPH_BLACKHAT, width)).max(axis=2)
-    grown = cv2.dilate(mask.astype(np.uint8), disc(2 * scale)) > 0
+    grown = person_hole(mask, grow_px=2 * scale)
     thin = (contrast >= ATTACHED_CONTRAST) & (near < (ATTACHED_REACH * height) ** 2) & ~grown
     if picture is not None:
         thin &= np.asarray(picture, bool)

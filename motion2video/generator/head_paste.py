@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from motion2video.generator.background import disc
+
 # paste_weight: the face is laid over fully up to TURN_FULL_DEG of turn out of the picture plane, not at all from
 # TURN_NONE_DEG on, linear between. Photos of people facing the camera, driven by a walk towards it, measured 18-20
 # degrees (woman_blue_tracksuit.jpg, fashion_woman_shorts.png: the photo's camera looks down on the face a little
@@ -62,8 +64,7 @@ def face_matte(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     hull = cv2.convexHull(np.round((pts - 0.5) * 16).astype(np.int32))  # OpenCV's pixel centres, 4 fractional bits
     mask = np.zeros(shape, np.uint8)
     cv2.fillConvexPoly(mask, hull, 255, lineType=cv2.LINE_AA, shift=4)
-    shrink = max(1, int(round(MATTE_SHRINK * size)))
-    mask = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * shrink + 1, 2 * shrink + 1)))
+    mask = cv2.erode(mask, disc(MATTE_SHRINK * size))
     matte = mask.astype(np.float32) / 255.0
     sigma = max(0.5, MATTE_FEATHER * size)
     return cv2.GaussianBlur(matte, (0, 0), sigmaX=sigma, borderType=cv2.BORDER_CONSTANT)
