@@ -51,7 +51,7 @@ import numpy as np
 
 from motion2video.core.atomic import check_output_path
 from motion2video.core.errors import InputError
-from motion2video.stages.reference import load_reference
+from motion2video.stages.reference import cut_to_view, load_reference
 from motion2video.stages.generation import GeneratedFrames, default_generator_threads, iter_generated
 from motion2video.stages.sampling import sample_forecast
 from motion2video.stages.structure import (
@@ -340,7 +340,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     clip = load_clip(bundle, input_path, character=config.character, fps=config.input_fps,
                      rig_map=config.rig_map).data
     ref = load_reference(reference, size=size, domain=domain, pose_path=reference_pose,
-                         crop_person=config.crop_person)
+                         crop_person=config.crop_person, keep_framing=kind in ("warp", "mesh"))
+    canvas = ref.image.shape[0]  # the generator's frame size: ``size``, or larger when the picture's framing is kept
     timings["load"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -352,8 +353,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
 
     t0 = time.perf_counter()
     report("structures", 0.0)
-    ref = reference_in_view(fc, ref, size=size, fit_view=config.fit_view)
-    structures = render_structures(fc, domain=domain, size=size, reference=ref)
+    ref = reference_in_view(fc, ref, size=canvas, fit_view=config.fit_view)
+    structures = render_structures(fc, domain=domain, size=canvas, reference=ref)
     timings["structures"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -361,7 +362,8 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
     clock: dict[str, float] = {}
     to, tf = structures.observed, structures.horizon
     ref_preview = structure_previews(structures, slice(0, 1))[0]
-    header = ((ref.image, "reference"), (ref_preview, "ref. structure"))
+    header = ((cut_to_view(ref.image, ref.view, size), "reference"), (cut_to_view(ref_preview, ref.view, size),
+                                                                      "ref. structure"))
     obs_steps, fut_steps = sheet_steps(to, tf, header=len(header))
     picked: dict[tuple[int, int], np.ndarray] = {}  # (cell, step) -> frame, for the contact sheet
     compose_s = 0.0
@@ -376,6 +378,7 @@ def synthesize(*, motion_model, frame_model, input_path: str | Path, reference: 
             writers = [stack.enter_context(VideoWriter(tmp, fc.fps, crf=config.crf, preset=config.preset))
                        for tmp in temps[:2]]
             for start, frames, previews in chunks:
+                frames, previews = cut_to_view(frames, ref.view, size), cut_to_view(previews, ref.view, size)
                 if on_chunk is not None:
                     on_chunk(start, frames, previews)
                 c0 = time.perf_counter()

@@ -37,6 +37,8 @@ from motion2video.core.errors import InputError
 REFERENCE_POSE_SUFFIX = ".pose.npz"
 HAND_LANDMARKS = ("wrist", "index", "pinky", "thumb")  # BlazePose's points of each hand (ReferencePerson.hands)
 PERSON_CROP_MARGIN = 0.1  # --crop-person: of the square's side, on every side
+FRAMING_MIN_RATIO = 1.1  # a picture extended to hold its pose keeps its own framing when the canvas is this much larger
+FRAMING_MAX_SIZE = 1024  # the largest canvas (px) generated on to keep a picture's framing
 
 
 def reference_pose_path(image: str | Path) -> Path:
@@ -298,6 +300,10 @@ class Reference:
             resize to S (None: ``image`` is the source); the face is taken from it
             (:func:`motion2video.stages.pictured_face.pictured_face`).
         source_scale, source_offset: ``image pixels = source pixels * source_scale + source_offset``.
+        view: (x0, y0, side) the square of ``image`` the output frames show, in its pixels; None: all of it. Set
+            when a person cut by the picture's edge (a half-length portrait) made the picture extend far past
+            what it frames (:func:`framing_view`): ``image`` is then the extended canvas, larger than the output
+            size, and the frames generated on it are cut to the view (:func:`cut_to_view`).
         relative_head: face: the head pose of the motion is applied relative to its first observed frame, on top of
             the reference's own (a fitted portrait keeps its pose and turns as the clip's head turns, rather than
             jumping to the clip's head pose; :func:`motion2video.stages.structure.relative_head_pose`).
@@ -313,6 +319,7 @@ class Reference:
     source_scale: float = 1.0
     source_offset: tuple[float, float] = (0.0, 0.0)
     relative_head: bool = False
+    view: tuple[float, float, float] | None = None
 
     def picture_mask(self) -> np.ndarray:
         """(S, S) bool: the pixels that come from the image file (not a replicated border)."""
@@ -465,6 +472,66 @@ def _slide_into(start: int, side: int, length: int, lo: float, hi: float) -> int
     return int(np.clip(start, first, last)) if first <= last else start
 
 
+def framing_view(picture: np.ndarray, person_mask: np.ndarray | None, *, crop_person: bool,
+                 margin: float = PERSON_CROP_MARGIN) -> tuple[float, float, float]:
+    """The square a picture frames, in the pixels of the picture extended to hold its person's pose.
+
+    A half-length portrait's estimated legs lie far below its bottom edge, and the picture is extended to hold them
+    (:func:`extend_to_pose`); framed around the whole pose, the pictured head and shoulders would fill a small part
+    of the frame. The view is what the user framed instead. With ``crop_person``: the square around the part of the
+    person the picture shows (``margin`` of its side on every side), no larger than the picture, so that no
+    replicated border comes into view; when the shown person is taller than that square, it starts at their head.
+    Without it: the picture's own square (centred, as :func:`fit_square` pads it).
+
+    Args:
+        picture: (H, W) the extended picture's map of the file's own pixels (> 0.5).
+        person_mask: (H, W) the person's segmentation in the same pixels (> 0.5), or None.
+        crop_person: frame the shown person rather than the whole picture.
+    Returns:
+        (x0, y0, side) in the extended picture's pixels.
+    """
+    ys, xs = np.nonzero(np.asarray(picture) > 0.5)
+    px0, py0, px1, py1 = xs.min(), ys.min(), xs.max() + 1, ys.max() + 1
+    shown = None if person_mask is None else (np.asarray(person_mask) > 0.5) & (np.asarray(picture) > 0.5)
+    if not crop_person or shown is None or not shown.any():
+        side = max(px1 - px0, py1 - py0)
+        return float(px0 + (px1 - px0 - side) / 2), float(py0 + (py1 - py0 - side) / 2), float(side)
+    ys, xs = np.nonzero(shown)
+    x0, y0, x1, y1 = xs.min(), ys.min(), xs.max() + 1, ys.max() + 1
+    side = min(max(x1 - x0, y1 - y0) * (1 + 2 * margin), px1 - px0, py1 - py0)
+    left = (x0 + x1 - side) / 2
+    top = (y0 + y1 - side) / 2 if (y1 - y0) * (1 + 2 * margin) <= side + 1e-6 else y0 - margin * side
+    left, top = np.clip(left, px0, px1 - side), np.clip(top, py0, py1 - side)
+    return float(left), float(top), float(side)
+
+
+def cut_to_view(frames: np.ndarray, view: tuple[float, float, float] | None, size: int) -> np.ndarray:
+    """Frames cut to a square view of theirs and resized to ``size`` (area-averaged when smaller).
+
+    Args:
+        frames: (..., S, S, 3) uint8, made at a reference's size.
+        view: (x0, y0, side) in their pixels (:attr:`Reference.view`), or None (the frames are returned as they are).
+        size: the output's side in pixels.
+    Returns:
+        (..., size, size, 3) uint8.
+    """
+    if view is None:
+        return frames
+    x0, y0, side = (float(v) for v in view)
+    k = size / side
+    flat = np.asarray(frames).reshape(-1, *frames.shape[-3:])
+    inter = cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR
+    out = np.empty((len(flat), size, size, 3), np.uint8)
+    for i, frame in enumerate(flat):
+        x, y = int(np.floor(x0)), int(np.floor(y0))
+        s = int(np.ceil(x0 + side)) - x
+        grown = cv2.copyMakeBorder(frame, max(0, -y), max(0, y + s - frame.shape[0]), max(0, -x),
+                                   max(0, x + s - frame.shape[1]), cv2.BORDER_REPLICATE)
+        crop = grown[max(0, y):max(0, y) + s, max(0, x):max(0, x) + s]
+        out[i] = cv2.resize(crop, (size, size), interpolation=inter)
+    return out.reshape(*frames.shape[:-3], size, size, 3)
+
+
 def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "Reference":
     """A body reference re-framed to the square ``view`` (x0, y0, side) of its pixels, resized back to its size: a
     view larger than the picture zooms out, one beside it pans; outside the picture its border is replicated.
@@ -487,8 +554,10 @@ def zoom_to_view(reference: "Reference", view: tuple[float, float, float]) -> "R
                        -np.array([x0, y0]) * k, (size, size))
     note = (f"the motion leaves the reference picture: it is re-framed to the {side:.0f} px square at ({x0:.0f}, "
             f"{y0:.0f}) of its {size} px (scale {k:.2f}, the border replicated) so the person stays in view")
+    shown = None if reference.view is None else (
+        (reference.view[0] - x0) * k, (reference.view[1] - y0) * k, reference.view[2] * k)
     return Reference(image=np.ascontiguousarray(image), pose=pose, notes=reference.notes + (note,), path=reference.path,
-                     person=person, picture=picture,
+                     person=person, picture=picture, view=shown,
                      source=reference.image if reference.source is None else reference.source,
                      source_scale=reference.source_scale * k,
                      source_offset=tuple((np.asarray(reference.source_offset) - [x0, y0]) * k))
@@ -532,7 +601,8 @@ def portrait_reference(image: np.ndarray, path: Path, *, size: int, notes: tuple
 
 
 def load_reference(path: str | Path, *, size: int, domain: str,
-                   pose_path: str | Path | None = None, crop_person: bool = False) -> Reference:
+                   pose_path: str | Path | None = None, crop_person: bool = False,
+                   keep_framing: bool = False) -> Reference:
     """The reference image at ``size`` x ``size`` and its pose (see the module docstring).
 
     A body reference with no pose file gets its pose estimated (BlazePose, a note says so); a person cut by the
@@ -547,6 +617,12 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         pose_path: the reference pose file; None looks for ``IMAGE.pose.npz`` beside the image.
         crop_person: body: cut a square around the person first (:func:`crop_to_person`), so that a person
             small in a large photo fills the generator's frame.
+        keep_framing: body, pose estimated here: when the picture had to be extended to hold its person's pose by
+            more than a tenth (:data:`FRAMING_MIN_RATIO`: a half-length portrait), the reference is the extended
+            canvas at a larger size (``size`` x canvas / view, at most :data:`FRAMING_MAX_SIZE`) and
+            :attr:`Reference.view` the square the picture frames (:func:`framing_view`), so that frames cut to it
+            (:func:`cut_to_view`) show the pictured person as large as the picture does. Only for generators that
+            make frames of any size (the warp and mesh generators).
     Raises:
         InputError: unreadable image, a pose file that is malformed or of the other domain, no pose file and
         (body) no person or (face) no face found, a pose file with joints outside the image or no person, or an
@@ -569,6 +645,7 @@ def load_reference(path: str | Path, *, size: int, domain: str,
     if not from_file and domain == "face":
         return portrait_reference(image, path, size=size, notes=tuple(notes), pose_path=pose_path)
     picture = np.ones(image.shape[:2], np.float32)  # which pixels are the file's, through every cut and pad
+    view = None  # the square the picture frames, when it is kept (keep_framing)
     if not from_file and domain == "body":
         pose, person, landmarks = estimate_reference_pose(image, path)
         if pose is None:
@@ -589,6 +666,8 @@ def load_reference(path: str | Path, *, size: int, domain: str,
             offset, grown = (margins[0], margins[1]), (image.shape[1], image.shape[0])
             picture = move_map(picture, 1.0, offset, grown)
             person = person.moved(1.0, offset, grown)
+            if keep_framing:
+                view = framing_view(picture, person.mask, crop_person=crop_person)
         if cut or any(margins):
             notes.append(cut_note(path, cut, margins))
     if crop_person:  # a body pose: from its file, or estimated above
@@ -597,22 +676,35 @@ def load_reference(path: str | Path, *, size: int, domain: str,
         picture = move_map(picture, 1.0, (-left, -top), (side, side))
         if person is not None:
             person = person.moved(1.0, (-left, -top), (side, side))
+        if view is not None:
+            view = (view[0] - left, view[1] - top, view[2])
         notes.append(f"reference cut to the person: a {side}x{side} square at ({left}, {top}) of the {w0}x{h0} image")
     h, w = image.shape[:2]
-    fitted, fit = fit_square(image, size)
-    if (h, w) != (size, size):
+    canvas = size
+    if view is not None and max(h, w) < FRAMING_MIN_RATIO * view[2]:
+        view = None  # the extension is small: the whole canvas is shown, as without keep_framing
+    if view is not None:
+        canvas = int(min(max(size, FRAMING_MAX_SIZE), round(size * max(h, w) / view[2])))
+    fitted, fit = fit_square(image, canvas)
+    if (h, w) != (canvas, canvas):
         how = f"padded to {max(h, w)}x{max(h, w)} and " if h != w else ""
-        notes.append(f"reference image is {w}x{h}: {how}resized to {size}x{size} for the frame generator")
-    picture = move_map(picture, fit.scale, fit.offset, (size, size))
+        notes.append(f"reference image is {w}x{h}: {how}resized to {canvas}x{canvas} for the frame generator")
+    picture = move_map(picture, fit.scale, fit.offset, (canvas, canvas))
     if person is not None:
-        person = person.moved(fit.scale, fit.offset, (size, size))
+        person = person.moved(fit.scale, fit.offset, (canvas, canvas))
+    if view is not None:
+        notes.append(f"the frames keep the picture's framing: the {view[2]:.0f} px square at ({view[0]:.0f}, "
+                     f"{view[1]:.0f}) of the {w}x{h} extended picture, at {size}x{size} (the body is generated on "
+                     f"all of it at {canvas}x{canvas}, the parts beyond the picture's edge out of view)")
+        view = (view[0] * fit.scale + fit.offset[0], view[1] * fit.scale + fit.offset[1], view[2] * fit.scale)
     if pose is not None:
-        pose = _fit_pose(pose, fit, size, (h, w))
+        pose = _fit_pose(pose, fit, canvas, (h, w))
         if domain == "body":  # a person to move: joints inside the image, and the image shows them
             from motion2video.generator.warp import check_reference_person, check_reference_points
 
-            check_reference_points(pose.points, width=size, height=size, path=pose_path if from_file else path)
+            check_reference_points(pose.points, width=canvas, height=canvas, path=pose_path if from_file else path)
             check_reference_person(fitted, pose.points, path=path)
     return Reference(image=fitted, pose=pose, notes=tuple(notes), path=path, person=person,
-                     picture=None if picture.min() > 0.5 else picture, source=None if (h, w) == (size, size) else image,
-                     source_scale=fit.scale, source_offset=tuple(float(v) for v in fit.offset))
+                     picture=None if picture.min() > 0.5 else picture,
+                     source=None if (h, w) == (canvas, canvas) else image,
+                     source_scale=fit.scale, source_offset=tuple(float(v) for v in fit.offset), view=view)

@@ -1,0 +1,108 @@
+"""A person cut by the picture's edge keeps the picture's framing.
+
+A half-length portrait's estimated legs lie far below its bottom edge; the picture is extended to hold the pose, and
+framed around the whole pose the pictured face was some 15 px tall at 256. The frames are now generated on the
+extended picture and cut to the square the picture frames.
+
+Real parts: the painted portraits and the tracksuit photo of ../shared/data/photos, BlazePose and MediaPipe's face
+detector on them, a CMU walk, the shipped motion model and frame generators.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from motion2video.core.skeletons import HEAD, THORAX
+from motion2video.stages.reference import (
+    FRAMING_MAX_SIZE, PERSON_CROP_MARGIN, cut_to_view, framing_view, load_reference,
+)
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+
+
+def test_framing_view_frames_the_shown_person_inside_the_picture():
+    """A 100 x 160 picture extended to 400 x 260 (its legs below): with crop_person the view holds the shown person
+    from the head down, lies inside the picture and is no larger than it; without, it is the picture's own square."""
+    picture = np.zeros((400, 260), np.float32)
+    picture[20:180, 80:180] = 1.0  # the file's pixels: x 80..179, y 20..179
+    person = np.zeros_like(picture)
+    person[50:400, 100:160] = 1.0  # the pictured person from y 50, and its guessed legs below the picture
+    x0, y0, side = framing_view(picture, person, crop_person=True)
+    assert side == 100.0  # the person is 130 px tall in the picture: the square is the picture's width
+    assert 80 <= x0 and x0 + side <= 180 and 20 <= y0 and y0 + side <= 180  # inside the picture
+    assert y0 == pytest.approx(50 - PERSON_CROP_MARGIN * side)  # from the head, with the margin above it
+    assert framing_view(picture, person, crop_person=False) == (50.0, 20.0, 160.0)  # the picture's square, centred
+    small = np.zeros_like(picture)
+    small[100:140, 120:140] = 1.0  # a shown person small in the picture: the square around them, centred on them
+    x0, y0, side = framing_view(picture, small, crop_person=True)
+    assert side == pytest.approx(40 * (1 + 2 * PERSON_CROP_MARGIN))
+    assert (x0 + side / 2, y0 + side / 2) == pytest.approx((130.0, 120.0))
+
+
+def test_cut_to_view_cuts_and_resizes_every_frame():
+    rng = np.random.default_rng(0)
+    frames = rng.integers(0, 256, (2, 3, 64, 64, 3), dtype=np.uint8)
+    assert cut_to_view(frames, None, 32) is frames
+    out = cut_to_view(frames, (16.0, 8.0, 32.0), 32)
+    assert out.shape == (2, 3, 32, 32, 3)
+    np.testing.assert_array_equal(out, frames[:, :, 8:40, 16:48])  # same size: the square itself
+    half = cut_to_view(frames, (0.0, 0.0, 64.0), 32)  # area-averaged: each pixel the mean of its 2 x 2 block
+    block = frames[1, 2].reshape(32, 2, 32, 2, 3).astype(np.float64).mean(axis=(1, 3))
+    assert np.abs(half[1, 2] - block).max() <= 1.0
+
+
+@pytest.mark.slow
+def test_a_half_length_portrait_keeps_its_framing(photos_dir):
+    """The Mona Lisa (half length, knees and feet past the bottom edge): the reference is the extended picture at a
+    larger size with the view the picture frames; in the output the head is over twice as large as when framed
+    around the whole pose."""
+    path = photos_dir / "portrait_mona_lisa.jpg"
+    old = load_reference(path, size=256, domain="body", crop_person=True)
+    new = load_reference(path, size=256, domain="body", crop_person=True, keep_framing=True)
+    assert old.view is None and old.image.shape == (256, 256, 3)
+    assert new.view is not None and 256 < new.image.shape[0] <= FRAMING_MAX_SIZE
+    assert any("keep the picture's framing" in note for note in new.notes)
+    x0, y0, side = new.view
+    assert -1 <= x0 and -1 <= y0 and x0 + side <= new.image.shape[0] + 1 and y0 + side <= new.image.shape[0] + 1
+    picture = new.picture_mask()[int(y0) + 1:int(y0 + side) - 1, int(x0) + 1:int(x0 + side) - 1]
+    assert picture.all()  # no replicated border in view
+    old_head = np.linalg.norm(np.subtract(old.pose.points[HEAD], old.pose.points[THORAX]))
+    new_head = np.linalg.norm(np.subtract(new.pose.points[HEAD], new.pose.points[THORAX])) * 256 / side
+    assert new_head > 2.5 * old_head
+
+
+@pytest.mark.slow
+def test_a_whole_person_in_the_picture_keeps_the_usual_reference(photos_dir):
+    """A photo with the whole person in it is loaded as before: no view, the generator's size."""
+    path = photos_dir / "woman_blue_tracksuit.jpg"
+    plain = load_reference(path, size=256, domain="body", crop_person=True)
+    kept = load_reference(path, size=256, domain="body", crop_person=True, keep_framing=True)
+    assert kept.view is None
+    np.testing.assert_array_equal(kept.image, plain.image)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("frame_model, size", [("frames-body-128", 128), ("frames-body-mesh-256", 256)])
+def test_a_portrait_driven_by_a_walk_shows_its_face(photos_dir, mocap_dir, frame_model, size):
+    """synthesize with the Mona Lisa as the reference and a CMU walk: frames of the output size, and a face detector
+    finds a face in nearly every one of them (none was found when the frames held the whole guessed body)."""
+    from motion2video.apps.synthesize import SynthesisConfig, synthesize
+    from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
+    from motion2video.stages.pictured_face import face_mesh
+
+    frames = []
+    result = synthesize(motion_model="mixture-periodic", frame_model=frame_model,
+                        input_path=mocap_dir / "cmu" / "08_01.bvh", reference=photos_dir / "portrait_mona_lisa.jpg",
+                        output=None, config=SynthesisConfig(samples=1, horizon=4, crop_person=True),
+                        on_chunk=lambda start, chunk, previews: frames.extend(chunk[:, 0]))
+    assert any("keep the picture's framing" in note for note in result.notes)
+    assert all(frame.shape == (size, size, 3) for frame in frames)
+    mesh = face_mesh()
+    found = 0
+    for frame in frames:
+        detections = mesh.detect(np.ascontiguousarray(frame))
+        found += bool(detections) and mesh.landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE
+    assert found >= 0.8 * len(frames)
