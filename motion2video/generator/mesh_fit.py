@@ -25,8 +25,11 @@ MASK_GREY = (200, 200, 200)  # the colour the correspondence renders use (only d
 # Anny "weight" values tried when fitting the body's width to the reference person's silhouette (fit_width).
 WEIGHT_GRID = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
 WIDTH_FIT_MARGIN = 0.01  # IoU another weight must gain over the given phenotype's to replace it
+MIN_SCALE_BONES = 4  # lift_by_bones: fewer bones between shown joints than this, and all bones set the scale
+
+
 def lift_reference(points: np.ndarray, guide: np.ndarray, camera, scale: float, shift: np.ndarray, *,
-                   pictured: np.ndarray | None = None) -> np.ndarray:
+                   pictured: np.ndarray | None = None, shown: np.ndarray | None = None) -> np.ndarray:
     """3D joints whose projection is the reference pose.
 
     With ``pictured`` (the picture's own 3D pose, from its pose file): its bone lengths, and for each bone which
@@ -45,6 +48,8 @@ def lift_reference(points: np.ndarray, guide: np.ndarray, camera, scale: float, 
         camera: the placement's PinholeCamera; its pixels map to output pixels by ``pixel * scale + shift``.
         scale, shift: that 2D similarity (float, (2,)).
         pictured: (17, 3) the pictured pose in its camera's axes (metres; x right, y up, z away), or None.
+        shown: (17,) bool the joints the picture shows, or None (all): only bones between shown joints set the
+            picture's scale (:func:`lift_by_bones`).
     Returns:
         (17, 3) world joints.
     """
@@ -57,18 +62,25 @@ def lift_reference(points: np.ndarray, guide: np.ndarray, camera, scale: float, 
     if pictured is None:
         depth = (np.asarray(guide, np.float64) - origin) @ axes[2]  # (17,) the guide's depths
         return origin[None] + (depth[:, None] * rays) @ axes
-    return origin[None] + lift_by_bones(rays, np.asarray(pictured, np.float64), f, pix) @ axes
+    return origin[None] + lift_by_bones(rays, np.asarray(pictured, np.float64), f, pix, shown=shown) @ axes
 
 
-def lift_by_bones(rays: np.ndarray, pictured: np.ndarray, focal: float, pixels: np.ndarray) -> np.ndarray:
+def lift_by_bones(rays: np.ndarray, pictured: np.ndarray, focal: float, pixels: np.ndarray, *,
+                  shown: np.ndarray | None = None) -> np.ndarray:
     """(17, 3) camera-axes joints on ``rays`` (17, 3) with the bone lengths and depth steps of ``pictured`` (17, 3,
-    camera axes); ``pixels`` (17, 2) and ``focal`` give the picture's scale (see :func:`lift_reference`)."""
+    camera axes); ``pixels`` (17, 2) and ``focal`` give the picture's scale (see :func:`lift_reference`), from the
+    bones between ``shown`` (17,) joints when there are at least :data:`MIN_SCALE_BONES` of them (the legs a
+    half-length portrait's pose estimate guesses below the picture are shorter than the person's)."""
     bones = [(j, p) for j, p in enumerate(H36M_17.parents) if p >= 0]
     lengths = {j: float(np.linalg.norm(pictured[j] - pictured[p])) for j, p in bones}
+    scaling = bones
+    if shown is not None:
+        inside = [(j, p) for j, p in bones if shown[j] and shown[p]]
+        scaling = inside if len(inside) >= MIN_SCALE_BONES else bones
     # A bone can look shorter than it is (foreshortened), never longer: the pelvis goes where the bones that look
     # longest for their length lie in the picture's plane. The 10% quantile, not the minimum: one keypoint a few
     # pixels off should not move the whole body.
-    ratio = [focal * lengths[j] / max(float(np.linalg.norm(pixels[j] - pixels[p])), 1e-6) for j, p in bones]
+    ratio = [focal * lengths[j] / max(float(np.linalg.norm(pixels[j] - pixels[p])), 1e-6) for j, p in scaling]
     joints = np.zeros((len(rays), 3))
     joints[0] = float(np.quantile(ratio, 0.1)) * rays[0]
     for j, p in bones:

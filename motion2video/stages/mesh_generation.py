@@ -95,6 +95,16 @@ class MeshVideo:
     skirt: Skirt | None = None
 
 
+def joints_in(points: np.ndarray, picture: np.ndarray) -> np.ndarray:
+    """(17,) bool: which joints (17, 2) pixels lie on a (H, W) map's true pixels (the picture's own, not a pad)."""
+    pts = np.round(np.asarray(points, np.float64)).astype(int)
+    h, w = picture.shape[:2]
+    inside = (pts[:, 0] >= 0) & (pts[:, 0] < w) & (pts[:, 1] >= 0) & (pts[:, 1] < h)
+    shown = np.zeros(len(pts), bool)
+    shown[inside] = np.asarray(picture, bool)[pts[inside, 1], pts[inside, 0]]
+    return shown
+
+
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
                output_size: int, model_size: int, person=None, image: np.ndarray | None = None,
                fit_to_mask: bool = True, pictured: np.ndarray | None = None,
@@ -135,7 +145,8 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
                                model_size=model_size)
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
-    lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift, pictured=pictured)
+    lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift, pictured=pictured,
+                            shown=None if from_file is None else joints_in(reference_points, from_file))
     small, seen, offsets = None, None, None
     if person is not None:
         seen = person.moved(k, -np.array([x0, y0]) * k, (model_size, model_size))

@@ -1,26 +1,32 @@
-"""A person cut by the picture's edge keeps the picture's framing.
+"""A person cut by the picture's edge: the picture's framing is kept, and the body is fitted to what it shows.
 
 A half-length portrait's estimated legs lie far below its bottom edge; the picture is extended to hold the pose, and
 framed around the whole pose the pictured face was some 15 px tall at 256. The frames are now generated on the
-extended picture and cut to the square the picture frames.
+extended picture and cut to the square the picture frames. The pose estimator's guessed legs are also shorter than
+the person's, and they set the fitted body's scale: only the bones the picture shows set it now.
 
-Real parts: the painted portraits and the tracksuit photo of ../shared/data/photos, BlazePose and MediaPipe's face
-detector on them, a CMU walk, the shipped motion model and frame generators.
+Real parts: the painted portraits, the tracksuit and red-jersey photos of ../shared/data/photos, BlazePose and
+MediaPipe's face detector on them, a CMU walk, the shipped motion model and frame generators, Anny through OSMesa.
 """
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
-from motion2video.core.skeletons import HEAD, THORAX
+from motion2video.core.skeletons import H36M_17, HEAD, THORAX
+from motion2video.generator.mesh_fit import lift_by_bones
 from motion2video.stages.reference import (
     FRAMING_MAX_SIZE, PERSON_CROP_MARGIN, cut_to_view, framing_view, load_reference,
 )
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_framing_view_frames_the_shown_person_inside_the_picture():
@@ -106,3 +112,52 @@ def test_a_portrait_driven_by_a_walk_shows_its_face(photos_dir, mocap_dir, frame
         detections = mesh.detect(np.ascontiguousarray(frame))
         found += bool(detections) and mesh.landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE
     assert found >= 0.8 * len(frames)
+
+
+def test_the_bones_the_picture_shows_set_the_lifted_body_s_scale():
+    """A standing pose 4 m from the camera, its legs 30% shorter in the pictured 3D pose than where its 2D joints put
+    them (as a pose estimator guesses legs below a picture's edge). Scaled by every bone, the guessed legs bring the
+    body nearer; scaled by the shown bones only, the pelvis is at its depth."""
+    walk = np.asarray(np.load(ROOT / "demo_inputs" / "cmu_walk.npz")["joints"], np.float64)[0]
+    cam = np.stack([walk[:, 0], walk[:, 2], walk[:, 1] - walk[0, 1] + 4.0], axis=1)  # x right, y up, z away
+    focal, centre = 500.0, 128.0
+    pixels = np.stack([centre + focal * cam[:, 0] / cam[:, 2], centre - focal * cam[:, 1] / cam[:, 2]], axis=1)
+    rays = np.stack([(pixels[:, 0] - centre) / focal, (centre - pixels[:, 1]) / focal, np.ones(17)], axis=1)
+    legs = [H36M_17.index(f"{side}_{part}") for side in ("left", "right") for part in ("knee", "ankle")]
+    guessed = cam.copy()
+    for side in ("left", "right"):
+        hip, knee, ankle = (H36M_17.index(f"{side}_{part}") for part in ("hip", "knee", "ankle"))
+        guessed[knee] = cam[hip] + 0.7 * (cam[knee] - cam[hip])
+        guessed[ankle] = guessed[knee] + 0.7 * (cam[ankle] - cam[knee])
+    shown = np.ones(17, bool)
+    shown[legs] = False
+    exact = lift_by_bones(rays, cam, focal, pixels)
+    assert exact[0, 2] == pytest.approx(cam[0, 2], rel=0.05)  # the nearest bones set it: within 5%
+    assert lift_by_bones(rays, guessed, focal, pixels)[0, 2] < 0.8 * cam[0, 2]  # every bone: far too near
+    assert lift_by_bones(rays, guessed, focal, pixels, shown=shown)[0, 2] == pytest.approx(exact[0, 2], rel=0.02)
+
+
+@pytest.mark.slow
+def test_a_person_cut_at_the_waist_gets_the_head_of_the_whole_photo(photos_dir, tmp_path):
+    """The red-jersey photo cut at his waist: the fitted head's width, over the distance between the pictured eyes,
+    is within 5% of the whole photo's (13% wider when the guessed legs set the body's scale)."""
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.stages.generation import mesh_setup
+    from motion2video.stages.structure import render_structures
+    from renderers import anny_model
+    from tests.test_head_paste import walk_forecast
+
+    net = load_frame_model("frames-body-mesh-256").model
+    whole = photos_dir / "fashion_man_red_jacket.png"
+    cut = tmp_path / "red_jersey_to_the_waist.png"
+    cv2.imwrite(str(cut), cv2.imread(str(whole), cv2.IMREAD_UNCHANGED)[:560])
+
+    def head_width(path) -> float:
+        reference = load_reference(path, size=256, domain="body", crop_person=True)
+        video = mesh_setup(net, reference, render_structures(walk_forecast(), domain="body", size=256,
+                                                             reference=reference))
+        x0, y0, side = video.crop
+        eyes = (np.asarray(reference.person.eyes) - [x0, y0]) * video.reference.masks.shape[-1] / side
+        return float(np.ptp(video.reference.uv[0][anny_model.head_vertices(), 0]) / np.linalg.norm(eyes[0] - eyes[1]))
+
+    assert head_width(cut) == pytest.approx(head_width(whole), rel=0.05)
