@@ -161,3 +161,23 @@ def test_a_person_cut_at_the_waist_gets_the_head_of_the_whole_photo(photos_dir, 
         return float(np.ptp(video.reference.uv[0][anny_model.head_vertices(), 0]) / np.linalg.norm(eyes[0] - eyes[1]))
 
     assert head_width(cut) == pytest.approx(head_width(whole), rel=0.05)
+
+
+@pytest.mark.slow
+def test_a_portrait_re_enacting_a_behaviour_shows_its_face(photos_dir, mocap_dir, tmp_path):
+    """transfer --style frames with the Mona Lisa: the video read back shows her face in every re-enacted frame."""
+    import imageio.v3 as iio
+
+    from motion2video.cli import main
+    from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
+    from motion2video.stages.pictured_face import face_mesh
+
+    out = tmp_path / "mona.mp4"
+    assert main(["transfer", "--model", "behavior", "--sample", "1", "--target", str(mocap_dir / "cmu" / "08_01.bvh"),
+                 "--style", "frames", "--frame-model", "frames-body-128", "--reference",
+                 str(photos_dir / "portrait_mona_lisa.jpg"), "--crop-person", "--horizon", "4", "-o", str(out)]) == 0
+    video = iio.imread(out)
+    mesh = face_mesh()
+    for frame in video:
+        detections = mesh.detect(np.ascontiguousarray(frame))
+        assert detections and mesh.landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE

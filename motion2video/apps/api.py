@@ -422,9 +422,7 @@ def transfer(model, target: str | Path, *, behavior: str | Path | None = None, s
         result = sample_behaviors(bundle, tgt, num_samples=samples, target_frame=target_frame, horizon=horizon,
                                   seed=seed)
     if ref is not None:
-
-        ref = reference_in_view(transfer_forecast(result), ref, size=frames_model.config.image_size,
-                                fit_view=fit_view)
+        ref = reference_in_view(transfer_forecast(result), ref, size=ref.image.shape[0], fit_view=fit_view)
     video = path = None
     if render or out is not None:
         report("frames", 0.0)

@@ -53,7 +53,7 @@ from motion2video.models.baselines import BASELINES
 from motion2video.models.checkpoint import ModelBundle, load_model
 from motion2video.stages.clips import LoadedClip, load_clip, model_frame
 from motion2video.stages.generation import generate_video_frames
-from motion2video.stages.reference import Reference, ReferencePose, load_reference
+from motion2video.stages.reference import Reference, ReferencePose, cut_to_view, load_reference
 from motion2video.stages.latents import (
     ADAPT_STEPS,
     behavior_model,
@@ -232,7 +232,8 @@ def frame_style_inputs(bundle: ModelBundle, *, frame_model: str | None = None, r
                          f"{DOMAIN_OF_LAYOUT[layout]}", frame_name)
     if reference:
         return loaded, load_reference(reference, size=loaded.config.image_size, domain=domain,
-                                      pose_path=reference_pose, crop_person=crop_person)
+                                      pose_path=reference_pose, crop_person=crop_person,
+                                      keep_framing=getattr(loaded, "kind", "analogy") in ("warp", "mesh"))
     if layout != "body3d":
         raise InputError("--style frames needs --reference for this model (only 3D body models can render "
                          "their own reference)")
@@ -320,7 +321,7 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
     if DOMAIN_OF_LAYOUT[result.layout] != cfg.domain:
         raise InputError(f"the frame model makes {cfg.domain} frames, but the behaviour model moves a "
                          f"{DOMAIN_OF_LAYOUT[result.layout]}", getattr(frame_model, "path", None))
-    s = cfg.image_size
+    s = cfg.image_size if reference is None else reference.image.shape[0]  # larger when its framing is kept
     fc = transfer_forecast(result)
     if reference is None:
         if result.layout != "body3d":
@@ -332,7 +333,9 @@ def render_with_frame_model(result: TransferResult, frame_model, *, size: int, r
     out = []
     for future in generated.futures:  # (H, s, s, 3)
         frames = np.concatenate([generated.observed, future])
-        if s != size:
+        if reference.view is not None:
+            frames = cut_to_view(frames, reference.view, size)
+        elif s != size:
             frames = np.stack([cv2.resize(f, (size, size), interpolation=cv2.INTER_LINEAR) for f in frames])
         out.append(frames)
     return out
@@ -454,7 +457,7 @@ def transfer_to_files(settings: TransferSettings, *, note: Callable[[str], None]
         result = sample_behaviors(bundle, target, num_samples=s.sample, target_frame=s.target_frame,
                                   horizon=s.horizon, seed=s.seed)
     if reference is not None:
-        reference = reference_in_view(transfer_forecast(result), reference, size=frame_model.model.config.image_size,
+        reference = reference_in_view(transfer_forecast(result), reference, size=reference.image.shape[0],
                                       fit_view=s.fit_view)
     chunks = iter_transfer(result, style=style, size=s.size, frame_model=frame_model, reference=reference)
     for line in (reference.notes if reference is not None and note is not None else ()):

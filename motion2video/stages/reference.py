@@ -693,9 +693,9 @@ def load_reference(path: str | Path, *, size: int, domain: str,
     if person is not None:
         person = person.moved(fit.scale, fit.offset, (canvas, canvas))
     if view is not None:
-        notes.append(f"the frames keep the picture's framing: the {view[2]:.0f} px square at ({view[0]:.0f}, "
-                     f"{view[1]:.0f}) of the {w}x{h} extended picture, at {size}x{size} (the body is generated on "
-                     f"all of it at {canvas}x{canvas}, the parts beyond the picture's edge out of view)")
+        notes.append(f"the frames keep the picture's framing: they show the {view[2]:.0f} px square at "
+                     f"({view[0]:.0f}, {view[1]:.0f}) of the {w}x{h} extended picture (the body is generated on all of "
+                     f"it at {canvas}x{canvas}, the parts beyond the picture's edge out of view)")
         view = (view[0] * fit.scale + fit.offset[0], view[1] * fit.scale + fit.offset[1], view[2] * fit.scale)
     if pose is not None:
         pose = _fit_pose(pose, fit, canvas, (h, w))
