@@ -181,3 +181,31 @@ def test_a_portrait_re_enacting_a_behaviour_shows_its_face(photos_dir, mocap_dir
     for frame in video:
         detections = mesh.detect(np.ascontiguousarray(frame))
         assert detections and mesh.landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE
+
+
+def test_view_crop_is_the_integer_square_inside_the_picture():
+    from motion2video.stages.mesh_generation import view_crop
+
+    assert view_crop((271.4, 16.0, 256.1), 794) == (271, 16, 256)
+    assert view_crop((-3.0, 700.0, 120.0), 794) == (0, 674, 120)  # moved inside
+    assert view_crop((0.0, 0.0, 900.0), 794) == (0, 0, 794)  # no larger than the picture
+
+
+@pytest.mark.slow
+def test_the_mesh_generator_makes_a_portrait_in_its_view_at_its_own_size(photos_dir):
+    """The Mona Lisa's mesh video is generated in the view's square (at the model's 256 px), not in the square
+    around every pose, whose legs lie out of view."""
+    from motion2video.generator.checkpoint import load_frame_model
+    from motion2video.stages.generation import mesh_setup
+    from motion2video.stages.mesh_generation import view_crop
+    from motion2video.stages.structure import render_structures
+    from tests.test_head_paste import walk_forecast
+
+    net = load_frame_model("frames-body-mesh-256").model
+    portrait = load_reference(photos_dir / "portrait_mona_lisa.jpg", size=256, domain="body", crop_person=True,
+                              keep_framing=True)
+    canvas = portrait.image.shape[0]
+    video = mesh_setup(net, portrait, render_structures(walk_forecast(), domain="body", size=canvas,
+                                                        reference=portrait))
+    assert video.crop == view_crop(portrait.view, canvas)
+    assert video.crop[2] == 256 and video.reference.masks.shape[-1] == 256

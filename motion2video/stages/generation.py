@@ -66,7 +66,7 @@ def mesh_setup(net, reference: Reference, structures: Structures):
                       output_size=structures.size, model_size=net.config.image_size, person=person,
                       image=reference.image, fit_to_mask=not phenotype,
                       pictured=None if reference.pose is None else reference.pose.camera_joints,
-                      face=reference_face(reference), from_file=reference.picture_mask())
+                      face=reference_face(reference), from_file=reference.picture_mask(), view=reference.view)
 
 
 def mesh_frames(net, reference: Reference, structures: Structures, video, rows: np.ndarray, *,

@@ -95,6 +95,14 @@ class MeshVideo:
     skirt: Skirt | None = None
 
 
+def view_crop(view: tuple[float, float, float], size: int) -> tuple[int, int, int]:
+    """(x0, y0, side) integer square of a (size, size) picture nearest the square ``view`` (x0, y0, side), inside it."""
+    side = int(min(size, max(8, round(view[2]))))
+    x0 = int(np.clip(round(view[0]), 0, size - side))
+    y0 = int(np.clip(round(view[1]), 0, size - side))
+    return x0, y0, side
+
+
 def joints_in(points: np.ndarray, picture: np.ndarray) -> np.ndarray:
     """(17,) bool: which joints (17, 2) pixels lie on a (H, W) map's true pixels (the picture's own, not a pad)."""
     pts = np.round(np.asarray(points, np.float64)).astype(int)
@@ -108,7 +116,8 @@ def joints_in(points: np.ndarray, picture: np.ndarray) -> np.ndarray:
 def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray, *, phenotype: dict,
                output_size: int, model_size: int, person=None, image: np.ndarray | None = None,
                fit_to_mask: bool = True, pictured: np.ndarray | None = None,
-               face: PicturedFace | None = None, from_file: np.ndarray | None = None) -> MeshVideo:
+               face: PicturedFace | None = None, from_file: np.ndarray | None = None,
+               view: tuple[float, float, float] | None = None) -> MeshVideo:
     """The meshes of a placed body video.
 
     Args:
@@ -133,6 +142,10 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
         from_file: (output_size, output_size) bool the pixels of ``image`` that come from the image file, or None (all
             of them): a border the pipeline replicated around a photo is inpainted with the person
             (:func:`reference_background`).
+        view: (x0, y0, side) the square of the output the frames are cut to
+            (:attr:`motion2video.stages.reference.Reference.view`), or None: the person is generated in that square
+            at the model's size, not in the square around every pose (a half-length portrait's guessed legs, out of
+            view, would shrink the pictured part to a third of the model's pixels).
     Raises:
         InputError: the placement has no 3D joints (a 2D motion model).
     """
@@ -141,8 +154,11 @@ def mesh_video(placement, reference_points: np.ndarray, target_rows: np.ndarray,
                          "keypoints); use --frame-model frames-body-128")
     world = np.concatenate([placement.world_observed, placement.world_futures.reshape(-1, 17, 3)])  # (N, 17, 3)
     scale, shift = placement.scale, placement.shift
-    x0, y0, side = person_crop(reference_points, target_rows, width=output_size, height=output_size,
-                               model_size=model_size)
+    if view is None:
+        x0, y0, side = person_crop(reference_points, target_rows, width=output_size, height=output_size,
+                                   model_size=model_size)
+    else:
+        x0, y0, side = view_crop(view, output_size)
     k = model_size / side
     to_crop = (scale * k, (np.asarray(shift) - [x0, y0]) * k)
     lifted = lift_reference(reference_points, world[0], placement.camera, scale, shift, pictured=pictured,
