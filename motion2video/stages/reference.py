@@ -13,11 +13,13 @@ Without one, a body reference gets its pose estimated (BlazePose, :mod:`motion2v
 so), and a body reference where nobody is found is refused (InputError naming the picture): there is no person
 to move. A person cut by the picture's edge gets a note; when the estimated joints themselves lie beyond the
 edge, the picture is extended there (its edge repeated, :attr:`Reference.picture` marks those pixels as not the
-file's) so that the pose fits in it. A face reference without a pose file (a photo or a painting of a face) gets
-the Anny head fitted to the face it shows (pose and expression, :mod:`motion2video.pose.face_portrait`), and the
-square around that face, framed as the face generators' training frames are, becomes the reference; one with no
-face is refused (InputError naming the picture). With the true or fitted pose, the generated frames start from
-where the pictured face is.
+file's) so that the pose fits in it; with ``keep_framing`` the extended picture is a larger canvas and
+:attr:`Reference.view` the square the picture itself frames, which the frames are cut back to (:func:`framing_view`,
+:func:`cut_to_view`), so a half-length portrait stays as large as it was pictured. A face reference without a
+pose file (a photo or a painting of a face) gets the Anny head fitted to the face it shows (pose and expression,
+:mod:`motion2video.pose.face_portrait`), and the square around that face, framed as the face generators' training
+frames are, becomes the reference; one with no face is refused (InputError naming the picture). With the true or
+fitted pose, the generated frames start from where the pictured face is.
 
 """
 
