@@ -90,14 +90,22 @@ def test_a_whole_person_in_the_picture_keeps_the_usual_reference(photos_dir):
     np.testing.assert_array_equal(kept.image, plain.image)
 
 
+def face_found(frame: np.ndarray) -> bool:
+    """Whether MediaPipe's face detector finds a face in an (H, W, 3) frame and its face mesh is sure of it."""
+    from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
+    from motion2video.stages.pictured_face import face_mesh
+
+    frame = np.ascontiguousarray(frame)
+    detections = face_mesh().detect(frame)
+    return bool(detections) and face_mesh().landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("frame_model, size", [("frames-body-128", 128), ("frames-body-mesh-256", 256)])
 def test_a_portrait_driven_by_a_walk_shows_its_face(photos_dir, mocap_dir, frame_model, size):
     """synthesize with the Mona Lisa as the reference and a CMU walk: frames of the output size, and a face detector
     finds a face in nearly every one of them (none was found when the frames held the whole guessed body)."""
     from motion2video.apps.synthesize import SynthesisConfig, synthesize
-    from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
-    from motion2video.stages.pictured_face import face_mesh
 
     frames = []
     result = synthesize(motion_model="mixture-periodic", frame_model=frame_model,
@@ -106,12 +114,7 @@ def test_a_portrait_driven_by_a_walk_shows_its_face(photos_dir, mocap_dir, frame
                         on_chunk=lambda start, chunk, previews: frames.extend(chunk[:, 0]))
     assert any("keep the picture's framing" in note for note in result.notes)
     assert all(frame.shape == (size, size, 3) for frame in frames)
-    mesh = face_mesh()
-    found = 0
-    for frame in frames:
-        detections = mesh.detect(np.ascontiguousarray(frame))
-        found += bool(detections) and mesh.landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE
-    assert found >= 0.8 * len(frames)
+    assert sum(face_found(frame) for frame in frames) >= 0.8 * len(frames)
 
 
 def test_the_bones_the_picture_shows_set_the_lifted_body_s_scale():
@@ -169,18 +172,12 @@ def test_a_portrait_re_enacting_a_behaviour_shows_its_face(photos_dir, mocap_dir
     import imageio.v3 as iio
 
     from motion2video.cli import main
-    from motion2video.pose.facemesh import MIN_PRESENCE, detection_roi
-    from motion2video.stages.pictured_face import face_mesh
 
     out = tmp_path / "mona.mp4"
     assert main(["transfer", "--model", "behavior", "--sample", "1", "--target", str(mocap_dir / "cmu" / "08_01.bvh"),
                  "--style", "frames", "--frame-model", "frames-body-128", "--reference",
                  str(photos_dir / "portrait_mona_lisa.jpg"), "--crop-person", "--horizon", "4", "-o", str(out)]) == 0
-    video = iio.imread(out)
-    mesh = face_mesh()
-    for frame in video:
-        detections = mesh.detect(np.ascontiguousarray(frame))
-        assert detections and mesh.landmarks(frame, detection_roi(detections[0])).score >= MIN_PRESENCE
+    assert all(face_found(frame) for frame in iio.imread(out))
 
 
 def test_view_crop_is_the_integer_square_inside_the_picture():

@@ -34,6 +34,7 @@ import torch
 
 from motion2video.core.camera import fit_camera, project
 from motion2video.core.errors import InputError
+from motion2video.core.skeletons import L_WRIST, R_WRIST
 from motion2video.generator.background import (MATTE_FEATHER_PX, attached_objects, composite, inpaint_background,
                                                soft_matte)
 from motion2video.generator.data import body_structures, face_structures
@@ -52,7 +53,7 @@ from renderers import anny_model
 # The joints (H36M-17) near which what the person holds is looked for
 # (:func:`~motion2video.generator.background.attached_objects`): the wrists. Not the ankles: near the feet, the
 # lines of a floor or a road were taken for held things as often as skis were.
-ATTACHED_ANCHORS = (13, 16)
+ATTACHED_ANCHORS = (L_WRIST, R_WRIST)
 
 
 @dataclass

@@ -492,9 +492,10 @@ def framing_view(picture: np.ndarray, person_mask: np.ndarray | None, *, crop_pe
     Returns:
         (x0, y0, side) in the extended picture's pixels.
     """
-    ys, xs = np.nonzero(np.asarray(picture) > 0.5)
+    file_pixels = np.asarray(picture) > 0.5
+    ys, xs = np.nonzero(file_pixels)
     px0, py0, px1, py1 = xs.min(), ys.min(), xs.max() + 1, ys.max() + 1
-    shown = None if person_mask is None else (np.asarray(person_mask) > 0.5) & (np.asarray(picture) > 0.5)
+    shown = None if person_mask is None else (np.asarray(person_mask) > 0.5) & file_pixels
     if not crop_person or shown is None or not shown.any():
         side = max(px1 - px0, py1 - py0)
         return float(px0 + (px1 - px0 - side) / 2), float(py0 + (py1 - py0 - side) / 2), float(side)
@@ -517,20 +518,15 @@ def cut_to_view(frames: np.ndarray, view: tuple[float, float, float] | None, siz
     Returns:
         (..., size, size, 3) uint8.
     """
+    from motion2video.stages.pictured_face import cut_square
+
     if view is None:
         return frames
     x0, y0, side = (float(v) for v in view)
-    k = size / side
+    square = (int(np.floor(x0)), int(np.floor(y0)), int(np.ceil(x0 + side)) - int(np.floor(x0)))
+    inter = cv2.INTER_AREA if size < side else cv2.INTER_LINEAR
     flat = np.asarray(frames).reshape(-1, *frames.shape[-3:])
-    inter = cv2.INTER_AREA if k < 1 else cv2.INTER_LINEAR
-    out = np.empty((len(flat), size, size, 3), np.uint8)
-    for i, frame in enumerate(flat):
-        x, y = int(np.floor(x0)), int(np.floor(y0))
-        s = int(np.ceil(x0 + side)) - x
-        grown = cv2.copyMakeBorder(frame, max(0, -y), max(0, y + s - frame.shape[0]), max(0, -x),
-                                   max(0, x + s - frame.shape[1]), cv2.BORDER_REPLICATE)
-        crop = grown[max(0, y):max(0, y) + s, max(0, x):max(0, x) + s]
-        out[i] = cv2.resize(crop, (size, size), interpolation=inter)
+    out = np.stack([cv2.resize(cut_square(frame, square), (size, size), interpolation=inter) for frame in flat])
     return out.reshape(*frames.shape[:-3], size, size, 3)
 
 
