@@ -410,6 +410,7 @@ def render_limb_maps(
     size: tuple[int, int],
     *,
     thickness: int = 4,
+    as_uint8: bool = False,
 ) -> np.ndarray:
     """One channel per limb: each bone drawn alone (anti-aliased, value 1 on the line) in its own map.
 
@@ -418,8 +419,9 @@ def render_limb_maps(
         skeleton: their skeleton; channels follow ``skeleton.bones`` order.
         size: (width, height).
         thickness: line width in pixels.
+        as_uint8: the maps as drawn, 0..255, not divided into floats.
     Returns:
-        (T, L, H, W) float32 in [0, 1], L = number of bones.
+        (T, L, H, W) float32 in [0, 1] (uint8 in 0..255 with ``as_uint8``), L = number of bones.
     """
     skel = _skeleton(skeleton)
     width, height = int(size[0]), int(size[1])
@@ -435,7 +437,7 @@ def render_limb_maps(
             if ok[a] and ok[b]:
                 cv2.line(maps[t, i], tuple(int(v) for v in pts[a]), tuple(int(v) for v in pts[b]), 255,
                          int(thickness), cv2.LINE_AA, SHIFT)
-    return maps.astype(np.float32) / 255.0
+    return maps if as_uint8 else maps.astype(np.float32) / 255.0
 
 
 # --- renderers ----------------------------------------------------------------------------------------

@@ -91,6 +91,23 @@ def test_generate_uint8_batches_and_shape_checks():
         generate(model, pairs.ref_images[:, :16], pairs.ref_structures, pairs.tgt_structures)
 
 
+@pytest.mark.parametrize("factor", [2, 4])
+def test_pooled_structures_are_the_full_maps_averaged(factor):
+    """What the mesh generator's network reads, built small, is the full-size maps averaged over its blocks."""
+    import torch.nn.functional as F
+
+    from motion2video.generator.data import pooled_body_structures
+
+    points = np.random.default_rng(3).uniform(-8, 72, (4, 17, 2))
+    points[1, 5] = np.nan  # a joint not found: its heatmap is empty, its limbs not drawn
+    full = torch.from_numpy(body_structures(points, 64))
+    small = pooled_body_structures(points, 64, factor)
+    assert small.shape == (4, BODY_STRUCTURE_CHANNELS, 64 // factor, 64 // factor) and small.dtype == np.float32
+    np.testing.assert_allclose(small, F.avg_pool2d(full, factor).numpy(), atol=1e-6)
+    assert small[1, 5].max() == 0 and small.max() > 0.5
+    np.testing.assert_array_equal(pooled_body_structures(points, 64, 1), full.numpy())
+
+
 def test_body_structures_and_flip_keep_joint_meaning():
     seqs = toy_sequences("body", num_sequences=2, frames_per_sequence=3, image_size=32)
     st = body_structures(seqs.points[0], 32)

@@ -295,6 +295,23 @@ def test_untrained_mesh_generator_is_its_prior(mesh_seqs):
     assert err_in.mean() < 0.03 and err_out.mean() < 0.03  # alpha = sigmoid(+-4): 98 % prior
 
 
+def test_the_network_reads_pooled_structures_as_full_ones(mesh_seqs):
+    """Structure maps given at the network's own size give the frame that full-size maps give."""
+    from motion2video.generator.data import body_structures, pooled_body_structures
+
+    pairs = make_pairs(mesh_seqs, np.array([[0, 0, 1], [1, 0, 2]]))
+    net = MeshWarpGenerator(MeshWarpConfig(image_size=64, net_scale=4))
+    torch.manual_seed(0)
+    for p in net.decoder.head.parameters():  # a network that uses its input
+        torch.nn.init.normal_(p, std=0.1)
+    x = torch.from_numpy(pairs.ref_images).permute(0, 3, 1, 2).float() / 255
+    inputs = mesh_inputs(pairs)
+    with torch.no_grad():
+        full = net(x, *inputs, torch.from_numpy(body_structures(pairs.tgt_points, 64)))
+        pooled = net(x, *inputs, torch.from_numpy(pooled_body_structures(pairs.tgt_points, 64, 4)))
+    torch.testing.assert_close(pooled, full, atol=1e-5, rtol=0)
+
+
 def train_tiny_mesh_model(domain: str, ckpt: Path, cache: Path, capsys) -> Path:
     """A mesh generator of ``domain`` trained for 2 steps at 64 px on 2 rendered sequences (cached in ``cache``)."""
     rc = main(["train-frames", "--domain", domain, "--model-kind", "mesh", "-o", str(ckpt), "--steps", "2",

@@ -310,8 +310,9 @@ class MeshWarpGenerator(nn.Module):
     """Reference frame + mesh correspondence -> target frame.
 
     forward(ref_image (B, 3, H, W) in [0, 1], ref_mask (B, 1, H, W), flow (B, H, W, 2), visibility
-    (B, 1, H, W), silhouette (B, 1, H, W), tgt_structure (B, S, H, W), source_mask=None) -> (B, 3, H, W) about
-    [0, 1]; ``source_mask`` as in :meth:`forward_parts`.
+    (B, 1, H, W), silhouette (B, 1, H, W), tgt_structure (B, S, H, W) (or (B, S, H / net_scale, W / net_scale), the
+    maps already averaged over the network's blocks), source_mask=None) -> (B, 3, H, W) about [0, 1]; ``source_mask``
+    as in :meth:`forward_parts`.
     """
 
     kind = "mesh"
@@ -356,12 +357,18 @@ class MeshWarpGenerator(nn.Module):
         sampled = unsharp(source, self.config.sharpen)
         prior_person = warp_image(sampled, flow, mode)
         prior = silhouette * prior_person + (1.0 - silhouette) * plate
-        net_in = torch.cat([prior * 2.0 - 1.0, plate * 2.0 - 1.0, tgt_structure.to(dtype), silhouette, visibility,
-                            warp_image(ref_mask.to(dtype), flow)], dim=1)
         scale = self.config.net_scale
+        # every input but the structure is pooled together; the structure may come pooled already
+        # (generator.data.pooled_body_structures), as it is the input's most channels
+        rest = torch.cat([prior * 2.0 - 1.0, plate * 2.0 - 1.0, silhouette, visibility,
+                          warp_image(ref_mask.to(dtype), flow)], dim=1)
         ref_in = ref_image * 2.0 - 1.0
+        structure = tgt_structure.to(dtype)
         if scale > 1:
-            net_in, ref_in = F.avg_pool2d(net_in, scale), F.avg_pool2d(ref_in, scale)
+            rest, ref_in = F.avg_pool2d(rest, scale), F.avg_pool2d(ref_in, scale)
+            if structure.shape[-1] == w:
+                structure = F.avg_pool2d(structure, scale)
+        net_in = torch.cat([rest[:, :6], structure, rest[:, 6:]], dim=1)
         ref_feats = [warp_image(f, flow) for f in self.image_encoder(ref_in)]
         feats = [fuse(torch.cat([a, r], dim=1)) for fuse, a, r in zip(self.fuse, self.encoder(net_in), ref_feats)]
         out = self.decoder(feats)

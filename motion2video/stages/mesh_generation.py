@@ -37,7 +37,7 @@ from motion2video.core.errors import InputError
 from motion2video.core.skeletons import L_WRIST, R_WRIST
 from motion2video.generator.background import (MATTE_FEATHER_PX, attached_objects, composite, inpaint_background,
                                                soft_matte)
-from motion2video.generator.data import body_structures, face_structures
+from motion2video.generator.data import face_structures, pooled_body_structures
 from motion2video.generator.garment import Skirt, find_skirt, lay_skirts
 from motion2video.generator.head_paste import HeadMoves
 from motion2video.generator.mesh_fit import fit_width, lift_reference, reference_crop, render_mesh_track
@@ -368,7 +368,7 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
             flows, vis = flows_to_targets(ref_uv, video.reference.visible[0], video.targets, part, margin=video.margin)
             n = len(part)
             sil = torch.from_numpy(grow_masks(video.targets.masks[part][:, None], video.margin).astype(np.float32))
-            structure = torch.from_numpy(body_structures(video.tgt_points[part], size))
+            structure = torch.from_numpy(pooled_body_structures(video.tgt_points[part], size, net.config.net_scale))
             parts = net.forward_parts(x_ref.expand(n, -1, -1, -1), ref_mask.expand(n, -1, -1, -1),
                                       torch.from_numpy(flows), torch.from_numpy(vis)[:, None],
                                       sil, structure, plate=plate.expand(n, -1, -1, -1),
