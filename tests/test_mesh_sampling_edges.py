@@ -140,7 +140,7 @@ def fitted_reference(path: Path, *, observed: np.ndarray | None = None, futures:
 
 def own_pixel(xy: np.ndarray, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     """A stand-in for :func:`motion2video.generator.mesh_flow.bilinear_footprint`: the pixel each point lies in, four
-    times (the completion's colour test before 2026-11-27)."""
+    times (a colour test that reads one pixel per point)."""
     x = np.clip(np.floor(xy[:, 0]).astype(np.int64), 0, w - 1)
     y = np.clip(np.floor(xy[:, 1]).astype(np.int64), 0, h - 1)
     return np.repeat(y[:, None], 4, axis=1), np.repeat(x[:, None], 4, axis=1)

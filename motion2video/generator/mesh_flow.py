@@ -426,7 +426,7 @@ def complete_reference_uv(ref_uv: np.ndarray, seen: np.ndarray, *, by_region: bo
 
     Args:
         ref_uv: (V, 2) reference pixels; seen: (V,) bool shown by the reference.
-        by_region: keep to the clothing region first (the default since 2026-11-26); False: any region.
+        by_region: keep to the clothing region first (the default); False: any region.
         mirror: the other side of the body first (with ``by_region``).
         by_segment: the typical colour per body segment (with ``by_region`` and ``image``).
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv`` (None: every shown vertex is a source).
@@ -583,11 +583,11 @@ def dense_flow(ref_uv: np.ndarray, ref_visible: np.ndarray, tgt_uv: np.ndarray, 
         neighbours: target vertices interpolated per pixel.
         complete: surface points the reference does not show sample the reference where the nearest shown
             point along the surface is (:func:`complete_reference_uv`; their visibility stays 0). Off, they
-            sample their own (occluded) reference pixel, as the models before 2026-11-25 evening were trained.
+            sample their own (occluded) reference pixel.
         image: (H, W, 3) the reference picture in the pixels of ``ref_uv``, for the completion's colour test.
         triangles: (F, 3) the mesh's triangles (:func:`mesh_triangles`): pixels inside a triangle the target shows
-            whole are read from it (:func:`triangle_pixels`), only the rest from the vertices; None: the vertices only
-            (the mesh flow before 2026-11-27).
+            whole are read from it (:func:`triangle_pixels`), only the rest from the vertices; None: the vertices
+            only.
     Returns:
         The :class:`MeshFlow`; with no visible target vertex, the identity flow and zero visibility.
     """

@@ -398,10 +398,10 @@ def mesh_source_mask(pairs) -> torch.Tensor | None:
     the segmented person (BlazePose's mask), not the fitted mesh's silhouette, which reaches past a real person
     where the fit is off; None for pairs whose mesh is exact (the generator then uses the reference's silhouette).
 
-    Until 2026-11-26 (later) the fitted silhouette, grown by the clothes margin, was joined to the segmented
-    person. On a real photo that lent the snow beside a skier's legs to her trousers (white patches in every
-    frame), and on ``dancer.avi`` the person PSNR of ``evaluate-frames --video`` was 20.64 dB against 21.19 with the
-    segmented person alone (docs/results.md, "How the mesh generator colours a fitted body")."""
+    Why not the segmented person joined with the fitted silhouette grown by the clothes margin: on a real photo that
+    lends the snow beside a skier's legs to her trousers (white patches in every frame), and on ``dancer.avi`` the
+    person PSNR of ``evaluate-frames --video`` was 20.64 dB with it against 21.19 with the segmented person alone
+    (docs/results.md, "How the mesh generator colours a fitted body")."""
     if pairs.mesh_ref_masks is None:
         return None
     return torch.from_numpy(np.asarray(pairs.ref_masks, bool))[:, None].float()
