@@ -10,6 +10,8 @@ whole output square (:func:`camera_covering`).
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import cv2
 import numpy as np
 
@@ -175,26 +177,37 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     rest = shape.vertices
     renderer = MeshRenderer(camera.width, camera.height)
     uv, visible, masks = None, None, np.zeros((n, size, size), bool)
+
+    def read(i: int, v: np.ndarray, depth: np.ndarray, mask: np.ndarray) -> None:
+        """Frame ``i``'s correspondence from its render."""
+        uvz = project(v, camera)
+        # where two surfaces meet, only the front one is shown: in a target so that the flow does not alternate
+        # between them, in the reference so that the one behind (a thigh under the hand) does not carry the other's
+        # pixel when a target moves them apart
+        visible[i] = vertex_visibility(uvz, depth, rest=rest)
+        uv[i] = uvz[:, :2] * scales[i] + shifts[i]
+        m = cv2.warpAffine(mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
+                           flags=cv2.INTER_LINEAR)
+        masks[i] = m > 0.5
+
+    # a frame is read in a second thread while the next one renders (OSMesa and NumPy release the GIL)
+    reading = ThreadPoolExecutor(max_workers=1)
+    pending = []
     try:
         for start, verts in posed_vertices(pose, offsets=offsets):
             if uv is None:
                 uv = np.zeros((n, verts.shape[1], 2), np.float32)
                 visible = np.zeros((n, verts.shape[1]), bool)
             for k, v in enumerate(verts):
-                i = start + k
                 out = renderer.render_mesh(v, faces, vertex_colors=MASK_GREY, camera=camera)
-                uvz = project(v, camera)
-                # where two surfaces meet, only the front one is shown: in a target so that the flow does not
-                # alternate between them, in the reference so that the one behind (a thigh under the hand) does not
-                # carry the other's pixel when a target moves them apart
-                visible[i] = vertex_visibility(uvz, out.depth, rest=rest)
-                uv[i] = uvz[:, :2] * scales[i] + shifts[i]
-                m = cv2.warpAffine(out.mask.astype(np.float32), affine_matrix(scales[i], shifts[i]), (size, size),
-                                   flags=cv2.INTER_LINEAR)
-                masks[start + k] = m > 0.5
+                pending.append(reading.submit(read, start + k, v, out.depth, out.mask))
+            for job in pending:
+                job.result()
+            pending.clear()
             if progress is not None:
                 progress(len(verts))
     finally:
+        reading.shutdown(wait=True, cancel_futures=True)
         renderer.close()
     return MeshTrack(uv=uv, visible=visible, masks=masks)
 

@@ -26,6 +26,7 @@ photo's face over each head.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import cv2
@@ -362,10 +363,21 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
         ref_uv = ref_uv[video.uv_sources]
     net.eval()
     rows = np.asarray(rows, np.int64)
-    with torch.inference_mode():
-        for start in range(0, len(rows), batch_size):
+    starts = range(0, len(rows), batch_size)
+
+    def correspondence(start: int) -> tuple[np.ndarray, np.ndarray]:
+        return flows_to_targets(ref_uv, video.reference.visible[0], video.targets, rows[start:start + batch_size],
+                                margin=video.margin)
+
+    with torch.inference_mode(), ThreadPoolExecutor(max_workers=1) as ahead:
+        # the next batch's flows (NumPy and SciPy, which release the GIL in their loops) are read while the network
+        # and the compositing run on this one
+        pending = ahead.submit(correspondence, 0) if len(rows) else None
+        for start in starts:
             part = rows[start:start + batch_size]
-            flows, vis = flows_to_targets(ref_uv, video.reference.visible[0], video.targets, part, margin=video.margin)
+            flows, vis = pending.result()
+            if start + batch_size < len(rows):
+                pending = ahead.submit(correspondence, start + batch_size)
             n = len(part)
             sil = torch.from_numpy(grow_masks(video.targets.masks[part][:, None], video.margin).astype(np.float32))
             structure = torch.from_numpy(pooled_body_structures(video.tgt_points[part], size, net.config.net_scale))
