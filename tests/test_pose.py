@@ -16,8 +16,8 @@ from motion2video.cli import main
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import H36M_17
 from motion2video.pose import blazepose as bp
-from motion2video.pose.estimate import (estimate_image, estimate_video, interpolate_gaps, landmark_extent,
-                                        poses_from_landmarks, read_image_rgb)
+from motion2video.pose.estimate import (default_model, estimate_image, estimate_video, interpolate_gaps,
+                                        landmark_extent, poses_from_landmarks, read_image_rgb)
 from motion2video.pose.h36m import HEAD_PER_LEG, NECK_PER_LEG, blazepose_to_h36m, world_to_project
 
 J = {name: i for i, name in enumerate(H36M_17.joints)}
@@ -190,6 +190,31 @@ def test_several_people_are_chosen_largest_or_left_to_right(photos_dir):
     assert landmark_extent(largest.landmarks) == pytest.approx(max(sizes))
     with pytest.raises(InputError, match="people found"):
         estimate_image(image, person=7)
+
+
+def test_a_person_the_detector_scores_under_its_threshold_gets_a_second_look(photos_dir):
+    """Her face covered by a black square twice its size, BlazePose's detector (which keys on a face) scores the
+    tracksuit woman 0.49, under its threshold of 0.5; the second look finds her body where the whole photo has it."""
+    from motion2video.pose.estimate import SECOND_CHANCE_SCORE
+
+    image = read_image_rgb(photos_dir / "woman_blue_tracksuit.jpg")
+    whole = estimate_image(image)
+    face = whole.landmarks.xy[:11]  # BlazePose's nose, eyes, ears and mouth
+    (cx, cy), r = face.mean(axis=0), 2.0 * np.ptp(face, axis=0).max()
+    covered = image.copy()
+    covered[int(cy - r):int(cy + r), int(cx - r):int(cx + r)] = 0
+    model = default_model()
+    assert not model.detect(covered) and model.detect(covered, min_score=SECOND_CHANCE_SCORE)
+    with pytest.raises(InputError, match="no person"):
+        estimate_image(covered, second_look=False)
+    found = estimate_image(covered)
+    assert found.people == 1 and found.landmarks.score >= 0.9
+    height = np.ptp(whole.points2d[:, 1])
+    error = np.linalg.norm(found.points2d - whole.points2d, axis=1) / height  # (17,) of her height
+    # her legs, far from the square, where the whole photo has them (the square hides her neck and shoulders too)
+    legs = [J[n] for n in ("left_knee", "right_knee", "left_ankle", "right_ankle")]
+    hips = [J[n] for n in ("pelvis", "left_hip", "right_hip")]
+    assert error[legs].max() < 0.03 and error[hips].max() < 0.07
 
 
 def test_a_photo_without_a_person_is_refused():

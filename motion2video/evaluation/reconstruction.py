@@ -249,7 +249,7 @@ def keypoint_distance(pred: np.ndarray, truth_points: np.ndarray, model: BlazePo
     dists, missing = [], 0
     for image, truth in zip(pred, truth_points):
         try:
-            found = estimate_image(image, model=model)
+            found = estimate_image(image, model=model, second_look=False)
         except InputError:
             missing += 1
             continue
@@ -263,7 +263,7 @@ def truth_points(images: np.ndarray, fallback: np.ndarray, model: BlazePose | No
     out = np.array(fallback, np.float64, copy=True)
     for i, image in enumerate(images):
         try:
-            out[i] = estimate_image(image, model=model).points2d
+            out[i] = estimate_image(image, model=model, second_look=False).points2d
         except InputError:
             pass
     return out

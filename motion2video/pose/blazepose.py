@@ -389,14 +389,14 @@ class BlazePose:
         self._lmk_heat, self._lmk_world = by_size[64 * 64 * 39], by_size[117]
         self._lmk_seg = by_size[LANDMARK_SIZE * LANDMARK_SIZE]
 
-    def detect(self, image: np.ndarray) -> list[Detection]:
-        """People in an (H, W, 3) uint8 RGB image, best score first."""
+    def detect(self, image: np.ndarray, *, min_score: float = DETECTION_MIN_SCORE) -> list[Detection]:
+        """People in an (H, W, 3) uint8 RGB image scoring at least ``min_score``, best score first."""
         tensor, scale, offset = letterbox(image)
         self._det.set_tensor(self._det_in, tensor[None])
         self._det.invoke()
         raw_boxes = self._det.get_tensor(self._det_boxes)[0]  # (2254, 12)
         raw_scores = self._det.get_tensor(self._det_scores)[0, :, 0]  # (2254,)
-        boxes, scores = decode_detections(raw_boxes, raw_scores, ssd_anchors())
+        boxes, scores = decode_detections(raw_boxes, raw_scores, ssd_anchors(), min_score=min_score)
         boxes, scores = weighted_nms(boxes, scores)
         # detector input (normalised) -> image pixels: undo the letterbox.
         pts = (boxes.reshape(-1, 6, 2) * DETECTOR_SIZE - offset) / scale  # (P, 6, 2)

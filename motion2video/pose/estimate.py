@@ -30,13 +30,26 @@ import numpy as np
 from motion2video.core.errors import InputError
 from motion2video.core.skeletons import h36m_body_points
 from motion2video.formats.canonical import floor_height
-from motion2video.pose.blazepose import NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, Roi, detection_roi
+from motion2video.pose.blazepose import (NUM_BODY_LANDMARKS, BlazePose, Detection, Landmarks, Roi, box_iou,
+                                          detection_roi)
 from motion2video.pose.follow import Candidate, FollowConfig, MotionState, check_candidate, torso_histogram
 from motion2video.pose.depth import default_focal, pixels_per_metre, root_path
 from motion2video.pose.h36m import blazepose_to_h36m, world_to_project
 from motion2video.pose.smoothing import smooth_landmarks
 
 MIN_PRESENCE = 0.5
+# A picture where BlazePose's person detector finds no one at its threshold (0.5) gets a second look
+# (:func:`second_chance`): its detections from SECOND_CHANCE_SCORE up, each kept only when the landmark model is sure
+# of a whole person there: presence >= SECOND_CHANCE_PRESENCE on the detection's region and again on the region its
+# landmarks give (MediaPipe's tracking step), the 33 body landmarks' mean visibility >= SECOND_CHANCE_VISIBILITY, and
+# all of them inside the picture. The detector keys on a face and upper body: a generated picture of a woman
+# meditating cross-legged over a starry background, eyes closed, scored 0.43 (presence 0.999, visibility 0.79), and
+# the tracksuit woman with her face and neck under a black square 0.49 (visibility 0.86). On 130 squares cut from the
+# shared photos beside their person, presence alone took 10 for a person (visibility 0.32-0.71), these tests none
+# (``git show REV:scripts/measure_second_look.py``, docs/results.md "A person the detector misses").
+SECOND_CHANCE_SCORE = 0.3
+SECOND_CHANCE_PRESENCE = 0.9
+SECOND_CHANCE_VISIBILITY = 0.75
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v")
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".webp", ".tif", ".tiff")
 
@@ -156,26 +169,74 @@ class PersonPose:
 
     def bounding_box(self) -> np.ndarray:
         """(4,) x_min, y_min, x_max, y_max of the 33 body landmarks, pixels."""
-        xy = self.landmarks.xy[:NUM_BODY_LANDMARKS]
-        return np.concatenate([xy.min(axis=0), xy.max(axis=0)])
+        return body_box(self.landmarks)
 
 
 def estimate_image(image: np.ndarray, *, person: str | int = "largest", model: BlazePose | None = None,
-                   source: str | Path | None = None) -> PersonPose:
-    """The pose of one person in an (H, W, 3) uint8 RGB image.
+                   source: str | Path | None = None, second_look: bool = True) -> PersonPose:
+    """The pose of one person in an (H, W, 3) uint8 RGB image. When the detector finds no one and ``person`` is
+    ``"largest"``, the detections under its threshold get a second look (:func:`second_chance`; off with
+    ``second_look=False``, as the reconstruction protocol scores generated frames by the detector's own threshold).
 
     Raises:
         InputError: no person found (naming ``source``), or ``person`` beyond the people found.
     """
     model = model or default_model()
     detections = model.detect(image)
-    lm = choose_person(model, image, detections, person, source)
+    people = len(detections)
+    if not detections and person == "largest" and second_look:
+        sure = second_chance(model, image)
+        if not sure:
+            raise InputError("no person found", source)
+        lm, people = max(sure, key=landmark_extent), len(sure)
+    else:
+        lm = choose_person(model, image, detections, person, source)
     if lm.score < MIN_PRESENCE:
         raise InputError(f"no person found (pose presence {lm.score:.2f})", source)
     body = slice(0, NUM_BODY_LANDMARKS)
     p2, j3, conf = landmarks_to_joints(lm.xy[None, body], lm.world[None, body], lm.visibility[None, body],
                                        width=image.shape[1], height=image.shape[0])
-    return PersonPose(p2[0], j3[0], conf[0], lm, image.shape[1], image.shape[0], len(detections))
+    return PersonPose(p2[0], j3[0], conf[0], lm, image.shape[1], image.shape[0], people)
+
+
+def second_chance(model: BlazePose, image: np.ndarray) -> list[Landmarks]:
+    """The people of ``image`` (H, W, 3) uint8 RGB among its detections scoring :data:`SECOND_CHANCE_SCORE` or more,
+    for a picture where no detection reaches the detector's own threshold: a detection counts when the landmark model
+    is sure of a whole person there (:func:`whole_person`), on its region and on the region its landmarks give. Two
+    detections of one person give poses whose body boxes overlap by more than half: the surer is kept.
+
+    Returns:
+        The landmarks (the second region's) of each person, surest first; empty when there is none.
+    """
+    h, w = image.shape[:2]
+    sure = []
+    for detection in model.detect(image, min_score=SECOND_CHANCE_SCORE):
+        first = model.landmarks(image, detection_roi(detection))
+        if first.score < SECOND_CHANCE_PRESENCE:
+            continue
+        lm = model.landmarks(image, first.next_roi())
+        if whole_person(lm, w, h):
+            sure.append(lm)
+    people: list[Landmarks] = []
+    for lm in sorted(sure, key=lambda lm: -lm.score):
+        if not people or box_iou(body_box(lm), np.stack([body_box(p) for p in people])).max() <= 0.5:
+            people.append(lm)
+    return people
+
+
+def whole_person(lm: Landmarks, width: int, height: int) -> bool:
+    """Presence :data:`SECOND_CHANCE_PRESENCE` or more, the 33 body landmarks' mean visibility
+    :data:`SECOND_CHANCE_VISIBILITY` or more, and all of them inside the ``width`` x ``height`` picture."""
+    xy = lm.xy[:NUM_BODY_LANDMARKS]
+    inside = bool(((xy >= 0) & (xy <= [width, height])).all())
+    return (lm.score >= SECOND_CHANCE_PRESENCE and inside
+            and float(lm.visibility[:NUM_BODY_LANDMARKS].mean()) >= SECOND_CHANCE_VISIBILITY)
+
+
+def body_box(lm: Landmarks) -> np.ndarray:
+    """(4,) x_min, y_min, x_max, y_max of the 33 body landmarks, pixels."""
+    xy = lm.xy[:NUM_BODY_LANDMARKS]
+    return np.concatenate([xy.min(axis=0), xy.max(axis=0)])
 
 
 def read_image_rgb(path: str | Path) -> np.ndarray:
