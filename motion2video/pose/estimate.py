@@ -46,7 +46,7 @@ MIN_PRESENCE = 0.5
 # meditating cross-legged over a starry background, eyes closed, scored 0.43 (presence 0.999, visibility 0.79), and
 # the tracksuit woman with her face and neck under a black square 0.49 (visibility 0.86). On 130 squares cut from the
 # shared photos beside their person, presence alone took 10 for a person (visibility 0.32-0.71), these tests none
-# (``git show REV:scripts/measure_second_look.py``, docs/results.md "A person the detector misses").
+# (``git show dfbb875:scripts/measure_second_look.py``; docs/results.md, "A person the detector misses").
 SECOND_CHANCE_SCORE = 0.3
 SECOND_CHANCE_PRESENCE = 0.9
 SECOND_CHANCE_VISIBILITY = 0.75
