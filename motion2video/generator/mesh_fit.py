@@ -143,7 +143,8 @@ def render_mesh_track(joints: np.ndarray, *, phenotype: dict, camera, transform:
     moved out of it first (``renderers.collision``): a mocap actor's arms pass where this person's fitted, often
     wider, body is. A pictured person's own pose (a reference, a video's frames) is left as it is. Where two
     surfaces of the body meet in a frame (a forearm held against the waist, a hand beside a thigh), only the front
-    one counts as shown (``renderers.mesh.behind_a_touching_surface``).
+    one counts as shown (``renderers.mesh.behind_a_touching_surface``). Each render is read (visibility, pixels,
+    silhouette) in one worker thread while the next one renders.
 
     Args:
         joints: (N, 17, 3) world joints (one body: a single size is fitted over all frames).

@@ -168,7 +168,9 @@ def reference_person(image: np.ndarray):
 
 def default_generator_threads() -> int:
     """Half the CPU cores, 1 to 4. On the 2-core machines this was built on, two threads were slower than
-    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench.py pipeline``."""
+    one whenever anything else ran (OpenMP threads wait on each other); see ``scripts/bench.py pipeline``. The mesh
+    generator keeps one more core busy with its NumPy work
+    (:func:`~motion2video.stages.mesh_generation.generate_mesh_frames`)."""
     return max(1, min(4, (os.cpu_count() or 1) // 2))
 
 

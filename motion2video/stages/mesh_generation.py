@@ -328,7 +328,8 @@ def generate_mesh_frames(net, image: np.ndarray, video: MeshVideo, rows: np.ndar
     through its soft matte (:func:`motion2video.generator.background.soft_matte` of the generator's alpha), so where
     the reference person stood shows the background, and no background colour is mixed into the person. With a
     pictured face (``video.face``) the photo's face is laid over each generated head, moved as the fitted face moves
-    and faded out as the head turns away (:func:`motion2video.stages.pictured_face.lay_face`).
+    and faded out as the head turns away (:func:`motion2video.stages.pictured_face.lay_face`). The flows of the next
+    batch are read in one worker thread while the network runs on this one.
 
     Args:
         net: a :class:`motion2video.generator.mesh_warp.MeshWarpGenerator`.
