@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,6 @@ import pytest
 import torch
 
 from motion2video.cli import main
-from motion2video.core.errors import InputError
 from motion2video.generator.data import load_or_generate, make_pairs
 from motion2video.generator.mesh_flow import dense_flow, identity_flow, transform_uv
 from motion2video.generator.mesh_warp import MeshWarpConfig, MeshWarpGenerator, mesh_inputs

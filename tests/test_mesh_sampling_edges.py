@@ -160,7 +160,6 @@ def test_the_demo_pictures_hidden_trousers_sample_neither_its_hands_nor_its_back
     import renderers.mesh
     from renderers import anny_model
 
-    from motion2video.generator.checkpoint import load_frame_model
     from motion2video.generator.mesh_warp import mesh_plate, sampled_colours
     from motion2video.stages.mesh_generation import sampled_person
 
