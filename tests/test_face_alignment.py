@@ -82,6 +82,23 @@ def test_crown_offset_is_how_far_the_pictured_head_top_lies_below_the_fitted_one
     assert crown_offset(uv, silhouette, silhouette) is None
 
 
+def test_crown_offset_is_measured_where_the_face_moves_sideways():
+    """A fitted head 20 px beside the pictured one: in its own columns it sees the person's shoulder, 44 px below its
+    crown; in the columns its face moves to (dx) it sees the pictured head top, 4 px below."""
+    from renderers import anny_model
+
+    head = anny_model.head_vertices()
+    uv = np.zeros((len(head), 2))
+    uv[head, 0] = np.linspace(40.0, 60.0, head.sum())  # the fitted head spans columns 40..60
+    silhouette = np.zeros((128, 128), bool)
+    silhouette[30:100, 38:63] = True
+    person = np.zeros((128, 128), bool)
+    person[34:100, 56:85] = True  # the pictured head, 20 px to the right, its top 4 px lower
+    person[74:100, 20:110] = True  # the shoulders
+    assert crown_offset(uv, silhouette, person) == 44.0
+    assert crown_offset(uv, silhouette, person, dx=20.0) == 4.0
+
+
 def test_the_head_stays_where_the_eyes_are_unsure_unseen_or_too_far():
     rest, uv, shown, irises = frontal_picture()
     # BlazePose unsure of one eye

@@ -118,20 +118,50 @@ def face_weights(rest) -> np.ndarray:
     return np.where(anny_model.head_vertices(), face, 0.0)
 
 
-def crown_offset(uv: np.ndarray, silhouette: np.ndarray, person: np.ndarray) -> float | None:
+def crown_offset(uv: np.ndarray, silhouette: np.ndarray, person: np.ndarray, *, dx: float = 0.0) -> float | None:
     """How far (pixels, + down) the pictured person's head top lies below the fitted head's: the median over the
-    middle half of the fitted head's columns of the difference between the first person row and the first
-    silhouette row; None when a column has no person or the head is under 4 columns wide."""
+    middle half of the fitted head's columns of the difference between the first person row ``dx`` pixels to the
+    right (where those columns sample once the face is moved sideways onto the eyes, :func:`eye_shift`) and the first
+    silhouette row; None when a column has no person or the head is under 4 columns wide.
+
+    Without ``dx``, a fitted head an eye distance beside the pictured one measured the person's shoulder and hair
+    in half its columns: on the Mona Lisa the crown was moved 51 px down at 256 where the face moved 6, and the
+    crown and forehead sampled her forehead and eyes (a skin crown, a second pair of eyes above the pasted face)."""
     head = np.asarray(uv)[anny_model.head_vertices()]
     w = silhouette.shape[1]
     lo, hi = np.quantile(head[:, 0], [0.25, 0.75])
     columns = np.arange(max(0, int(np.floor(lo))), min(w, int(np.ceil(hi)) + 1))
+    moved = columns + int(round(dx))
+    keep = (moved >= 0) & (moved < w)
+    columns, moved = columns[keep], moved[keep]
     if len(columns) < 4:
         return None
-    sil, per = np.asarray(silhouette, bool)[:, columns], np.asarray(person, bool)[:, columns]
+    sil, per = np.asarray(silhouette, bool)[:, columns], np.asarray(person, bool)[:, moved]
     if not sil.any(axis=0).all() or not per.any(axis=0).all():
         return None
     return float(np.median(per.argmax(axis=0) - sil.argmax(axis=0)))
+
+
+def eye_shift(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibility: np.ndarray, *,
+              rest) -> np.ndarray | None:
+    """(2,) pixels: the mean offset from the centres of the irises the fitted mesh shows to BlazePose's eyes, the
+    move :func:`align_face` gives the face; None when an eye is not seen surely (:data:`EYE_VISIBILITY`), the mesh
+    shows fewer than :data:`MIN_IRIS_SHOWN` vertices of an iris, or the offset is longer than
+    :data:`MAX_FACE_SHIFT` times the distance between the pictured eyes. Arguments as :func:`align_face`."""
+    eyes = np.asarray(eyes, np.float64)
+    if np.any(np.asarray(eye_visibility) < EYE_VISIBILITY):
+        return None
+    iris = (anny_model.vertex_regions(rest) == anny_model.IRIS) & np.asarray(visible, bool)
+    offsets = []
+    for eye, side in zip(eyes, (rest.vertices[:, 0] > 0, rest.vertices[:, 0] < 0)):  # Anny's left is +x
+        shown = iris & side
+        if shown.sum() < MIN_IRIS_SHOWN:
+            return None
+        offsets.append(eye - np.asarray(uv, np.float64)[shown].mean(axis=0))
+    shift = np.mean(offsets, axis=0)
+    if np.linalg.norm(shift) > MAX_FACE_SHIFT * np.linalg.norm(eyes[0] - eyes[1]):
+        return None
+    return shift
 
 
 def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibility: np.ndarray, *,
@@ -159,18 +189,8 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
         surely (:data:`EYE_VISIBILITY`), the mesh shows fewer than :data:`MIN_IRIS_SHOWN` vertices of an iris, or
         the shift is longer than :data:`MAX_FACE_SHIFT` times the distance between the pictured eyes.
     """
-    eyes = np.asarray(eyes, np.float64)
-    if np.any(np.asarray(eye_visibility) < EYE_VISIBILITY):
-        return uv, None
-    iris = (anny_model.vertex_regions(rest) == anny_model.IRIS) & np.asarray(visible, bool)
-    offsets = []
-    for eye, side in zip(eyes, (rest.vertices[:, 0] > 0, rest.vertices[:, 0] < 0)):  # Anny's left is +x
-        shown = iris & side
-        if shown.sum() < MIN_IRIS_SHOWN:
-            return uv, None
-        offsets.append(eye - uv[shown].mean(axis=0))
-    shift = np.mean(offsets, axis=0)
-    if np.linalg.norm(shift) > MAX_FACE_SHIFT * np.linalg.norm(eyes[0] - eyes[1]):
+    shift = eye_shift(uv, visible, eyes, eye_visibility, rest=rest)
+    if shift is None:
         return uv, None
     per_vertex = head_weights(rest)[:, None] * shift[None]  # (V, 2)
     if crown_dy is not None:  # the crown moves down by the pictured crown's offset, the face by the eyes'
@@ -265,7 +285,8 @@ def reference_sampling(uv: np.ndarray, visible: np.ndarray, silhouette: np.ndarr
     fitted = np.asarray(uv)
     mask = None if person is None else person.segmented()
     if person is not None and align:
-        crown = crown_offset(uv, silhouette, mask)
+        shift = eye_shift(uv, visible, person.eyes, person.eye_visibility, rest=rest)
+        crown = crown_offset(uv, silhouette, mask, dx=0.0 if shift is None else float(shift[0]))
         uv, _ = align_face(uv, visible, person.eyes, person.eye_visibility, rest=rest, crown_dy=crown)
     shown = np.asarray(visible, bool)
     if mask is not None and mask.any() and edge_px is not None:
