@@ -65,14 +65,24 @@ def test_the_face_follows_the_eyes_and_the_crown_the_pictured_head_top():
     assert np.all(w[~head] == 0) and np.all((w >= 0) & (w <= 1))
 
 
-def test_crown_offset_is_how_far_the_pictured_head_top_lies_below_the_fitted_one():
+def fitted_head_columns_40_to_60() -> tuple[np.ndarray, np.ndarray]:
+    """(V, 2) vertex pixels whose head spans columns 40..60, and a (128, 128) fitted silhouette whose top is row 30
+    over columns 38..62."""
     from renderers import anny_model
 
     head = anny_model.head_vertices()
     uv = np.zeros((len(head), 2))
-    uv[head, 0] = np.linspace(40.0, 60.0, head.sum())  # the fitted head spans columns 40..60
+    uv[head, 0] = np.linspace(40.0, 60.0, head.sum())
     silhouette = np.zeros((128, 128), bool)
     silhouette[30:100, 38:63] = True
+    return uv, silhouette
+
+
+def test_crown_offset_is_how_far_the_pictured_head_top_lies_below_the_fitted_one():
+    from renderers import anny_model
+
+    head = anny_model.head_vertices()
+    uv, silhouette = fitted_head_columns_40_to_60()
     person = np.zeros((128, 128), bool)
     person[34:100, 36:65] = True
     assert crown_offset(uv, silhouette, person) == 4.0
@@ -85,13 +95,7 @@ def test_crown_offset_is_how_far_the_pictured_head_top_lies_below_the_fitted_one
 def test_crown_offset_is_measured_where_the_face_moves_sideways():
     """A fitted head 20 px beside the pictured one: in its own columns it sees the person's shoulder, 44 px below its
     crown; in the columns its face moves to (dx) it sees the pictured head top, 4 px below."""
-    from renderers import anny_model
-
-    head = anny_model.head_vertices()
-    uv = np.zeros((len(head), 2))
-    uv[head, 0] = np.linspace(40.0, 60.0, head.sum())  # the fitted head spans columns 40..60
-    silhouette = np.zeros((128, 128), bool)
-    silhouette[30:100, 38:63] = True
+    uv, silhouette = fitted_head_columns_40_to_60()
     person = np.zeros((128, 128), bool)
     person[34:100, 56:85] = True  # the pictured head, 20 px to the right, its top 4 px lower
     person[74:100, 20:110] = True  # the shoulders
