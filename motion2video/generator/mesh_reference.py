@@ -192,6 +192,13 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
     shift = eye_shift(uv, visible, eyes, eye_visibility, rest=rest)
     if shift is None:
         return uv, None
+    return move_face(uv, shift, rest=rest, crown_dy=crown_dy), shift
+
+
+def move_face(uv: np.ndarray, shift: np.ndarray, *, rest, crown_dy: float | None = None) -> np.ndarray:
+    """(V, 2) ``uv`` with the face moved by ``shift`` (2,) (:func:`eye_shift`), the crown by ``crown_dy`` (with the
+    shift's sideways part) blended over the forehead, the neck following part of the way: :func:`align_face`'s
+    move, for a caller that has the shift already."""
     per_vertex = head_weights(rest)[:, None] * shift[None]  # (V, 2)
     if crown_dy is not None:  # the crown moves down by the pictured crown's offset, the face by the eyes'
         face = face_weights(rest)[:, None]
@@ -199,7 +206,7 @@ def align_face(uv: np.ndarray, visible: np.ndarray, eyes: np.ndarray, eye_visibi
         head = anny_model.head_vertices()[:, None]
         per_vertex = np.where(head, face * shift[None] + (1.0 - face) * crown[None], per_vertex)
     moved = np.asarray(uv, np.float64) + per_vertex
-    return moved.astype(np.asarray(uv).dtype), shift
+    return moved.astype(np.asarray(uv).dtype)
 
 
 # grazing_where_touching: a fitted vertex whose surface the picture shows at a grazing angle (facing() below this)
@@ -286,8 +293,8 @@ def reference_sampling(uv: np.ndarray, visible: np.ndarray, silhouette: np.ndarr
     mask = None if person is None else person.segmented()
     if person is not None and align:
         shift = eye_shift(uv, visible, person.eyes, person.eye_visibility, rest=rest)
-        crown = crown_offset(uv, silhouette, mask, dx=0.0 if shift is None else float(shift[0]))
-        uv, _ = align_face(uv, visible, person.eyes, person.eye_visibility, rest=rest, crown_dy=crown)
+        if shift is not None:  # align_face's move, with the crown measured where the face moves
+            uv = move_face(uv, shift, rest=rest, crown_dy=crown_offset(uv, silhouette, mask, dx=float(shift[0])))
     shown = np.asarray(visible, bool)
     if mask is not None and mask.any() and edge_px is not None:
         shown = shown & on_person(uv, mask, edge_px=edge_px)
