@@ -371,16 +371,23 @@ def gaussian_heatmaps(joints_2d: np.ndarray, size: tuple[int, int], sigma: float
     Returns:
         (J, H, W) float32 in [0, 1].
     """
+    gx, gy = gaussian_profiles(joints_2d, size, sigma)
+    return (gy.astype(np.float32)[:, :, None] * gx.astype(np.float32)[:, None, :])  # (J, H, W)
+
+
+def gaussian_profiles(joints_2d: np.ndarray, size: tuple[int, int], sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """The 1-D factors of :func:`gaussian_heatmaps`: ``gx`` (..., J, W) over the pixel centres of a row and ``gy``
+    (..., J, H) over those of a column, float64, ``gy`` zero for a joint that is not finite. ``joints_2d`` (..., J, 2)
+    pixels; ``size`` (width, height)."""
     width, height = int(size[0]), int(size[1])
     pts = np.asarray(joints_2d, np.float64)
-    ok = np.all(np.isfinite(pts), axis=-1)  # (J,)
-    pts = np.where(ok[:, None], pts, 0.0)
+    ok = np.all(np.isfinite(pts), axis=-1)  # (..., J)
+    pts = np.where(ok[..., None], pts, 0.0)
     xs = np.arange(width, dtype=np.float64) + 0.5  # (W,) pixel centres
     ys = np.arange(height, dtype=np.float64) + 0.5  # (H,)
-    gx = np.exp(-((xs[None, :] - pts[:, :1]) ** 2) / (2.0 * sigma**2))  # (J, W)
-    gy = np.exp(-((ys[None, :] - pts[:, 1:]) ** 2) / (2.0 * sigma**2))  # (J, H)
-    gy *= ok[:, None]
-    return (gy.astype(np.float32)[:, :, None] * gx.astype(np.float32)[:, None, :])  # (J, H, W)
+    gx = np.exp(-((xs - pts[..., :1]) ** 2) / (2.0 * sigma**2))  # (..., J, W)
+    gy = np.exp(-((ys - pts[..., 1:]) ** 2) / (2.0 * sigma**2))  # (..., J, H)
+    return gx, gy * ok[..., None]
 
 
 def colourise_heatmaps(heatmaps: np.ndarray) -> np.ndarray:

@@ -112,7 +112,7 @@ def pooled_body_structures(points: np.ndarray, size: int, factor: int) -> np.nda
     Returns:
         (B, 33, size // factor, size // factor) float32 in [0, 1].
     """
-    from renderers.skeleton import render_limb_maps
+    from renderers.skeleton import gaussian_profiles, render_limb_maps
 
     if factor == 1:
         return body_structures(points, size)
@@ -122,12 +122,7 @@ def pooled_body_structures(points: np.ndarray, size: int, factor: int) -> np.nda
     if size % factor:
         raise ValueError(f"size {size} is not a multiple of the block side {factor}")
     small = size // factor
-    sigma = heatmap_sigma(size)
-    ok = np.isfinite(points).all(axis=-1)  # (B, 17)
-    pts = np.where(ok[..., None], points, 0.0)
-    centres = np.arange(size, dtype=np.float64) + 0.5  # (size,)
-    gx = np.exp(-((centres - pts[..., :1]) ** 2) / (2.0 * sigma ** 2))  # (B, 17, size)
-    gy = np.exp(-((centres - pts[..., 1:]) ** 2) / (2.0 * sigma ** 2)) * ok[..., None]
+    gx, gy = gaussian_profiles(points, (size, size), heatmap_sigma(size))  # (B, 17, size) each
     gx = gx.reshape(*gx.shape[:2], small, factor).mean(axis=-1).astype(np.float32)  # (B, 17, small)
     gy = gy.reshape(*gy.shape[:2], small, factor).mean(axis=-1).astype(np.float32)
     heat = gy[..., :, None] * gx[..., None, :]  # (B, 17, small, small)
