@@ -17,7 +17,6 @@ import numpy as np
 # the picture's width): a segmentation's outline runs through pixels mixed with the person (hair, a blurred edge),
 # which the inpainting would otherwise spread inward as a halo of the person's colour.
 BACKGROUND_GROW_PX = 3.0
-INPAINT_RADIUS_PX = 5  # OpenCV's neighbourhood radius for each filled pixel
 # The matte's Gaussian feather (standard deviation), pixels of the matte: it smooths the stair of pixels along the
 # outline. The generator's alpha is already soft over a few pixels (its network works at a quarter of the
 # resolution); a feather of 1.5 px at 256 on top of it drew a blurred halo of the person around her outline on
@@ -133,16 +132,14 @@ def off_line_spread(points: np.ndarray) -> float:
 
 
 def inpaint_background(image: np.ndarray, person: np.ndarray, *, grow_px: float | None = None) -> np.ndarray:
-    """The picture with its person removed: :func:`person_hole` filled by OpenCV's Navier-Stokes inpainting.
+    """The picture with its person removed: :func:`person_hole` filled from the picture's own patches
+    (:func:`motion2video.generator.inpaint.patch_inpaint`).
 
-    Why Navier-Stokes (``cv2.INPAINT_NS``): the four classical inpaintings OpenCV offers were measured on
-    ``woman_blue_tracksuit.jpg`` at 512 px, filling her own silhouette moved 90 px sideways onto the background (the
-    moved region minus her grown silhouette, whose truth is known) with her silhouette removed too: onto the flat
-    wall NS 38.3 dB PSNR, Telea 32.1, contrib's ``xphoto`` frequency-selective reconstruction (FSR_FAST) 20.1,
-    shift-map 8.5; onto the door, which no method can know behind her, NS 14.3, FSR_FAST 14.2, Telea 14.0,
-    shift-map 7.3. NS took 0.2-0.3 s, Telea 0.1-0.3 s, FSR_FAST 9-14 s and shift-map 18-22 s. NS continues the
-    wall's shading and the door's edges into the hole; FSR_FAST left dark streaked blotches there and shift-map
-    covered the door with the wall. Both contrib methods are also too slow to run for every reference.
+    Why patches: a diffusing inpainting (OpenCV's Navier-Stokes) continues the hole's border inward, which is right
+    for a flat wall but, over a hole the size of a person, drew what touches it into a smear of the person's shape:
+    the skier's ski bindings into a dark bell at her feet, a cast shadow into a dark blob, asphalt and grass into a
+    grey blur where a man lunged. Patches carry the snow, the asphalt's grain and the shadow's edge into the hole
+    (docs/results.md, "The background behind the person", with the measurements).
 
     Args:
         image: (H, W, 3) uint8 RGB; person: (H, W) bool or probability, the person (> 0.5).
@@ -150,7 +147,7 @@ def inpaint_background(image: np.ndarray, person: np.ndarray, *, grow_px: float 
     Returns:
         (H, W, 3) uint8, equal to ``image`` outside the hole (an image with no person comes back unchanged).
     """
-    import cv2
+    from motion2video.generator.inpaint import patch_inpaint
 
     hole = person_hole(person, grow_px=grow_px)
     image = np.ascontiguousarray(image, np.uint8)
@@ -158,7 +155,7 @@ def inpaint_background(image: np.ndarray, person: np.ndarray, *, grow_px: float 
         return image.copy()
     if hole.all():  # nothing to fill from: the image's mean colour
         return np.broadcast_to(image.reshape(-1, 3).mean(0).round().astype(np.uint8), image.shape).copy()
-    return cv2.inpaint(image, hole.astype(np.uint8), INPAINT_RADIUS_PX, cv2.INPAINT_NS)
+    return patch_inpaint(image, hole)
 
 
 def soft_matte(alpha: np.ndarray, *, feather_px: float | None = None) -> np.ndarray:
