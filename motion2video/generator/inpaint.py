@@ -5,14 +5,16 @@ level of an image pyramid, every patch that overlaps the hole is matched to its 
 (PatchMatch's propagation and random search, Barnes et al. 2009), then each hole pixel becomes the mean of what the
 matched patches put there, weighted by how well each matched; matching and voting alternate a few times. The
 coarsest level starts from OpenCV's Navier-Stokes inpainting; each finer level starts from the coarser matches. At
-the end each hole pixel is the centre pixel of its own patch's match, which keeps the picture's grain.
+the end each hole pixel is the centre pixel of its own patch's match, which keeps the picture's grain, and where the
+fill's slow shading and the diffusion's agree within a few levels the diffusion's is taken (:func:`diffused_shading`).
 
 Why this and not only OpenCV: its classical inpaintings (Navier-Stokes, Telea) diffuse the colours of the hole's
 border inward, which is right for a flat wall but draws the dark things that touch a large hole (a ski binding at a
 boot, the shadow under an arm) into a grey smear shaped like the person, and fills asphalt, snow or foliage with a
-smooth blur; the patch-based inpaintings of ``cv2.xphoto`` (shift-map, frequency-selective reconstruction) took 9-40 s
-a picture here and left streaks (docs/results.md, "The background behind the person"). No well-kept Python library
-offers PatchMatch completion; the few packages that wrap one build C++ at install.
+smooth blur; the patch-based inpaintings of ``cv2.xphoto`` (frequency-selective reconstruction, shift-map) took 2-15 and
+6-42 s a picture at 256-400 px here, left streaks or copied whole regions over the hole (docs/results.md, "The
+background behind the person"; docs/experiments.md). No well-kept Python library offers PatchMatch completion; the few
+packages that wrap one build C++ at install.
 
 Patches are compared in a reduced space: the first :attr:`PatchSettings.dims` principal components of the known
 patches of each level (7 x 7 x 3 = 147 numbers down to 16), which keeps every comparison a short vector difference.
