@@ -106,7 +106,8 @@ def nearest_patches(features: np.ndarray, targets: np.ndarray, sources: np.ndarr
     ty, tx = np.divmod(targets, w)
     own = features[targets]
     match = nearest[targets]
-    best = np.einsum("nd,nd->n", own - features[match], own - features[match])
+    diff = own - features[match]
+    best = np.einsum("nd,nd->n", diff, diff)
 
     def consider(candidate: np.ndarray, ok: np.ndarray) -> None:
         idx = np.flatnonzero(ok)
@@ -235,7 +236,7 @@ def patch_inpaint(image: np.ndarray, hole: np.ndarray, *, settings: PatchSetting
         fill.reshape(-1, 3)[inside] = picture.reshape(-1, 3)[nearest[inside]]
     if settings.shading_tolerance > 0:
         diffused = cv2.inpaint(image, hole.astype(np.uint8), 5, cv2.INPAINT_NS)
-        fill = diffused_shading(np.where(hole[..., None], fill, image), diffused, settings)
+        fill = diffused_shading(fill, diffused, settings)  # fill is the picture itself outside the hole
     return np.where(hole[..., None], np.clip(np.rint(fill), 0, 255), image).astype(np.uint8)
 
 
