@@ -11,8 +11,8 @@ fill's slow shading and the diffusion's agree within a few levels the diffusion'
 Why this and not only OpenCV: its classical inpaintings (Navier-Stokes, Telea) diffuse the colours of the hole's
 border inward, which is right for a flat wall but draws the dark things that touch a large hole (a ski binding at a
 boot, the shadow under an arm) into a grey smear shaped like the person, and fills asphalt, snow or foliage with a
-smooth blur; the patch-based inpaintings of ``cv2.xphoto`` (frequency-selective reconstruction, shift-map) took 2-15 and
-6-42 s a picture at 256-400 px here, left streaks or copied whole regions over the hole (docs/results.md, "The
+smooth blur; the patch-based inpaintings of ``cv2.xphoto`` (frequency-selective reconstruction, shift-map), a little
+slower than these patches at 256 px, left dark streaks or copied whole regions over the hole (docs/results.md, "The
 background behind the person"; docs/experiments.md). No well-kept Python library offers PatchMatch completion; the few
 packages that wrap one build C++ at install.
 
