@@ -223,7 +223,7 @@ def with_mesh(pairs: FramePairs, frames: VideoFrames) -> FramePairs:
     return replace(pairs, head_mattes=np.repeat(mattes[None], n, axis=0), head_affines=head.affines,
                    head_weights=head.weights, head_shown=head.shown,
                    head_landmarks=np.repeat(landmarks_in_reference(face)[None], n, axis=0),
-                   head_triangles=np.repeat(landmark_triangles()[None], n, axis=0))
+                   head_triangles=np.repeat(landmark_triangles()[None], n, axis=0), head_offsets=head.offsets)
 
 
 def head_box_masks(points: np.ndarray, size: int) -> np.ndarray:

@@ -162,7 +162,8 @@ class FramePairs:
             each target takes; head_shown: (B, L) bool the target shows each of its landmarks
             (:class:`generator.head_paste.HeadMoves`).
         head_landmarks: (B, L, 2) the face's landmarks in the reference's pixels; head_triangles: (B, T, 3) int their
-            triangles (:func:`generator.head_paste.shown_face`).
+            triangles (:func:`generator.head_paste.shown_face`); head_offsets: (B, L, 2) each landmark's offset in
+            the target from where the affine map puts it (:class:`generator.head_paste.FaceBend`).
     """
 
     ref_images: np.ndarray
@@ -183,6 +184,7 @@ class FramePairs:
     head_shown: np.ndarray | None = None
     head_landmarks: np.ndarray | None = None
     head_triangles: np.ndarray | None = None
+    head_offsets: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ref_images.shape[0])

@@ -6,8 +6,10 @@ photo shows does not survive it. So the face is taken from the photo itself and 
 1. **Where it goes.** The face's landmarks have points on the body mesh's head (the face mesh's correspondence
    with Anny); the least-squares 2D affine map of those points from the reference mesh onto a target's posed mesh
    (:func:`head_affine`: in-plane turn, scale, translation, and the foreshortening of a small nod or turn) moves
-   the face.
-2. **Whether it fits.** A face seen from another side is not an affine image of the pictured one. The head's turn
+   the face, and the face bends as the head's turn changes its shape (:class:`FaceBend`: the face's points lie at
+   different depths, so a turned head's nose moves farther than its ears; each landmark's offset from its affine
+   place is what the head's rest points show when seen the pictured way and the target's way).
+2. **Whether it fits.** A face seen from far to the side is not an image of the pictured one. The head's turn
    out of the picture plane between the photo and the target (the angle between the directions the camera looks
    along in the head's own axes, :func:`view_direction`: in the photo from the face's landmarks, in the target from
    the posed head's vertices) and the share of the landmarks' surface points the target still shows (an arm in
@@ -35,10 +37,12 @@ from motion2video.generator.background import disc
 # paste_weight: the face is laid over fully up to TURN_FULL_DEG of turn out of the picture plane, not at all from
 # TURN_NONE_DEG on, linear between. Photos of people facing the camera, driven by a walk towards it, measured 18-20
 # degrees (woman_blue_tracksuit.jpg, fashion_woman_shorts.png: the photo's camera looks down on the face a little
-# more than the placement's); the three-quarter face of fashion_man_red_jacket.png 22-26 degrees, where the affine
-# map stretches the far cheek visibly but the face stays his; a profile 85.
-TURN_FULL_DEG = 25.0
-TURN_NONE_DEG = 45.0
+# more than the placement's); the three-quarter face of fashion_man_red_jacket.png 22-26 degrees; a profile 85. A
+# sampled walk swings the shoulders, and the head with them, by up to 40 degrees every stride: bent to the turn
+# (FaceBend), the pictured face is still a face there, where the generator's own head is a mosaic, and a ramp that
+# ended at 45 degrees faded the face out and in again every half stride.
+TURN_FULL_DEG = 35.0
+TURN_NONE_DEG = 55.0
 # paste_weight: the share of the face landmarks' surface points that the target shows (all three vertices of each):
 # at or above SHOWN_FULL the face is laid over fully, at or below SHOWN_NONE not at all. On woman_blue_tracksuit.jpg
 # driven by the demo walk: 0.97-0.98 of them facing the camera, 0.53 turned by 90 degrees (where the turn alone
@@ -83,15 +87,19 @@ def head_affine(ref_uv: np.ndarray, tgt_uv: np.ndarray) -> np.ndarray | None:
     return solution.T  # (2, 3)
 
 
-def view_direction(points3d: np.ndarray, uv: np.ndarray) -> np.ndarray:
-    """(3,) unit vector: the direction the camera looks along, in the axes of ``points3d`` (P, 3) (a rigid head at
-    rest), from their pictured pixels ``uv`` (P, 2): the affine camera fitted by least squares, its two rows made
-    orthonormal, their cross product (image y down, so it points from the camera into the scene)."""
+def affine_camera(points3d: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """(2, 3) the affine camera taking ``points3d`` (P, 3) (a rigid head at rest) to their pictured pixels ``uv``
+    (P, 2), both about their means, fitted by least squares."""
     p = np.asarray(points3d, np.float64)
     q = np.asarray(uv, np.float64)
-    p, q = p - p.mean(axis=0), q - q.mean(axis=0)
-    camera = np.linalg.lstsq(p, q, rcond=None)[0].T  # (2, 3)
-    u, _, vt = np.linalg.svd(camera, full_matrices=False)
+    return np.linalg.lstsq(p - p.mean(axis=0), q - q.mean(axis=0), rcond=None)[0].T
+
+
+def view_direction(points3d: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """(3,) unit vector: the direction the camera looks along, in the axes of ``points3d`` (P, 3) (a rigid head at
+    rest), from their pictured pixels ``uv`` (P, 2): the affine camera (:func:`affine_camera`), its two rows made
+    orthonormal, their cross product (image y down, so it points from the camera into the scene)."""
+    u, _, vt = np.linalg.svd(affine_camera(points3d, uv), full_matrices=False)
     rows = u @ vt  # nearest orthonormal rows
     d = np.cross(rows[0], rows[1])
     return d / np.linalg.norm(d)
@@ -122,7 +130,7 @@ def pixel_index_affine(affine: np.ndarray) -> np.ndarray:
 
 
 def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine: np.ndarray,
-               weight: float, *, within: np.ndarray | None = None) -> np.ndarray:
+               weight: float, *, within: np.ndarray | None = None, bend: FaceBend | None = None) -> np.ndarray:
     """The frame with the source face laid over it.
 
     The source is first shrunk by area averaging to the map's scale when the map shrinks it (a photo at several
@@ -139,6 +147,8 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
         within: (H, W) float in [0, 1] where the face may be laid, or None: the generated person's matte (a face from
             a three-quarter view, spread over a frontal head, reaches past its outline) times the part of the face
             the target shows (:func:`shown_face`).
+        bend: the face's own shape change on top of ``affine`` (:class:`FaceBend`: a turned head's near cheek
+            widens and its far cheek narrows, its nose moves farther than its ears), or None: ``affine`` alone.
     Returns:
         (H, W, 3) uint8, equal to ``frame`` wherever the warped matte times ``weight`` is 0.
     """
@@ -179,8 +189,18 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
     box = affine.copy()
     box[:, 2] -= [x0, y0]
     size = (int(x1 - x0), int(y1 - y0))
-    face = cv2.warpAffine(source, box, size, flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
-    alpha = cv2.warpAffine(matte, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    if bend is None:
+        face = cv2.warpAffine(source, box, size, flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+        alpha = cv2.warpAffine(matte, box, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                               borderValue=0.0)
+    else:  # each box pixel looks up the source where the affine map's inverse takes it, less the bend there
+        grid = np.stack(np.meshgrid(np.arange(size[0], dtype=np.float64), np.arange(size[1], dtype=np.float64)), -1)
+        moved = grid - bend_field(bend, (int(x0), int(y0), int(x1), int(y1)))
+        back = cv2.invertAffineTransform(box)
+        maps = (moved @ back[:, :2].T + back[:, 2]).astype(np.float32)
+        face = cv2.remap(source, maps[..., 0], maps[..., 1], cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+        alpha = cv2.remap(matte, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                          borderValue=0.0)
     if within is not None:
         alpha = alpha * np.asarray(within, np.float32)[y0:y1, x0:x1]
     alpha = np.clip(alpha * float(weight), 0.0, 1.0)[..., None]
@@ -188,6 +208,53 @@ def paste_head(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine:
     mixed = alpha * face.astype(np.float32) + (1.0 - alpha) * under
     out[y0:y1, x0:x1] = np.clip(np.rint(mixed), 0, 255).astype(np.uint8)
     return out
+
+
+@dataclass(frozen=True)
+class FaceBend:
+    """How a moved face departs from its affine move: each landmark's offset from where the affine map puts it.
+
+    The head's affine move (:func:`head_affine`) is its turn, scale and place; a head turned out of the picture plane
+    also changes the face's shape, as its points lie at different depths: the nose moves farther than the ears, the
+    near cheek widens and the far one narrows. The offsets, spread between the landmarks, bend the pasted face to
+    that shape (a piecewise-affine warp over the landmarks, :func:`bend_field`).
+
+    Attributes:
+        points: (L, 2) the landmarks where the target has them, frame pixels (the affine map's place plus
+            ``offsets``).
+        offsets: (L, 2) each landmark's offset from the affine map's place, pixels.
+    """
+
+    points: np.ndarray
+    offsets: np.ndarray
+
+
+def bend_field(bend: FaceBend, box: tuple[int, int, int, int]) -> np.ndarray:
+    """(y1 - y0, x1 - x0, 2) float64: the bend at each pixel centre of the frame's box (x0, y0, x1, y1).
+
+    Inside the landmarks' hull it is the offsets interpolated linearly over the Delaunay triangles of the landmarks'
+    places (SciPy's ``LinearNDInterpolator``: the triangles never overlap, even where a turned face folds its far
+    cheek over, and each pixel's centre is found in the triangle that holds it); outside the hull it is the bend of
+    the nearest pixel inside (the matte's feather reaches a little past it), and zero when the hull misses the box.
+    """
+    from scipy.interpolate import LinearNDInterpolator
+
+    x0, y0, x1, y1 = box
+    h, w = y1 - y0, x1 - x0
+    centres = np.stack(np.meshgrid(np.arange(x0, x1) + 0.5, np.arange(y0, y1) + 0.5), axis=-1).reshape(-1, 2)
+    field = LinearNDInterpolator(np.asarray(bend.points, np.float64),
+                                 np.asarray(bend.offsets, np.float64))(centres).reshape(h, w, 2)
+    inside = np.isfinite(field[..., 0])
+    if not inside.any():
+        return np.zeros((h, w, 2))
+    if not inside.all():  # each pixel outside takes the bend of the nearest pixel inside
+        _, nearest = cv2.distanceTransformWithLabels((~inside).astype(np.uint8), cv2.DIST_L2, 5,
+                                                     labelType=cv2.DIST_LABEL_PIXEL)
+        ys, xs = np.nonzero(inside)
+        by_label = np.zeros((nearest.max() + 1, 2))
+        by_label[nearest[ys, xs]] = field[ys, xs]
+        field = by_label[nearest]
+    return field
 
 
 def head_squares(points: np.ndarray, size: int, *, scale: float, min_side: float) -> np.ndarray:
@@ -260,11 +327,14 @@ class HeadMoves:
         affines: (N, 2, 3) reference pixels -> target pixels, the head's move (the identity where none fits).
         weights: (N,) in [0, 1] how much of the face each target takes (0 where no map fits).
         shown: (N, L) bool: the target shows the surface point of each of the face's L landmarks.
+        offsets: (N, L, 2) each landmark's offset in the target from where the affine map puts it, pixels: the
+            face's shape change (:class:`FaceBend`); zero where no map fits.
     """
 
     affines: np.ndarray
     weights: np.ndarray
     shown: np.ndarray
+    offsets: np.ndarray
 
 
 def face_triangles(points: np.ndarray) -> np.ndarray:
@@ -326,7 +396,10 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
     landmarks onto the mesh's stretched her 10 px face to 15 and raised its brow 5 px). How far the target's head is
     turned from the pictured face (:func:`view_direction`, both against the same head at rest) and how many of the
     landmarks' surface points the target shows give the weight (:func:`paste_weight`); which of them it shows says
-    where the face may be laid (:func:`shown_face`).
+    where the face may be laid (:func:`shown_face`). The face's bend (:class:`FaceBend`) is what no affine map takes
+    of the change from the pictured view to the target's: the face's points at rest seen through the affine camera
+    of the pictured landmarks and through that of the target's head (:func:`affine_camera`), so it is the turn's
+    alone, whatever the fitted head's own place in the reference.
 
     Args:
         face_xy: (L, 2) the face's landmarks in the reference picture's pixels (the pictured view of the head).
@@ -343,8 +416,11 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
     face_weights = np.asarray(face_weights, np.float64)
     pictured = view_direction(face_points, face_xy)
     on_ref = np.einsum("lkd,lk->ld", np.asarray(ref_uv, np.float64)[face_vertices], face_weights)  # (L, 2)
+    face_at_rest = np.asarray(face_points, np.float64) - np.mean(face_points, axis=0)
+    as_pictured = face_at_rest @ affine_camera(face_points, face_xy).T  # (L, 2) the face's points seen as pictured
     n = len(tgt_uv)
     affines = np.repeat(np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]), n, axis=0)
+    offsets = np.zeros((n, len(face_xy), 2))
     weights = np.zeros(n)
     landmark_shown = np.zeros((n, len(face_xy)), bool)
     for i in range(n):
@@ -354,8 +430,12 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
         if affine is None:
             continue
         affines[i] = affine
+        as_seen = face_at_rest @ affine_camera(head_points, uv[head_vertices]).T  # ... seen as the target sees them
+        shape = head_affine(as_pictured, as_seen)
+        if shape is not None:
+            offsets[i] = as_seen - (as_pictured @ shape[:, :2].T + shape[:, 2])
         turn = float(np.degrees(np.arccos(np.clip(pictured @ view_direction(head_points, uv[head_vertices]),
                                                   -1.0, 1.0))))
         landmark_shown[i] = np.asarray(tgt_visible[i], bool)[face_vertices].all(axis=1)
         weights[i] = paste_weight(turn, float(np.mean(landmark_shown[i])))
-    return HeadMoves(affines, weights, landmark_shown)
+    return HeadMoves(affines, weights, landmark_shown, offsets)

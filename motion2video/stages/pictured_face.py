@@ -18,7 +18,8 @@ import numpy as np
 from motion2video.core.camera import affine_matrix
 from motion2video.core.skeletons import HEAD, NECK, THORAX
 from motion2video.generator.head_paste import (
-    HeadMoves, compose_affine, face_matte, face_triangles, head_moves, paste_head, pixel_index_affine, shown_face,
+    FaceBend, HeadMoves, compose_affine, face_matte, face_triangles, head_moves, paste_head, pixel_index_affine,
+    shown_face,
 )
 
 # The square searched for the face: centred between the nose and head joints, this many times the thorax-to-head
@@ -159,11 +160,12 @@ def lay_face(frame: np.ndarray, face: PicturedFace, head: HeadMoves, row: int, *
         within: (H, W) float in [0, 1] the generated person's matte, or None.
     """
     move = head.affines[row] if affine is None else np.asarray(affine, np.float64)
-    where = landmarks_in_reference(face) @ move[:, :2].T + move[:, 2]
+    where = landmarks_in_reference(face) @ move[:, :2].T + move[:, 2] + head.offsets[row]
     shown = shown_face(where, landmark_triangles(), head.shown[row], frame.shape[:2])
     within = shown if within is None else shown * np.asarray(within, np.float32)
     return paste_head(frame, face.image, face.matte, compose_affine(move, face.to_reference),
-                      float(head.weights[row]), within=within)
+                      float(head.weights[row]), within=within,
+                      bend=FaceBend(where, head.offsets[row]))
 
 
 def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, rest
