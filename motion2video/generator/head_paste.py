@@ -361,19 +361,36 @@ def signed_areas(xy: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
+def lone_hidden(shown: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(L,) bool: the landmarks ``shown`` (L,) bool says are hidden whose every neighbour in ``triangles`` (T, 3) is
+    shown. What hides part of a face (a hand, the far cheek of a turn) hides landmarks side by side; one hidden among
+    shown ones is the render's depth test, steep across a pixel on a small head (1-5 of a face's 468 in each frame
+    of a sampled walk), and cutting its triangles out punched a hole in the face."""
+    shown = np.asarray(shown, bool)
+    tri = np.asarray(triangles, np.int64)
+    hidden_beside = np.zeros(len(shown), bool)  # a landmark with a hidden neighbour in one of its triangles
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        np.logical_or.at(hidden_beside, tri[:, a], ~shown[tri[:, b]])
+        np.logical_or.at(hidden_beside, tri[:, b], ~shown[tri[:, a]])
+    in_triangles = np.zeros(len(shown), bool)
+    in_triangles[tri.ravel()] = True
+    return ~shown & ~hidden_beside & in_triangles
+
+
 def shown_face(points: np.ndarray, triangles: np.ndarray, shown: np.ndarray, shape: tuple[int, int]
                ) -> np.ndarray:
     """(H, W) float32 in [0, 1]: the part of a moved face a target shows. The face's triangles (:func:`face_triangles`)
     at its landmarks ``points`` (L, 2) in the target's pixels are drawn where the target shows their three landmarks
-    (``shown`` (L,) bool: not behind a hand or an arm, not on the far side of a turned head) and they face the way
-    most of them face (a triangle folded over in the picture is the far cheek of a three-quarter face); the rest is
-    left to the generator. The edges the hidden triangles leave are feathered by :data:`MATTE_FEATHER` of the face's
-    size."""
+    (``shown`` (L,) bool: not behind a hand or an arm, not on the far side of a turned head; a lone hidden landmark
+    counts as shown, :func:`lone_hidden`) and they face the way most of them face (a triangle folded over in the
+    picture is the far cheek of a three-quarter face); the rest is left to the generator. The edges the hidden
+    triangles leave are feathered by :data:`MATTE_FEATHER` of the face's size."""
     pts = np.asarray(points, np.float64)
     triangles = np.asarray(triangles, np.int64)
     area = signed_areas(pts, triangles)
     front = 1.0 if np.sum(area > 0) >= np.sum(area < 0) else -1.0
-    drawn = np.asarray(shown, bool)[triangles].all(axis=1) & (area * front > 1e-6)
+    shown = np.asarray(shown, bool) | lone_hidden(shown, triangles)
+    drawn = shown[triangles].all(axis=1) & (area * front > 1e-6)
     if drawn.all():
         return np.ones(shape, np.float32)  # nothing hidden: the matte alone outlines the face
     cover = np.zeros(shape, np.float32)
