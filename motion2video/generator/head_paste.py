@@ -97,9 +97,14 @@ def affine_camera(points3d: np.ndarray, uv: np.ndarray) -> np.ndarray:
 
 def view_direction(points3d: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """(3,) unit vector: the direction the camera looks along, in the axes of ``points3d`` (P, 3) (a rigid head at
-    rest), from their pictured pixels ``uv`` (P, 2): the affine camera (:func:`affine_camera`), its two rows made
-    orthonormal, their cross product (image y down, so it points from the camera into the scene)."""
-    u, _, vt = np.linalg.svd(affine_camera(points3d, uv), full_matrices=False)
+    rest), from their pictured pixels ``uv`` (P, 2): :func:`camera_direction` of their :func:`affine_camera`."""
+    return camera_direction(affine_camera(points3d, uv))
+
+
+def camera_direction(camera: np.ndarray) -> np.ndarray:
+    """(3,) unit vector: the direction an affine ``camera`` (2, 3) looks along, its two rows made orthonormal, their
+    cross product (image y down, so it points from the camera into the scene)."""
+    u, _, vt = np.linalg.svd(camera, full_matrices=False)
     rows = u @ vt  # nearest orthonormal rows
     d = np.cross(rows[0], rows[1])
     return d / np.linalg.norm(d)
@@ -255,6 +260,21 @@ def bend_field(bend: FaceBend, box: tuple[int, int, int, int]) -> np.ndarray:
         by_label[nearest[ys, xs]] = field[ys, xs]
         field = by_label[nearest]
     return field
+
+
+def lay_moved_face(frame: np.ndarray, source: np.ndarray, matte: np.ndarray, affine: np.ndarray, moved: np.ndarray,
+                   offsets: np.ndarray, triangles: np.ndarray, shown: np.ndarray, weight: float, *,
+                   within: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, 3) uint8 ``frame`` with a face laid over the part of it the target shows: ``source`` (h, w, 3) and its
+    ``matte`` moved by ``affine`` (2, 3) (source pixels -> frame pixels) and bent by ``offsets`` (L, 2)
+    (:class:`FaceBend`), cut to the triangles (:func:`shown_face`, ``triangles`` (T, 3), ``shown`` (L,) bool) of its
+    landmarks, ``moved`` (L, 2) where ``affine`` puts them in the frame, bent, and to ``within`` (H, W) float in
+    [0, 1] (the generated person's matte) or None (:func:`paste_head` with ``weight``). The one way ``synthesize``
+    and the reconstruction protocol lay the pictured face."""
+    where = np.asarray(moved, np.float64) + offsets
+    cover = shown_face(where, triangles, shown, frame.shape[:2])
+    within = cover if within is None else cover * np.asarray(within, np.float32)
+    return paste_head(frame, source, matte, affine, weight, within=within, bend=FaceBend(where, offsets))
 
 
 def head_squares(points: np.ndarray, size: int, *, scale: float, min_side: float) -> np.ndarray:
@@ -431,10 +451,11 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
     face_xy = np.asarray(face_xy, np.float64)
     face_vertices = np.asarray(face_vertices, np.int64)
     face_weights = np.asarray(face_weights, np.float64)
-    pictured = view_direction(face_points, face_xy)
+    pictured_camera = affine_camera(face_points, face_xy)
+    pictured = camera_direction(pictured_camera)
     on_ref = np.einsum("lkd,lk->ld", np.asarray(ref_uv, np.float64)[face_vertices], face_weights)  # (L, 2)
     face_at_rest = np.asarray(face_points, np.float64) - np.mean(face_points, axis=0)
-    as_pictured = face_at_rest @ affine_camera(face_points, face_xy).T  # (L, 2) the face's points seen as pictured
+    as_pictured = face_at_rest @ pictured_camera.T  # (L, 2) the face's points seen as pictured
     n = len(tgt_uv)
     affines = np.repeat(np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]), n, axis=0)
     offsets = np.zeros((n, len(face_xy), 2))
@@ -447,12 +468,12 @@ def head_moves(face_xy: np.ndarray, face_points: np.ndarray, face_vertices: np.n
         if affine is None:
             continue
         affines[i] = affine
-        as_seen = face_at_rest @ affine_camera(head_points, uv[head_vertices]).T  # ... seen as the target sees them
+        camera = affine_camera(head_points, uv[head_vertices])
+        as_seen = face_at_rest @ camera.T  # ... and seen as the target sees them
         shape = head_affine(as_pictured, as_seen)
         if shape is not None:
             offsets[i] = as_seen - (as_pictured @ shape[:, :2].T + shape[:, 2])
-        turn = float(np.degrees(np.arccos(np.clip(pictured @ view_direction(head_points, uv[head_vertices]),
-                                                  -1.0, 1.0))))
+        turn = float(np.degrees(np.arccos(np.clip(pictured @ camera_direction(camera), -1.0, 1.0))))
         landmark_shown[i] = np.asarray(tgt_visible[i], bool)[face_vertices].all(axis=1)
         weights[i] = paste_weight(turn, float(np.mean(landmark_shown[i])))
     return HeadMoves(affines, weights, landmark_shown, offsets)

@@ -28,6 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# OpenCV's Navier-Stokes inpainting: the neighbourhood radius (pixels) of each filled pixel, for the whole-picture fill
+# the patches fall back on and take their slow shading from
+DIFFUSION_RADIUS_PX = 5
+
 
 @dataclass(frozen=True)
 class PatchSettings:
@@ -207,7 +211,7 @@ def patch_inpaint(image: np.ndarray, hole: np.ndarray, *, settings: PatchSetting
         sources[:r], sources[-r:], sources[:, :r], sources[:, -r:] = False, False, False, False
         known = np.flatnonzero(sources)
         if len(known) == 0:
-            return cv2.inpaint(image, hole.astype(np.uint8), 5, cv2.INPAINT_NS)
+            return cv2.inpaint(image, hole.astype(np.uint8), DIFFUSION_RADIUS_PX, cv2.INPAINT_NS)
         targets = np.flatnonzero(reach)
         nearest = start_matches(coarser, (h, w), targets, known, sources.ravel(), rng)
         if depth == len(levels) - 1:
@@ -235,7 +239,7 @@ def patch_inpaint(image: np.ndarray, hole: np.ndarray, *, settings: PatchSetting
         inside = np.flatnonzero(hole)
         fill.reshape(-1, 3)[inside] = picture.reshape(-1, 3)[nearest[inside]]
     if settings.shading_tolerance > 0:
-        diffused = cv2.inpaint(image, hole.astype(np.uint8), 5, cv2.INPAINT_NS)
+        diffused = cv2.inpaint(image, hole.astype(np.uint8), DIFFUSION_RADIUS_PX, cv2.INPAINT_NS)
         fill = diffused_shading(fill, diffused, settings)  # fill is the picture itself outside the hole
     return np.where(hole[..., None], np.clip(np.rint(fill), 0, 255), image).astype(np.uint8)
 

@@ -32,7 +32,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 from motion2video.generator.background import composite, inpaint_background, soft_matte
 from motion2video.generator.image_baselines import BASELINES, run_baseline
 from motion2video.generator.data import FramePairs, evaluation_pair_index, make_pairs
-from motion2video.generator.head_paste import FaceBend, paste_head, shown_face
+from motion2video.generator.head_paste import lay_moved_face
 from motion2video.generator.specs import FrameSequences
 from motion2video.generator.mesh_warp import MeshWarpGenerator, head_cut, mesh_inputs, mesh_source_mask
 from motion2video.generator.model import FrameGenerator, generate, images_to_tensor
@@ -331,19 +331,6 @@ def run_generator(model: FrameGenerator | WarpGenerator | MeshWarpGenerator, pai
     return generate(model, pairs.ref_images, pairs.ref_structures, pairs.tgt_structures, batch_size=batch_size)
 
 
-def lay_pair_face(frame: np.ndarray, image: np.ndarray, matte: np.ndarray, landmarks: np.ndarray, affine: np.ndarray,
-                  offsets: np.ndarray, triangles: np.ndarray, shown: np.ndarray, weight: float,
-                  person: np.ndarray) -> np.ndarray:
-    """(H, W, 3) uint8 ``frame`` with the reference ``image``'s face laid over its head, one pair's fields of
-    :class:`~motion2video.generator.data.FramePairs` (``head_*``) as ``synthesize`` lays it
-    (:func:`motion2video.stages.pictured_face.lay_face`): moved by ``affine`` and bent by ``offsets``
-    (:class:`~motion2video.generator.head_paste.FaceBend`), inside the part of the face the target shows and the
-    generated ``person``'s matte."""
-    where = landmarks @ affine[:, :2].T + affine[:, 2] + offsets
-    within = person * shown_face(where, triangles, shown, person.shape)
-    return paste_head(frame, image, matte, affine, weight, within=within, bend=FaceBend(where, offsets))
-
-
 @torch.inference_mode()
 def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: int = 16) -> np.ndarray:
     """(N, H, W, 3) uint8 frames of the mesh generator on pairs that carry their mesh correspondence.
@@ -352,7 +339,7 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
     reference's person (its segmentation joined with the fitted silhouette) inpainted
     (:func:`motion2video.generator.background.inpaint_background`) is the plate, and the generated person is laid
     over it through its soft matte (:func:`~motion2video.generator.background.soft_matte`), and the reference's face
-    over the generated head where the pairs carry it (:func:`~motion2video.generator.head_paste.paste_head`).
+    over the generated head where the pairs carry it (:func:`~motion2video.generator.head_paste.lay_moved_face`).
     Rendered pairs keep the generator's own composite over its plate
     (:func:`~motion2video.generator.mesh_warp.mesh_plate`), as in training.
     """
@@ -386,9 +373,11 @@ def mesh_generate(model: MeshWarpGenerator, pairs: FramePairs, *, batch_size: in
         matte = soft_matte(parts.alpha[:, 0].numpy())
         frames = np.concatenate([composite(b, p[None], m[None]) for b, p, m in zip(behind, person, matte)])
         if part.head_mattes is not None:  # the reference's own face over the generated heads, as synthesize does
-            frames = np.stack([lay_pair_face(*args) for args in zip(
-                frames, part.ref_images, part.head_mattes, part.head_landmarks, part.head_affines, part.head_offsets,
-                part.head_triangles, part.head_shown, part.head_weights, matte)])
+            frames = np.stack([
+                lay_moved_face(f, r, m, a, xy @ a[:, :2].T + a[:, 2], o, t, shown, w, within=p)
+                for f, r, m, xy, a, o, t, shown, w, p in
+                zip(frames, part.ref_images, part.head_mattes, part.head_landmarks, part.head_affines,
+                    part.head_offsets, part.head_triangles, part.head_shown, part.head_weights, matte)])
         out.append(frames)
     return np.concatenate(out)
 

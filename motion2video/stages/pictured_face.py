@@ -18,8 +18,7 @@ import numpy as np
 from motion2video.core.camera import affine_matrix
 from motion2video.core.skeletons import HEAD, NECK, THORAX
 from motion2video.generator.head_paste import (
-    FaceBend, HeadMoves, compose_affine, face_matte, face_triangles, head_moves, paste_head, pixel_index_affine,
-    shown_face,
+    HeadMoves, compose_affine, face_matte, face_triangles, head_moves, lay_moved_face, pixel_index_affine,
 )
 
 # The square searched for the face: centred between the nose and head joints, this many times the thorax-to-head
@@ -150,8 +149,7 @@ def landmark_triangles() -> np.ndarray:
 def lay_face(frame: np.ndarray, face: PicturedFace, head: HeadMoves, row: int, *, affine: np.ndarray | None = None,
              within: np.ndarray | None = None) -> np.ndarray:
     """(H, W, 3) uint8 ``frame``, target ``row`` of ``head``, with the pictured face laid over the part of it the
-    target shows (:func:`motion2video.generator.head_paste.shown_face`,
-    :func:`motion2video.generator.head_paste.paste_head`).
+    target shows (:func:`motion2video.generator.head_paste.lay_moved_face`).
 
     Args:
         frame: (H, W, 3) uint8 in the reference picture's pixels (the output's).
@@ -160,12 +158,10 @@ def lay_face(frame: np.ndarray, face: PicturedFace, head: HeadMoves, row: int, *
         within: (H, W) float in [0, 1] the generated person's matte, or None.
     """
     move = head.affines[row] if affine is None else np.asarray(affine, np.float64)
-    where = landmarks_in_reference(face) @ move[:, :2].T + move[:, 2] + head.offsets[row]
-    shown = shown_face(where, landmark_triangles(), head.shown[row], frame.shape[:2])
-    within = shown if within is None else shown * np.asarray(within, np.float32)
-    return paste_head(frame, face.image, face.matte, compose_affine(move, face.to_reference),
-                      float(head.weights[row]), within=within,
-                      bend=FaceBend(where, head.offsets[row]))
+    moved = landmarks_in_reference(face) @ move[:, :2].T + move[:, 2]
+    return lay_moved_face(frame, face.image, face.matte, compose_affine(move, face.to_reference), moved,
+                          head.offsets[row], landmark_triangles(), head.shown[row], float(head.weights[row]),
+                          within=within)
 
 
 def face_moves(face: PicturedFace, ref_uv: np.ndarray, tgt_uv: np.ndarray, tgt_visible: np.ndarray, *, rest
